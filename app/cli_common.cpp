@@ -1,0 +1,77 @@
+#include "cli_common.h"
+
+#include "error.h"
+
+#include <cstdio>
+
+namespace tpb::app {
+
+void RenderOverrides::add(CLI::App* cmd) {
+    cmd->add_option("--passes", passes, "Number of progressive passes (0 = until --time or Ctrl-C)");
+    cmd->add_option("--time", timeBudget, "Time budget in seconds");
+    cmd->add_option("--photons", photons, "Photons traced per pass");
+    cmd->add_option("--radius", radius, "Initial beam kernel radius, m (absolute)");
+    cmd->add_option("--alpha", alpha, "Progressive radius shrink parameter in (0, 1]");
+    cmd->add_option("--threads", threads, "Worker threads (0 = all cores)");
+    cmd->add_option("--seed", seed, "Random seed");
+    cmd->add_option("--width", width, "Override the camera's horizontal resolution");
+    cmd->add_option("--height", height, "Override the camera's vertical resolution");
+    cmd->add_option("--bins", bins, "Override the film's number of time bins");
+    cmd->add_option("--profile", profile, "Time profile of a ray-beam estimate: exact | uniform (paper)")
+        ->check(CLI::IsMember({"exact", "uniform"}));
+    cmd->add_option("--beam-length", beamLength, "Photon beams end at the next event (short) or the surface (long)")
+        ->check(CLI::IsMember({"short", "long"}));
+    cmd->add_option("--accel", accel, "Beam query backend: embree | brute")->check(CLI::IsMember({"embree", "brute"}));
+}
+
+void RenderOverrides::applyToDesc(SceneDesc& d) const {
+    if (width) d.camera.width = *width;
+    if (height) d.camera.height = *height;
+    if (bins) d.film.bins = *bins;
+    if (d.camera.width < 1 || d.camera.height < 1 || d.film.bins < 1)
+        throw UserError("--width, --height and --bins must be >= 1");
+    const uint64_t need = filmBytes(d.camera, d.film.bins);
+    if (need > maxFilmBytes())
+        throw UserError("the film would need " + humanBytes(need) + " but at most " + humanBytes(maxFilmBytes()) +
+                        " is allowed; lower --width/--height/--bins");
+}
+
+void RenderOverrides::applyToSettings(DriverSettings& s) const {
+    if (passes) s.passes = *passes;
+    if (timeBudget) {
+        s.timeBudgetSec = *timeBudget;
+        if (!passes) s.passes = 0;  // a time budget alone means: as many passes as fit
+    }
+    if (photons) s.photonsPerPass = *photons;
+    if (radius) s.beamRadius0 = *radius;
+    if (alpha) s.alpha = *alpha;
+    if (threads) s.threads = *threads;
+    if (seed) s.seed = *seed;
+    if (profile == "exact") s.profile = TimeProfile::Exact;
+    if (profile == "uniform") s.profile = TimeProfile::Uniform;
+    if (beamLength == "short") s.beamLength = BeamLength::Short;
+    if (beamLength == "long") s.beamLength = BeamLength::Long;
+    s.accel = accel == "brute" ? BeamAccel::Kind::BruteForce : BeamAccel::Kind::Embree;
+    if (s.photonsPerPass < 1) throw UserError("--photons must be >= 1");
+    if (!(s.alpha > 0.0 && s.alpha <= 1.0)) throw UserError("--alpha must be in (0, 1]");
+    if (!(s.beamRadius0 > 0.0)) throw UserError("--radius must be > 0");
+    if (s.timeBudgetSec < 0.0) throw UserError("--time must be >= 0");
+}
+
+std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrides& ov) {
+    SceneDesc desc = loadScene(path);
+    for (const std::string& w : desc.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    ov.applyToDesc(desc);
+    return Scene::build(desc);
+}
+
+std::string humanBytes(uint64_t b) {
+    char buf[64];
+    if (b >= (1ull << 30)) std::snprintf(buf, sizeof buf, "%.2f GiB", b / double(1ull << 30));
+    else if (b >= (1ull << 20)) std::snprintf(buf, sizeof buf, "%.1f MiB", b / double(1ull << 20));
+    else if (b >= 1024) std::snprintf(buf, sizeof buf, "%.1f KiB", b / 1024.0);
+    else std::snprintf(buf, sizeof buf, "%llu B", static_cast<unsigned long long>(b));
+    return buf;
+}
+
+}  // namespace tpb::app

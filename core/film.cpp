@@ -1,0 +1,198 @@
+#include "film.h"
+
+#include "error.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace tpb {
+
+uint64_t transientFilmBytes(int width, int height, int bins) {
+    const uint64_t px = static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
+    return px * (static_cast<uint64_t>(bins) * 2u * 3u * sizeof(float) + 3u * sizeof(double));
+}
+
+void PixelAccumulator::reset(int bins) {
+    bins_ = bins;
+    data_.assign(static_cast<size_t>(bins) * 2 * 3, 0.0);
+    lo_[0] = lo_[1] = bins;
+    hi_[0] = hi_[1] = -1;
+    steady_ = Color(0.0);
+}
+
+void PixelAccumulator::clearTouched() {
+    for (int a = 0; a < 2; ++a) {
+        if (hi_[a] >= lo_[a]) {
+            double* p = &data_[(static_cast<size_t>(a) * bins_ + lo_[a]) * 3];
+            std::fill(p, p + static_cast<size_t>(hi_[a] - lo_[a] + 1) * 3, 0.0);
+        }
+        lo_[a] = bins_;
+        hi_[a] = -1;
+    }
+    steady_ = Color(0.0);
+}
+
+TransientFilm::TransientFilm(int width, int height, const TimeBins& time)
+    : width_(width), height_(height), tilesX_((width + kTile - 1) / kTile), time_(time) {
+    TPB_CHECK(width > 0 && height > 0 && time.bins > 0);
+    const int tilesY = (height + kTile - 1) / kTile;
+    tiles_ = std::vector<Tile>(static_cast<size_t>(tilesX_) * tilesY);
+    size_t offset = 0;
+    for (int ty = 0; ty < tilesY; ++ty)
+        for (int tx = 0; tx < tilesX_; ++tx) {
+            Tile& t = tiles_[ty * tilesX_ + tx];
+            t.rect = {tx * kTile, ty * kTile, std::min(kTile, width - tx * kTile), std::min(kTile, height - ty * kTile)};
+            t.offset = offset;
+            t.steady.assign(static_cast<size_t>(t.rect.w) * t.rect.h * 3, 0.0);
+            offset += static_cast<size_t>(t.rect.w) * t.rect.h * time.bins * 3;
+        }
+    sums_[0].assign(offset, 0.0f);
+    sums_[1].assign(offset, 0.0f);
+}
+
+uint64_t TransientFilm::bytes() const { return transientFilmBytes(width_, height_, time_.bins); }
+
+void TransientFilm::clear() {
+    for (Tile& t : tiles_) {
+        std::lock_guard<std::mutex> g(t.mutex);
+        t.passes = 0;
+        std::fill(t.steady.begin(), t.steady.end(), 0.0);
+        for (int a = 0; a < 2; ++a) {
+            const size_t n = static_cast<size_t>(t.rect.w) * t.rect.h * time_.bins * 3;
+            std::fill(sums_[a].begin() + t.offset, sums_[a].begin() + t.offset + n, 0.0f);
+        }
+    }
+    stats.rejectedSamples = 0;
+    for (int a = 0; a < 2; ++a) { stats.outside[a] = 0.0; stats.inside[a] = 0.0; }
+}
+
+TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile)
+    : film_(film), tile_(tile), lock_(film.tiles_[tile].mutex) {}
+
+TransientFilm::TileWriter::~TileWriter() { ++film_.tiles_[tile_].passes; }
+
+void TransientFilm::TileWriter::addPixel(int x, int y, const PixelAccumulator& acc) {
+    Tile& t = film_.tiles_[tile_];
+    const int px = x - t.rect.x0, py = y - t.rect.y0;
+    for (int a = 0; a < 2; ++a) {
+        const TimeAxis axis = static_cast<TimeAxis>(a);
+        float* sums = film_.sums_[a].data();
+        for (int k = acc.lo(axis); k <= acc.hi(axis); ++k) {
+            const double* v = acc.bin(axis, k);
+            float* dst = sums + film_.index(t, k, px, py);
+            dst[0] += static_cast<float>(v[0]);
+            dst[1] += static_cast<float>(v[1]);
+            dst[2] += static_cast<float>(v[2]);
+        }
+    }
+    double* s = &t.steady[(static_cast<size_t>(py) * t.rect.w + px) * 3];
+    s[0] += acc.steady().x;
+    s[1] += acc.steady().y;
+    s[2] += acc.steady().z;
+}
+
+bool TransientFilm::frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out, bool wait) const {
+    out.resize(static_cast<size_t>(width_) * height_ * 3);
+    bin = std::clamp(bin, 0, time_.bins - 1);
+    const float* sums = sums_[static_cast<int>(axis)].data();
+    bool complete = true;
+    std::vector<double> acc;
+    for (const Tile& t : tiles_) {
+        std::unique_lock<std::mutex> lock(t.mutex, std::defer_lock);
+        if (wait) lock.lock();
+        else if (!lock.try_lock()) { complete = false; continue; }
+        const size_t n = static_cast<size_t>(t.rect.w) * t.rect.h * 3;
+        const double inv = t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0;
+        acc.assign(n, 0.0);
+        const int k0 = mode == EmissionMode::Continuous ? 0 : bin;
+        for (int k = k0; k <= bin; ++k) {
+            const float* src = sums + index(t, k, 0, 0);
+            for (size_t i = 0; i < n; ++i) acc[i] += src[i];
+        }
+        for (int py = 0; py < t.rect.h; ++py)
+            for (int px = 0; px < t.rect.w; ++px)
+                for (int c = 0; c < 3; ++c)
+                    out[((static_cast<size_t>(t.rect.y0 + py) * width_) + t.rect.x0 + px) * 3 + c] =
+                        static_cast<float>(acc[(static_cast<size_t>(py) * t.rect.w + px) * 3 + c] * inv);
+    }
+    return complete;
+}
+
+bool TransientFilm::steadyImage(std::vector<float>& out, bool wait) const {
+    out.resize(static_cast<size_t>(width_) * height_ * 3);
+    bool complete = true;
+    for (const Tile& t : tiles_) {
+        std::unique_lock<std::mutex> lock(t.mutex, std::defer_lock);
+        if (wait) lock.lock();
+        else if (!lock.try_lock()) { complete = false; continue; }
+        const double inv = t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0;
+        for (int py = 0; py < t.rect.h; ++py)
+            for (int px = 0; px < t.rect.w; ++px)
+                for (int c = 0; c < 3; ++c)
+                    out[((static_cast<size_t>(t.rect.y0 + py) * width_) + t.rect.x0 + px) * 3 + c] =
+                        static_cast<float>(t.steady[(static_cast<size_t>(py) * t.rect.w + px) * 3 + c] * inv);
+    }
+    return complete;
+}
+
+void TransientFilm::pixelProfile(int x, int y, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {
+    out.assign(static_cast<size_t>(time_.bins) * 3, 0.0f);
+    if (x < 0 || y < 0 || x >= width_ || y >= height_) return;
+    const Tile& t = tiles_[tileOf(x, y)];
+    std::lock_guard<std::mutex> g(t.mutex);
+    const double inv = t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0;
+    const float* sums = sums_[static_cast<int>(axis)].data();
+    double run[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < time_.bins; ++k) {
+        const float* v = sums + index(t, k, x - t.rect.x0, y - t.rect.y0);
+        for (int c = 0; c < 3; ++c) {
+            run[c] = (mode == EmissionMode::Continuous ? run[c] : 0.0) + v[c];
+            out[static_cast<size_t>(k) * 3 + c] = static_cast<float>(run[c] * inv);
+        }
+    }
+}
+
+void TransientFilm::streak(int row, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {
+    out.assign(static_cast<size_t>(time_.bins) * width_ * 3, 0.0f);
+    if (row < 0 || row >= height_) return;
+    std::vector<float> prof;
+    for (int x = 0; x < width_; ++x) {
+        pixelProfile(x, row, axis, mode, prof);
+        for (int k = 0; k < time_.bins; ++k)
+            for (int c = 0; c < 3; ++c)
+                out[(static_cast<size_t>(k) * width_ + x) * 3 + c] = prof[static_cast<size_t>(k) * 3 + c];
+    }
+}
+
+void TransientFilm::volume(TimeAxis axis, EmissionMode mode, std::vector<double>& out) const {
+    const size_t bins = static_cast<size_t>(time_.bins);
+    out.assign(static_cast<size_t>(width_) * height_ * bins * 3, 0.0);
+    const float* sums = sums_[static_cast<int>(axis)].data();
+    for (const Tile& t : tiles_) {
+        std::lock_guard<std::mutex> g(t.mutex);
+        const double inv = t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0;
+        for (int py = 0; py < t.rect.h; ++py)
+            for (int px = 0; px < t.rect.w; ++px) {
+                double* dst = &out[((static_cast<size_t>(t.rect.y0 + py) * width_) + t.rect.x0 + px) * bins * 3];
+                double run[3] = {0.0, 0.0, 0.0};
+                for (size_t k = 0; k < bins; ++k) {
+                    const float* v = sums + index(t, static_cast<int>(k), px, py);
+                    for (int c = 0; c < 3; ++c) {
+                        run[c] = (mode == EmissionMode::Continuous ? run[c] : 0.0) + v[c];
+                        dst[k * 3 + c] = run[c] * inv;
+                    }
+                }
+            }
+    }
+}
+
+int64_t TransientFilm::minPasses() const {
+    int64_t m = INT64_MAX;
+    for (const Tile& t : tiles_) {
+        std::lock_guard<std::mutex> g(t.mutex);
+        m = std::min(m, t.passes);
+    }
+    return tiles_.empty() ? 0 : m;
+}
+
+}  // namespace tpb

@@ -1,0 +1,125 @@
+// The transient film: RGB radiance per pixel per time bin, on two time axes (real time, camera
+// path included; camera-unwarped time, camera path excluded), plus the steady-state image.
+//
+// Units: a bin holds the part of the steady-state radiance carried by light whose arrival OPL falls
+// in that bin (i.e. the delta-pulse response integrated over the bin), so the steady-state image is
+// the sum over bins plus what fell outside the film. Continuous emission (light on from the pulse
+// instant) is the running sum over bins, computed on demand (transport is linear, time-invariant).
+//
+// Concurrency: the image is split in 16x16 tiles. A tile has one writer at a time (the worker that
+// renders it in the current pass) and its own pass count, so a reader always sees, per tile, the
+// average of the passes that tile has completed - never a partially gathered pass. Sums are float
+// (per pass, each pixel is accumulated in double first); steady-state sums are double.
+#pragma once
+#include "math.h"
+#include "scene_desc.h"
+#include "time_splat.h"
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+namespace tpb {
+
+enum class TimeAxis { Real = 0, Unwarped = 1 };
+
+struct TileRect { int x0, y0, w, h; };
+
+// Accumulates one pixel's contributions during one pass, in double, touched bins only.
+class PixelAccumulator {
+public:
+    explicit PixelAccumulator(int bins = 1) { reset(bins); }
+    void reset(int bins);
+    void add(TimeAxis axis, int bin, const Color& c) {
+        double* p = &data_[(static_cast<size_t>(axis) * bins_ + bin) * 3];
+        p[0] += c.x; p[1] += c.y; p[2] += c.z;
+        int& lo = lo_[static_cast<int>(axis)];
+        int& hi = hi_[static_cast<int>(axis)];
+        lo = std::min(lo, bin);
+        hi = std::max(hi, bin);
+    }
+    void addSteady(const Color& c) { steady_ += c; }
+    const Color& steady() const { return steady_; }
+    int lo(TimeAxis a) const { return lo_[static_cast<int>(a)]; }
+    int hi(TimeAxis a) const { return hi_[static_cast<int>(a)]; }
+    const double* bin(TimeAxis a, int k) const { return &data_[(static_cast<size_t>(a) * bins_ + k) * 3]; }
+    void clearTouched();  // zero the touched range, ready for the next pixel
+
+private:
+    int bins_ = 0;
+    std::vector<double> data_;
+    int lo_[2], hi_[2];
+    Color steady_{0.0};
+};
+
+struct FilmStats {
+    std::atomic<int64_t> rejectedSamples{0};  // NaN/Inf estimates discarded
+    // Luminance of energy that fell outside the film's time range (sum over passes, not averaged),
+    // per time axis, and the luminance that landed inside (to report the fraction).
+    std::atomic<double> outside[2] = {0.0, 0.0};
+    std::atomic<double> inside[2] = {0.0, 0.0};
+};
+
+class TransientFilm {
+public:
+    static constexpr int kTile = 16;
+
+    TransientFilm(int width, int height, const TimeBins& time);
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const TimeBins& time() const { return time_; }
+    int bins() const { return time_.bins; }
+    int tileCount() const { return static_cast<int>(tiles_.size()); }
+    TileRect tileRect(int tile) const { return tiles_[tile].rect; }
+    uint64_t bytes() const;
+
+    // Writer side (one writer per tile at a time): lock, add pixels, finish.
+    class TileWriter {
+    public:
+        TileWriter(TransientFilm& film, int tile);
+        ~TileWriter();
+        void addPixel(int x, int y, const PixelAccumulator& acc);
+    private:
+        TransientFilm& film_;
+        int tile_;
+        std::unique_lock<std::mutex> lock_;
+    };
+
+    // Reader side. Each returns averages (sum / passes of the tile). `wait=false` skips tiles that
+    // are being written (their pixels are left untouched in `out`), returning false if any was.
+    bool frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out, bool wait = true) const;
+    bool steadyImage(std::vector<float>& out, bool wait = true) const;  // W*H*3
+    void pixelProfile(int x, int y, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const;  // bins*3
+    void streak(int row, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const;  // bins rows x W cols x 3
+    // Whole volume (W*H*bins*3, pixel-major: ((y*W + x)*bins + k)*3), in double.
+    void volume(TimeAxis axis, EmissionMode mode, std::vector<double>& out) const;
+    int64_t minPasses() const;  // passes completed by every tile
+    void clear();
+
+    FilmStats stats;
+
+private:
+    struct Tile {
+        TileRect rect;
+        size_t offset = 0;  // into sums_ (per axis)
+        int64_t passes = 0;
+        std::vector<double> steady;  // w*h*3
+        mutable std::mutex mutex;
+    };
+    // Layout per axis: [tile][bin][pixel in tile][rgb], so a frame reads contiguous blocks.
+    size_t index(const Tile& t, int bin, int px, int py) const {
+        return t.offset + (static_cast<size_t>(bin) * t.rect.w * t.rect.h + static_cast<size_t>(py) * t.rect.w + px) * 3;
+    }
+    int tileOf(int x, int y) const { return (y / kTile) * tilesX_ + (x / kTile); }
+
+    int width_, height_, tilesX_;
+    TimeBins time_;
+    std::vector<Tile> tiles_;
+    std::vector<float> sums_[2];
+};
+
+// Bytes a film of this size needs (both axes, RGB float, steady-state double).
+uint64_t transientFilmBytes(int width, int height, int bins);
+
+}  // namespace tpb

@@ -1,0 +1,150 @@
+#include "image_io.h"
+
+#include "error.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <half.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include <stb_image_write.h>
+
+namespace tpb {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string tmpName(const std::string& path) { return path + ".tmp-" + std::to_string(::getpid()); }
+
+void commitFile(const std::string& tmp, const std::string& path) {
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw UserError(path, 0, "", "cannot move the finished file into place: " + ec.message());
+    }
+}
+
+}  // namespace
+
+float linearToSrgb(float v) {
+    if (!(v > 0.0f)) return 0.0f;
+    if (v >= 1.0f) return 1.0f;
+    return v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+}
+
+void ensureWritableDir(const std::string& dir) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec || !fs::is_directory(dir))
+        throw UserError(dir, 0, "", "cannot create the output folder: " + (ec ? ec.message() : "not a folder") +
+                                        "; choose another folder with -o");
+    if (::access(dir.c_str(), W_OK) != 0)
+        throw UserError(dir, 0, "", "the output folder is not writable; choose another folder with -o");
+}
+
+void writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb, ExrPixel type) {
+    TPB_CHECK(rgb.size() == static_cast<size_t>(width) * height * 3);
+    const std::string tmp = tmpName(path);
+    try {
+        Imf::Header header(width, height);
+        const Imf::PixelType pt = type == ExrPixel::Half ? Imf::HALF : Imf::FLOAT;
+        header.channels().insert("R", Imf::Channel(pt));
+        header.channels().insert("G", Imf::Channel(pt));
+        header.channels().insert("B", Imf::Channel(pt));
+        Imf::FrameBuffer fb;
+        std::vector<half> h;
+        if (type == ExrPixel::Half) {
+            h.resize(rgb.size());
+            for (size_t i = 0; i < rgb.size(); ++i) h[i] = half(rgb[i]);
+            char* base = reinterpret_cast<char*>(h.data());
+            const size_t xs = 3 * sizeof(half), ys = xs * width;
+            fb.insert("R", Imf::Slice(Imf::HALF, base, xs, ys));
+            fb.insert("G", Imf::Slice(Imf::HALF, base + sizeof(half), xs, ys));
+            fb.insert("B", Imf::Slice(Imf::HALF, base + 2 * sizeof(half), xs, ys));
+        } else {
+            char* base = const_cast<char*>(reinterpret_cast<const char*>(rgb.data()));
+            const size_t xs = 3 * sizeof(float), ys = xs * width;
+            fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+            fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+            fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+        }
+        {
+            Imf::OutputFile file(tmp.c_str(), header);
+            file.setFrameBuffer(fb);
+            file.writePixels(height);
+        }
+    } catch (const std::exception& e) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw UserError(path, 0, "", std::string("cannot write EXR: ") + e.what());
+    }
+    commitFile(tmp, path);
+}
+
+void readExr(const std::string& path, int& width, int& height, std::vector<float>& rgb) {
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i dw = file.header().dataWindow();
+        width = dw.max.x - dw.min.x + 1;
+        height = dw.max.y - dw.min.y + 1;
+        rgb.assign(static_cast<size_t>(width) * height * 3, 0.0f);
+        char* base = reinterpret_cast<char*>(rgb.data()) -
+                     (static_cast<ptrdiff_t>(dw.min.x) + static_cast<ptrdiff_t>(dw.min.y) * width) * 3 * sizeof(float);
+        const size_t xs = 3 * sizeof(float), ys = xs * width;
+        Imf::FrameBuffer fb;
+        fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+        fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+        fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+        file.setFrameBuffer(fb);
+        file.readPixels(dw.min.y, dw.max.y);
+    } catch (const std::exception& e) {
+        throw UserError(path, 0, "", std::string("cannot read EXR: ") + e.what());
+    }
+}
+
+void writePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb) {
+    const std::string tmp = tmpName(path);
+    if (!stbi_write_png(tmp.c_str(), width, height, 3, rgb.data(), width * 3)) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw UserError(path, 0, "", "cannot write PNG (folder missing, not writable or disk full)");
+    }
+    commitFile(tmp, path);
+}
+
+void writePngPreview(const std::string& path, int width, int height, const std::vector<float>& rgb, double exposureEv) {
+    const float scale = static_cast<float>(std::exp2(exposureEv));
+    std::vector<unsigned char> px(rgb.size());
+    for (size_t i = 0; i < rgb.size(); ++i)
+        px[i] = static_cast<unsigned char>(std::lround(255.0f * linearToSrgb(rgb[i] * scale)));
+    writePng8(path, width, height, px);
+}
+
+void writeTextFile(const std::string& path, const std::string& text) {
+    const std::string tmp = tmpName(path);
+    {
+        std::ofstream f(tmp, std::ios::binary);
+        f << text;
+        f.flush();
+        if (!f) {
+            std::error_code ec;
+            fs::remove(tmp, ec);
+            throw UserError(path, 0, "", "cannot write file (folder missing, not writable or disk full)");
+        }
+    }
+    commitFile(tmp, path);
+}
+
+}  // namespace tpb

@@ -1,0 +1,32 @@
+// Image output: OpenEXR (this file's .cpp is the only user of OpenEXR) and 8-bit PNG previews.
+// Every write goes to "<path>.tmp-<pid>" first and is renamed into place, so an interrupted or
+// failed write never leaves a half file under the final name. Failures throw UserError naming
+// the path and the reason (unwritable folder, disk full...).
+#pragma once
+#include <string>
+#include <vector>
+
+namespace tpb {
+
+enum class ExrPixel { Float, Half };
+
+// rgb: width*height*3 floats, row-major from the top row.
+void writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb,
+              ExrPixel type = ExrPixel::Float);
+// Reads an RGB(A) EXR into rgb (width*height*3). Throws UserError on failure.
+void readExr(const std::string& path, int& width, int& height, std::vector<float>& rgb);
+
+// sRGB PNG of linear rgb * 2^exposure, clamped.
+void writePngPreview(const std::string& path, int width, int height, const std::vector<float>& rgb, double exposureEv = 0.0);
+// Raw 8-bit RGB PNG (e.g. a screenshot).
+void writePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
+
+// Writes `text` to path atomically (tmp + rename). Throws UserError on failure.
+void writeTextFile(const std::string& path, const std::string& text);
+// Creates a folder (and parents); throws UserError if it cannot, or if it is not writable.
+void ensureWritableDir(const std::string& dir);
+
+// Linear -> sRGB-encoded [0,1].
+float linearToSrgb(float v);
+
+}  // namespace tpb

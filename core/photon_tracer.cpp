@@ -1,0 +1,156 @@
+#include "photon_tracer.h"
+
+#include "bsdf.h"
+#include "parallel.h"
+#include "rng.h"
+#include "sampling.h"
+
+namespace tpb {
+
+namespace {
+
+constexpr double kRayEps = 1e-6;
+
+// Length of a long beam that never hits a surface (infinite medium): until its transmittance
+// falls below 1e-7, at most 10 scene diagonals.
+double openBeamLength(const Scene& scene, const Medium& m) {
+    const double minSigma = std::min(m.sigma_t.x, std::min(m.sigma_t.y, m.sigma_t.z));
+    const double diag = std::max(scene.bounds.diagonal(), 1e-3);
+    return minSigma > 0.0 ? std::min(16.2 / minSigma, 10.0 * diag) : 10.0 * diag;
+}
+
+}  // namespace
+
+void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index, PhotonMap& out) {
+    Rng rng(s.seed, Stream::Photon, s.pass, static_cast<uint64_t>(index));
+    double lightPdf;
+    const int li = scene.pickLight(rng.uniform(), lightPdf);
+    if (li < 0 || lightPdf <= 0.0) return;
+    const Light& light = scene.lights[li];
+    EmissionSample em = light.sampleEmission(rng);
+    Color power = em.power / (lightPdf * static_cast<double>(s.photons));
+    const double power0 = maxComponent(power);
+    if (!(power0 > 0.0)) return;
+    Ray ray = em.ray;
+    double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
+    RegionStack regions;
+
+    for (int depth = 0; depth < s.maxDepth; ++depth) {
+        const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
+        const double dSurf = hit ? hit->t : kInf;
+        const Region& region = scene.regions[regions.top()];
+
+        if (region.hasMedium) {
+            const Medium& m = region.medium;
+            const double sigmaBar = m.samplingSigma();
+            // Free-flight sampling with pdf sigma_bar exp(-sigma_bar d).
+            const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
+            const bool scatters = d < dSurf;
+            const double segment = scatters ? d : dSurf;
+            if (s.storeBeams && m.scattering) {
+                double len = s.beamLength == BeamLength::Short ? segment : dSurf;
+                if (!std::isfinite(len)) len = openBeamLength(scene, m);
+                if (len > 0.0 && std::isfinite(len))
+                    out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
+            }
+            if (!std::isfinite(segment)) break;  // escaped (non-scattering infinite region)
+            // Weight: T(d) sigma_s / (sigma_bar T_bar(d)) at a scattering event, T / T_bar at a surface.
+            const Color tr = m.transmittance(segment);
+            const double trBar = std::exp(-sigmaBar * segment);
+            if (scatters) {
+                power *= m.sigma_s * tr / (sigmaBar * trBar);
+                opl += region.ior * d;
+                ray = {ray.at(d), m.phase.sample(ray.d, rng.uniform(), rng.uniform())};
+            } else {
+                power *= tr / trBar;
+            }
+            if (!isFinite(power)) { ++out.rejected; return; }
+            if (scatters) {
+                // Russian roulette on the throughput relative to the emitted power.
+                const double q = std::min(1.0, maxComponent(power) / power0);
+                if (q <= 0.0) return;
+                if (q < 1.0) {
+                    if (rng.uniform() >= q) return;
+                    power /= q;
+                }
+                continue;
+            }
+        }
+        if (!hit) break;
+        opl += region.ior * hit->t;
+
+        const ShapeInfo& shape = scene.shapes[hit->shape];
+        if (shape.areaLight >= 0 || shape.material < 0) return;  // emitters and unassigned shapes absorb
+        const Material& mat = scene.materials[shape.material];
+        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
+        const Vec3 ng = front ? hit->ng : -hit->ng;  // facing the incoming photon
+        Vec3 ns = front ? hit->ns : -hit->ns;
+        if (glm::dot(ns, ng) <= 0.0) ns = ng;
+        Vec3 newDir;
+        switch (mat.type) {
+            case MaterialType::Diffuse: {
+                if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, ng, power, opl});
+                newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), ns));
+                if (glm::dot(newDir, ng) <= 0.0) return;
+                power *= mat.albedo;
+                ray = {hit->p + kRayEps * ng, newDir};
+                break;
+            }
+            case MaterialType::Mirror:
+                power *= mat.specular;
+                ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+                break;
+            case MaterialType::Dielectric:
+            case MaterialType::Null: {
+                double etaI, etaT;
+                scene.interfaceEtas(shape, front, regions, etaI, etaT);
+                if (mat.type == MaterialType::Null) {
+                    etaT = etaI;  // index-matched boundary: no refraction, no reflection
+                }
+                const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
+                Vec3 refr;
+                if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
+                    ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+                } else {
+                    ray = {hit->p - kRayEps * ng, refr};
+                    if (front) regions.push(shape.interiorRegion); else regions.pop();
+                }
+                if (mat.type == MaterialType::Dielectric) power *= mat.specular;
+                break;
+            }
+        }
+        const double q = std::min(1.0, maxComponent(power) / power0);
+        if (q <= 0.0) return;
+        if (q < 1.0) {
+            if (rng.uniform() >= q) return;
+            power /= q;
+        }
+    }
+}
+
+PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s, const std::atomic<bool>* abort) {
+    // Fixed batches so the output order does not depend on the number of threads.
+    constexpr int64_t kBatch = 1024;
+    const int64_t batches = (s.photons + kBatch - 1) / kBatch;
+    std::vector<PhotonMap> parts(static_cast<size_t>(batches));
+    parallelFor(batches, s.threads, [&](int64_t b, int) {
+        PhotonMap& part = parts[static_cast<size_t>(b)];
+        const int64_t end = std::min(s.photons, (b + 1) * kBatch);
+        for (int64_t i = b * kBatch; i < end; ++i) tracePhoton(scene, s, i, part);
+        part.emitted = end - b * kBatch;
+    }, abort);
+    PhotonMap all;
+    size_t nb = 0, np = 0;
+    for (const PhotonMap& p : parts) { nb += p.beams.size(); np += p.photons.size(); }
+    all.beams.reserve(nb);
+    all.photons.reserve(np);
+    for (PhotonMap& p : parts) {
+        all.beams.insert(all.beams.end(), p.beams.begin(), p.beams.end());
+        all.photons.insert(all.photons.end(), p.photons.begin(), p.photons.end());
+        all.emitted += p.emitted;
+        all.rejected += p.rejected;
+    }
+    return all;
+}
+
+}  // namespace tpb

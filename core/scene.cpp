@@ -1,0 +1,183 @@
+#include "scene.h"
+
+#include "error.h"
+#include "mesh.h"
+
+#include <algorithm>
+
+namespace tpb {
+
+namespace {
+
+Region makeRegion(const MediumDesc* m, double iorOverride) {
+    Region r;
+    if (m) {
+        r.medium.sigma_s = m->sigma_s;
+        r.medium.sigma_a = m->sigma_a;
+        r.medium.sigma_t = m->sigma_s + m->sigma_a;
+        r.medium.ior = m->ior;
+        r.medium.phase.g = m->g;
+        r.medium.scattering = maxComponent(m->sigma_s) > 0.0;
+        r.hasMedium = maxComponent(r.medium.sigma_t) > 0.0;
+        r.ior = m->ior;
+    }
+    if (iorOverride > 0.0) r.ior = iorOverride;
+    r.medium.ior = r.ior;
+    return r;
+}
+
+double resolveRadius(double value, bool relative, double diagonal) {
+    return relative ? value * diagonal : value;
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
+    auto s = std::make_unique<Scene>();
+    s->desc = d;
+
+    for (const MaterialDesc& m : d.materials) s->materials.push_back({m.type, m.albedo, m.specular, m.ior});
+
+    // Region 0: the outside, filled by the global medium (or vacuum).
+    s->regions.push_back(makeRegion(d.globalMedium >= 0 ? &d.media[d.globalMedium] : nullptr, 0.0));
+
+    std::vector<ShapeDesc> shapes = d.shapes;
+    // Each area light gets a visible, one-sided emitting quad (black otherwise).
+    for (size_t i = 0; i < d.lights.size(); ++i) {
+        const LightDesc& l = d.lights[i];
+        if (l.type != LightType::AreaQuad) continue;
+        ShapeDesc q;
+        q.name = l.name.empty() ? "area light " + std::to_string(i) : l.name;
+        q.type = ShapeType::Quad;
+        q.corner = l.corner;
+        q.edgeU = l.edgeU;
+        q.edgeV = l.edgeV;
+        q.areaLight = static_cast<int>(i);
+        shapes.push_back(q);
+    }
+
+    for (size_t i = 0; i < shapes.size(); ++i) {
+        const ShapeDesc& sd = shapes[i];
+        const std::string key = "shapes[" + std::to_string(i) + "]";
+        ShapeInfo info;
+        info.name = sd.name.empty() ? key : sd.name;
+        info.material = sd.material;
+        info.areaLight = sd.areaLight;
+        const Material* mat = sd.material >= 0 ? &s->materials[sd.material] : nullptr;
+        const bool isInterface = mat && (mat->type == MaterialType::Dielectric || mat->type == MaterialType::Null);
+        if (isInterface) {
+            const MediumDesc* inner = sd.interiorMedium >= 0 ? &d.media[sd.interiorMedium] : nullptr;
+            // A dielectric's index is its material's; a null boundary takes its medium's.
+            const double ior = mat->type == MaterialType::Dielectric ? mat->ior : (inner ? inner->ior : 1.0);
+            s->regions.push_back(makeRegion(inner, ior));
+            info.interiorRegion = static_cast<int>(s->regions.size() - 1);
+        }
+        const int id = static_cast<int>(i);
+        switch (sd.type) {
+            case ShapeType::Mesh: {
+                TriangleMesh m = loadObj(sd.meshPath);
+                m.transform(sd.transform);
+                if (sd.flipNormals) m.flip();
+                s->geometry.addMesh(m, id);
+                break;
+            }
+            case ShapeType::Sphere: s->geometry.addSphere(sd.center, sd.radius, id); break;
+            case ShapeType::Quad: {
+                TriangleMesh m = makeQuad(sd.corner, sd.edgeU, sd.edgeV);
+                if (sd.flipNormals) m.flip();
+                s->geometry.addMesh(m, id);
+                break;
+            }
+            case ShapeType::Box: {
+                TriangleMesh m = makeBox(sd.boxMin, sd.boxMax);
+                m.transform(sd.transform);
+                if (sd.flipNormals) m.flip();
+                s->geometry.addMesh(m, id);
+                break;
+            }
+        }
+        s->shapes.push_back(info);
+    }
+    s->geometry.commit();
+
+    for (const LightDesc& l : d.lights) s->lights.push_back(Light::fromDesc(l));
+    double total = 0.0;
+    for (const Light& l : s->lights) {
+        total += std::max(0.0, luminance(l.power));
+        s->lightCdf.push_back(total);
+    }
+    if (total > 0.0)
+        for (double& c : s->lightCdf) c /= total;
+
+    s->camera = Camera::fromDesc(d.camera);
+
+    s->bounds = s->geometry.bounds();
+    for (const Light& l : s->lights) {
+        s->bounds.expand(l.position);
+        if (l.type == LightType::AreaQuad) s->bounds.expand(l.corner + l.edgeU + l.edgeV);
+    }
+    s->bounds.expand(s->camera.position);
+    double diag = s->bounds.diagonal();
+    if (!(diag > 0.0)) diag = 1.0;
+    s->beamRadius0 = resolveRadius(d.render.radius, d.render.radiusRelative, diag);
+    s->surfaceRadius0 = resolveRadius(d.render.surfaceRadius, d.render.radiusRelative, diag);
+
+    // Film time axis.
+    s->time.bins = d.film.bins;
+    if (d.film.autoRange) {
+        double t0, t1;
+        autoTimeRange(*s, t0, t1);
+        s->time.startOpl = t0;
+        s->time.binWidth = (t1 - t0) / d.film.bins;
+    } else {
+        s->time.startOpl = d.film.startOpl;
+        s->time.binWidth = d.film.binWidthOpl;
+    }
+
+    // Stages this scene needs.
+    Stages& st = s->stages;
+    for (size_t r = 0; r < s->regions.size(); ++r)
+        if (s->regions[r].hasMedium && s->regions[r].medium.scattering) st.beams = true;
+    for (size_t i = 0; i < s->shapes.size(); ++i) {
+        const int m = s->shapes[i].material;
+        if (m < 0) continue;
+        const MaterialType t = s->materials[m].type;
+        if (t == MaterialType::Diffuse) st.surfacePhotons = true;
+        if (t == MaterialType::Mirror || t == MaterialType::Dielectric) st.specularChains = true;
+    }
+    for (const Light& l : s->lights)
+        if (l.type == LightType::AreaQuad) st.visibleEmitters = true;
+    st.reasons.push_back(st.beams ? "photon beams: a region holds a scattering medium"
+                                  : "no photon beams: no scattering medium");
+    st.reasons.push_back(st.surfacePhotons ? "surface photons: the scene has diffuse surfaces"
+                                           : "no surface photon map: no diffuse surface");
+    st.reasons.push_back(st.specularChains ? "specular chains: mirrors or dielectrics present"
+                                           : "no specular chains: no mirror or dielectric");
+    st.reasons.push_back(st.visibleEmitters ? "visible emitters: area lights" : "no visible emitters (delta lights only)");
+    return s;
+}
+
+int Scene::pickLight(double u, double& pdf) const {
+    if (lights.empty() || lightCdf.back() <= 0.0) { pdf = 0.0; return -1; }
+    const auto it = std::upper_bound(lightCdf.begin(), lightCdf.end(), u);
+    const int i = std::min<int>(static_cast<int>(it - lightCdf.begin()), static_cast<int>(lights.size()) - 1);
+    pdf = lightCdf[i] - (i > 0 ? lightCdf[i - 1] : 0.0);
+    return i;
+}
+
+void autoTimeRange(const Scene& s, double& startOpl, double& endOpl) {
+    double emit = kInf;
+    for (const Light& l : s.lights) emit = std::min(emit, l.emitOpl);
+    if (!std::isfinite(emit)) emit = 0.0;
+    double maxIor = 1.0;
+    for (const Region& r : s.regions) maxIor = std::max(maxIor, r.ior);
+    const Bounds3 g = s.geometry.bounds();
+    double diag = g.valid() ? g.diagonal() : s.bounds.diagonal();
+    if (!(diag > 0.0)) diag = 1.0;
+    // Lights to the scene and back to the camera, with a few bounces: a generous window.
+    const double camDist = g.valid() ? glm::length(s.camera.position - g.center()) : 0.0;
+    startOpl = emit;
+    endOpl = emit + maxIor * (2.5 * diag) + camDist;
+}
+
+}  // namespace tpb
