@@ -22,9 +22,12 @@ void sortBeamHits(std::vector<BeamHit>& hits, size_t from) {
 
 namespace {
 
+// Everything the overlap test needs, contiguous (one memory access per candidate).
 struct Piece {
-    uint32_t beam, piece;
+    Vec3 origin, dir;  // of the beam
     double sbLo, sbHi;
+    uint32_t beam, piece;
+    int region;
 };
 
 void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece>& pieces) {
@@ -32,15 +35,14 @@ void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece
     for (uint32_t b = 0; b < beams.size(); ++b) {
         const uint32_t n = beamPieceCount(beams[b].length, radius);
         for (uint32_t k = 0; k < n; ++k)
-            pieces.push_back({b, k, beams[b].length * k / n, k + 1 == n ? beams[b].length : beams[b].length * (k + 1) / n});
+            pieces.push_back({beams[b].origin, beams[b].dir, beams[b].length * k / n,
+                              k + 1 == n ? beams[b].length : beams[b].length * (k + 1) / n, b, k, beams[b].region});
     }
 }
 
-bool testPiece(const std::vector<Beam>& beams, const Piece& p, double radius, const Vec3& o, const Vec3& d,
-               double sMax, int region, BeamHit& hit) {
-    const Beam& b = beams[p.beam];
-    if (b.region != region) return false;
-    if (!rayBeamOverlap(o, d, sMax, b.origin, b.dir, p.sbLo, p.sbHi, radius, hit.overlap)) return false;
+bool testPiece(const Piece& p, double radius, const Vec3& o, const Vec3& d, double sMax, int region, BeamHit& hit) {
+    if (p.region != region) return false;
+    if (!rayBeamOverlap(o, d, sMax, p.origin, p.dir, p.sbLo, p.sbHi, radius, hit.overlap)) return false;
     hit.beam = p.beam;
     hit.piece = p.piece;
     return true;
@@ -57,7 +59,7 @@ public:
         const size_t from = hits.size();
         BeamHit h;
         for (const Piece& p : pieces_)
-            if (testPiece(*beams_, p, radius_, o, d, sMax, region, h)) hits.push_back(h);
+            if (testPiece(p, radius_, o, d, sMax, region, h)) hits.push_back(h);
         sortBeamHits(hits, from);
     }
     std::string name() const override { return "brute-force"; }
@@ -149,8 +151,7 @@ private:
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
         const auto* self = static_cast<const EmbreeBeams*>(args->geometryUserPtr);
         const Piece& p = self->pieces_[args->primID];
-        const Beam& b = (*self->beams_)[p.beam];
-        const Vec3 a = b.origin + p.sbLo * b.dir, e = b.origin + p.sbHi * b.dir;
+        const Vec3 a = p.origin + p.sbLo * p.dir, e = p.origin + p.sbHi * p.dir;
         const double pad = self->radius_ * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
         const Vec3 lo = glm::min(a, e) - pad, hi = glm::max(a, e) + pad;
         RTCBounds* out = args->bounds_o;
@@ -167,8 +168,7 @@ private:
         auto* ctx = reinterpret_cast<Context*>(args->context);
         const EmbreeBeams* self = ctx->self;
         BeamHit h;
-        if (testPiece(*self->beams_, self->pieces_[args->primID], self->radius_, ctx->o, ctx->d, ctx->sMax,
-                      ctx->region, h))
+        if (testPiece(self->pieces_[args->primID], self->radius_, ctx->o, ctx->d, ctx->sMax, ctx->region, h))
             ctx->hits->push_back(h);
         // No hit is reported to Embree: traversal goes on and visits every overlapping piece.
     }

@@ -17,8 +17,10 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace tpb {
@@ -288,10 +290,16 @@ Geometry::Geometry() : impl_(std::make_unique<Impl>()) {
     impl_->scene = rtcNewScene(impl_->device);
     checkEmbree(impl_->device, "creating the scene");
     // Robust mode: conservative traversal and no accuracy-reducing shortcuts, so that rays through
-    // shared edges of neighbouring triangles are not lost.
+    // shared edges of neighbouring triangles are not lost (costs ~10% on the armadillo). High
+    // build quality: the scene is static and built once.
     rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-    checkEmbree(impl_->device, "configuring the scene");
+    try {
+        checkEmbree(impl_->device, "configuring the scene");
+    } catch (...) {
+        rtcReleaseScene(impl_->scene);
+        throw;
+    }
 }
 
 Geometry::~Geometry() {
@@ -409,6 +417,7 @@ std::optional<SurfaceHit> Geometry::intersect(const Ray& ray) const {
     h.shape = info.shapeId;
     if (info.kind == Kind::Sphere) {
         const SphereData& s = impl_->spheres[info.index];
+        if (!std::isfinite(qc.sphereT)) return std::nullopt;  // cannot happen: callback sets it
         h.t = qc.sphereT;
         h.prim = 0;
         h.p = ray.o + h.t * ray.d;

@@ -18,7 +18,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -78,13 +77,13 @@ std::string trimmed(std::string s) {
 
 // tinyobj reports "... line 12.)": recover the line number for the error position.
 int lineOf(const std::string& message) {
-    static const std::regex re(R"(line (\d+))");
-    std::smatch m;
-    if (std::regex_search(message, m, re)) {
-        try {
-            return std::stoi(m[1].str());
-        } catch (...) {
-        }
+    for (size_t at = message.find("line "); at != std::string::npos;
+         at = message.find("line ", at + 1)) {
+        size_t i = at + 5;
+        long value = 0;
+        while (i < message.size() && message[i] >= '0' && message[i] <= '9' && value < 100000000)
+            value = value * 10 + (message[i++] - '0');
+        if (i > at + 5) return int(value);
     }
     return 0;
 }

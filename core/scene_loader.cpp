@@ -119,20 +119,24 @@ std::string join(const std::vector<std::string>& words) {
     return s;
 }
 
-// Levenshtein distance, case-insensitive.
+// Edit distance counting insertions, deletions, substitutions and swaps of neighbours (optimal
+// string alignment), case-insensitive.
 size_t editDistance(std::string_view a, std::string_view b) {
-    const auto low = [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); };
-    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i) {
-        cur[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j) {
-            const size_t subst = prev[j - 1] + (low(a[i - 1]) == low(b[j - 1]) ? 0 : 1);
-            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, subst});
+    const auto low = [](char c) { return std::tolower(static_cast<unsigned char>(c)); };
+    const size_t n = a.size(), m = b.size();
+    std::vector<size_t> d((n + 1) * (m + 1));
+    const auto at = [&](size_t i, size_t j) -> size_t& { return d[i * (m + 1) + j]; };
+    for (size_t i = 0; i <= n; ++i) at(i, 0) = i;
+    for (size_t j = 0; j <= m; ++j) at(0, j) = j;
+    for (size_t i = 1; i <= n; ++i) {
+        for (size_t j = 1; j <= m; ++j) {
+            const size_t cost = low(a[i - 1]) == low(b[j - 1]) ? 0 : 1;
+            at(i, j) = std::min({at(i - 1, j) + 1, at(i, j - 1) + 1, at(i - 1, j - 1) + cost});
+            if (i > 1 && j > 1 && low(a[i - 1]) == low(b[j - 2]) && low(a[i - 2]) == low(b[j - 1]))
+                at(i, j) = std::min(at(i, j), at(i - 2, j - 2) + 1);
         }
-        std::swap(prev, cur);
     }
-    return prev[b.size()];
+    return at(n, m);
 }
 
 // " (did you mean \"x\"?)" when a candidate is close to `word`, else "".
@@ -494,8 +498,9 @@ int readReference(Bag& b, std::string_view key, const std::map<std::string, int>
     std::vector<std::string> defined, quoted;
     for (const auto& [name, index] : names) {
         defined.push_back(name);
-        quoted.push_back("\"" + name + "\"");
+        if (quoted.size() < 20) quoted.push_back("\"" + name + "\"");
     }
+    if (defined.size() > quoted.size()) quoted.push_back("...");
     b.fail(key, "undefined " + what + " \"" + v->text + "\"" + suggestion(v->text, defined) +
                     (defined.empty() ? "; no " + plural + " are defined" : "; defined " + plural + ": " + join(quoted)));
 }

@@ -131,6 +131,16 @@ std::filesystem::path tempDir() {
     return dir;
 }
 
+// Removes the temporary folder after all tests.
+struct TempDirCleanup : ::testing::Environment {
+    void TearDown() override {
+        std::error_code ec;
+        std::filesystem::remove_all(tempDir(), ec);
+    }
+};
+[[maybe_unused]] ::testing::Environment* const kTempDirCleanup =
+    ::testing::AddGlobalTestEnvironment(new TempDirCleanup);
+
 std::string writeFile(const std::string& name, const std::string& text) {
     const auto path = tempDir() / name;
     std::ofstream(path) << text;

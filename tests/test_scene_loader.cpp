@@ -336,6 +336,9 @@ TEST(SceneErrors, UnknownKeySuggestsClosest) {
                 "unknown key for a point light (did you mean \"power\"?); allowed: type, name, power");
     expectError("{\"version\": 1,\n\"shape\": []}", 2, "shape", "(did you mean \"shapes\"?)");
     expectError("{\"version\": 1,\n\"camera\": {\"zoom\": 2}}", 2, "camera.zoom", "allowed: position, look_at, up");
+    // A misspelt required key is reported as such, not as missing.
+    expectError("{\"version\": 1, \"lights\": [{\n\"tpye\": \"point\"}]}", 2, "lights[0].tpye",
+                "(did you mean \"type\"?)");
     // A key that belongs to another type of the same object.
     expectError("{\"shapes\": [{\"type\": \"quad\",\n \"interior_medium\": \"x\"}]}", 2, "shapes[0].interior_medium",
                 "unknown key for a quad");

@@ -1,0 +1,162 @@
+// Viewer: the driver session and the data path from the film to the textures. The UI thread only
+// reads the film with frame(..., wait=false) (tiles being written keep their previous pixels and
+// are fetched again), the streak and the pixel profile are read on a helper thread (they lock
+// tiles and would otherwise stall the UI behind a tile being rendered).
+#include "view_app.h"
+
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace tpb::app {
+
+float autoExposureEv(const std::vector<float>& rgb, bool& found) {
+    std::vector<float> lum;
+    lum.reserve(rgb.size() / 3);
+    for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
+        const float l = 0.2126f * rgb[i] + 0.7152f * rgb[i + 1] + 0.0722f * rgb[i + 2];
+        if (std::isfinite(l) && l > 0.0f) lum.push_back(l);
+    }
+    found = !lum.empty();
+    if (!found) return 0.0f;
+    // The 99th percentile of the lit pixels maps to 1 (a few highlights may clip).
+    const size_t k = std::min(lum.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(lum.size())));
+    std::nth_element(lum.begin(), lum.begin() + static_cast<std::ptrdiff_t>(k), lum.end());
+    return std::clamp(-std::log2(lum[k]), -64.0f, 64.0f);
+}
+
+void Viewer::restart(const DriverSettings& s, const std::string& why) {
+    if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
+    driver_ = std::make_shared<Driver>(scene_, s);
+    ++generation_;
+    edit_ = driver_->settings();
+    driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
+    status_ = why;
+}
+
+float Viewer::binCentreOpl(int bin) const {
+    return static_cast<float>(scene_.time.startOpl + (bin + 0.5) * scene_.time.binWidth);
+}
+
+FetchKey Viewer::frameKey() const {
+    FetchKey k;
+    k.generation = generation_;
+    k.passes = driver_->completedPasses();
+    k.steady = st_.showSteady;
+    if (!k.steady) {
+        k.bin = st_.bin;
+        k.axis = st_.axis;
+        k.mode = st_.mode;
+    }
+    return k;
+}
+
+FetchKey Viewer::profileKey() const {
+    FetchKey k;
+    k.generation = generation_;
+    k.passes = driver_->completedPasses();
+    k.x = st_.selX;
+    k.y = st_.selY;
+    k.axis = st_.axis;
+    k.mode = st_.mode;
+    return k;
+}
+
+void Viewer::updateFrame() {
+    const FetchKey key = frameKey();
+    const double now = glfwGetTime();
+    // Fetch when the film or the selection changed; an incomplete fetch (tiles being written were
+    // skipped) is repeated, at most 30 times a second.
+    const bool changed = !(key == frameKey_);
+    if (changed || (!frameComplete_ && now - lastFetch_ >= 1.0 / 30.0)) {
+        const TransientFilm& film = driver_->film();
+        frameRgb_.resize(static_cast<size_t>(film.width()) * film.height() * 3, 0.0f);
+        frameComplete_ = key.steady ? film.steadyImage(frameRgb_, false)
+                                    : film.frame(key.bin, key.axis, key.mode, frameRgb_, false);
+        frameKey_ = key;
+        lastFetch_ = now;
+        image_.upload(film.width(), film.height(), frameRgb_.data());
+        imageDirty_ = true;
+        // Auto exposure once the picture has light in it (at start, or after the Auto button).
+        bool& pending = key.steady ? st_.autoSteady : st_.autoFrame;
+        if (pending && frameComplete_ && key.passes > 0) {
+            bool found = false;
+            const float ev = autoExposureEv(frameRgb_, found);
+            if (found) {
+                (key.steady ? st_.evSteady : st_.evFrame) = ev;
+                pending = false;
+            }
+        }
+    }
+    DisplayParams p = st_.display;
+    p.exposureEv = st_.showSteady ? st_.evSteady : st_.evFrame;
+    if (imageDirty_ || p.exposureEv != lastImageParams_.exposureEv || p.srgb != lastImageParams_.srgb ||
+        p.falseColor != lastImageParams_.falseColor || p.decades != lastImageParams_.decades) {
+        program_.apply(image_, p);
+        lastImageParams_ = p;
+        imageDirty_ = false;
+    }
+}
+
+void Viewer::updateProfile() {
+    using namespace std::chrono_literals;
+    if (profileJob_.valid() && profileJob_.wait_for(0s) == std::future_status::ready) {
+        ProfileResult r = profileJob_.get();
+        const TransientFilm& film = driver_->film();
+        if (r.key.generation == generation_) {
+            profileKey_ = r.key;
+            profileRgb_ = std::move(r.profile);
+            profileLum_.resize(profileRgb_.size() / 3);
+            for (size_t k = 0; k < profileLum_.size(); ++k)
+                profileLum_[k] = 0.2126f * profileRgb_[k * 3] + 0.7152f * profileRgb_[k * 3 + 1] +
+                                 0.0722f * profileRgb_[k * 3 + 2];
+            streak_.upload(film.width(), film.bins(), r.streak.data());
+            streakDirty_ = true;
+        }
+    }
+    const FetchKey key = profileKey();
+    if (!profileJob_.valid() && !(key == profileRequested_)) {
+        profileRequested_ = key;
+        std::shared_ptr<const Driver> drv = driver_;
+        profileJob_ = std::async(std::launch::async, [drv, key] {
+            ProfileResult r;
+            r.key = key;
+            drv->film().pixelProfile(key.x, key.y, key.axis, key.mode, r.profile);
+            drv->film().streak(key.y, key.axis, key.mode, r.streak);
+            return r;
+        });
+    }
+    DisplayParams p = st_.display;
+    p.exposureEv = st_.evFrame;
+    if (!streak_.empty() &&
+        (streakDirty_ || p.exposureEv != lastStreakParams_.exposureEv || p.srgb != lastStreakParams_.srgb ||
+         p.falseColor != lastStreakParams_.falseColor || p.decades != lastStreakParams_.decades)) {
+        program_.apply(streak_, p);
+        lastStreakParams_ = p;
+        streakDirty_ = false;
+    }
+}
+
+void Viewer::startExport(const ExportRequest& req) {
+    if (export_.busy()) {
+        status_ = "an export is already running";
+        return;
+    }
+    exportError_.clear();
+    exportLog_.clear();
+    export_.start(driver_, req);
+}
+
+void Viewer::pollExport() {
+    if (!export_.collect()) return;
+    exportLog_ = export_.written();
+    exportError_ = export_.error();
+    for (const std::string& w : exportLog_) std::printf("exported: %s\n", w.c_str());
+    if (!exportError_.empty()) std::fprintf(stderr, "export failed: %s\n", exportError_.c_str());
+    std::fflush(stdout);
+    if (exportRequested_) exportDone_ = true;
+}
+
+}  // namespace tpb::app

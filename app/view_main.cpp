@@ -1,0 +1,312 @@
+// `tpb view`: the interactive viewer (GLFW window, OpenGL 3.3 core, Dear ImGui). The driver
+// renders in the background; this file holds the command line, the window and the main loop,
+// including the headless screenshot mode used by the tests (--screenshot, --after-passes).
+#include "commands.h"
+#include "error.h"
+#include "image_io.h"
+#include "view_app.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <thread>
+
+namespace tpb::app {
+
+namespace {
+
+std::string gGlfwError;
+std::atomic<bool> gInterrupted{false};
+
+void onGlfwError(int code, const char* msg) {
+    gGlfwError = msg ? msg : "GLFW error " + std::to_string(code);
+}
+
+void onSigint(int) { gInterrupted = true; }
+
+// The window and its GL context; glfwTerminate on destruction.
+class GlfwWindow {
+public:
+    GlfwWindow(int width, int height, const std::string& title, bool vsync) {
+        glfwSetErrorCallback(onGlfwError);
+        if (!glfwInit()) fail();
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+        glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+        glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+        glfwWindowHint(GLFW_DOUBLEBUFFER, GLFW_TRUE);
+        window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+        if (!window_) {
+            glfwTerminate();
+            fail();
+        }
+        glfwMakeContextCurrent(window_);
+        glfwSwapInterval(vsync ? 1 : 0);
+    }
+    ~GlfwWindow() {
+        if (window_) glfwDestroyWindow(window_);
+        glfwTerminate();
+    }
+    GlfwWindow(const GlfwWindow&) = delete;
+    GlfwWindow& operator=(const GlfwWindow&) = delete;
+    GLFWwindow* get() const { return window_; }
+
+private:
+    [[noreturn]] static void fail() {
+        const std::string why = gGlfwError.empty() ? "" : " (" + gGlfwError + ")";
+        throw UserError("cannot open a window" + why + ": no display? use `tpb render` or run under xvfb-run");
+    }
+    GLFWwindow* window_ = nullptr;
+};
+
+class ImGuiSession {
+public:
+    explicit ImGuiSession(GLFWwindow* window) {
+        IMGUI_CHECKVERSION();
+        ImGui::CreateContext();
+        ImGui::GetIO().IniFilename = nullptr;  // the layout is fixed; write nothing to the cwd
+        ImGui::StyleColorsDark();
+        ImGui_ImplGlfw_InitForOpenGL(window, true);
+        if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
+            ImGui_ImplGlfw_Shutdown();
+            ImGui::DestroyContext();
+            throw std::runtime_error("Dear ImGui: cannot initialise the OpenGL 3 renderer");
+        }
+    }
+    ~ImGuiSession() {
+        ImGui_ImplOpenGL3_Shutdown();
+        ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+    }
+    ImGuiSession(const ImGuiSession&) = delete;
+    ImGuiSession& operator=(const ImGuiSession&) = delete;
+};
+
+}  // namespace
+
+Viewer::Viewer(const Scene& scene, const DriverSettings& settings, const ViewOptions& opt, GLFWwindow* window)
+    : scene_(scene), opt_(opt), window_(window) {
+    program_.load(TPB_SHADER_DIR);
+    const int maxTex = maxTextureSize();
+    if (scene.camera.width > maxTex || scene.camera.height > maxTex || scene.time.bins > maxTex)
+        throw UserError("the film (" + std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height) +
+                        ", " + std::to_string(scene.time.bins) + " bins) exceeds the largest OpenGL texture (" +
+                        std::to_string(maxTex) + "); lower --width/--height/--bins");
+
+    // Initial view: the scene's render settings, then the flags (as `tpb render` does).
+    const RenderDesc& rd = scene.desc.render;
+    st_.axis = (rd.unwarp || opt.unwarp) && !opt.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
+    st_.mode = (rd.emission == EmissionMode::Continuous || opt.continuous) && !opt.delta ? EmissionMode::Continuous
+                                                                                        : EmissionMode::Delta;
+    if (opt.bin) {
+        setBin(*opt.bin);
+    } else if (opt.timeNs) {
+        const int k = scene.time.binOf(*opt.timeNs * kC_m_per_ns);
+        if (k < 0 || k >= scene.time.bins)
+            std::fprintf(stderr, "warning: --time %.4g ns is outside the film (%.4g - %.4g ns); showing the nearest bin\n",
+                         *opt.timeNs, scene.time.startOpl / kC_m_per_ns, scene.time.endOpl() / kC_m_per_ns);
+        setBin(k);
+    }
+    if (opt.exposure) {
+        st_.evFrame = st_.evSteady = static_cast<float>(*opt.exposure);
+        st_.autoFrame = st_.autoSteady = false;
+    }
+    st_.display.falseColor = opt.falseColor;
+    st_.display.srgb = !opt.noSrgb;
+    st_.showSteady = opt.steady;
+    st_.selX = scene.camera.width / 2;
+    st_.selY = scene.camera.height / 2;
+    if (opt.pixel.size() == 2) {
+        st_.selX = std::clamp(opt.pixel[0], 0, scene.camera.width - 1);
+        st_.selY = std::clamp(opt.pixel[1], 0, scene.camera.height - 1);
+    }
+    frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
+    image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
+    restart(settings, "");
+}
+
+Viewer::~Viewer() {
+    // Helper threads first (they only read the film), then the render workers; the GL objects
+    // (members) are deleted afterwards, while the context still exists.
+    export_.cancelAndJoin();
+    if (profileJob_.valid()) profileJob_.wait();
+    if (driver_) driver_->stop();
+}
+
+bool Viewer::screenshotReady() {
+    if (driver_->running()) return false;
+    if (exportRequested_ && !exportDone_) return false;
+    if (!(frameKey_ == frameKey()) || !frameComplete_) return false;
+    return profileKey_ == profileKey();
+}
+
+void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
+    const std::vector<unsigned char> px = readBackBuffer(fbWidth, fbHeight);
+    const std::filesystem::path parent = std::filesystem::path(opt_.screenshot).parent_path();
+    if (!parent.empty()) ensureWritableDir(parent.string());
+    writePng8(opt_.screenshot, fbWidth, fbHeight, px);
+    screenshotTaken_ = true;
+    const uint64_t passes = driver_->completedPasses();
+    if (passes < static_cast<uint64_t>(opt_.afterPasses))
+        std::fprintf(stderr, "warning: the render stopped after %llu passes (asked: %lld)\n",
+                     static_cast<unsigned long long>(passes), static_cast<long long>(opt_.afterPasses));
+    std::printf("screenshot: %s (%dx%d) after %llu passes\n", opt_.screenshot.c_str(), fbWidth, fbHeight,
+                static_cast<unsigned long long>(passes));
+    // Machine-readable: where the film image is in the screenshot and how it was mapped.
+    std::printf("image_area %.3f %.3f %.3f %.3f zoom %.6f exposure_ev %.9g bin %d steady %d\n", imageMin_.x,
+                imageMin_.y, imageSize_.x, imageSize_.y, imageZoom_,
+                static_cast<double>(st_.showSteady ? st_.evSteady : st_.evFrame), st_.bin, st_.showSteady ? 1 : 0);
+    std::fflush(stdout);
+}
+
+void Viewer::run() {
+    const bool shot = !opt_.screenshot.empty();
+    exportRequested_ = shot && !opt_.exportDir.empty();
+    bool exportStarted = false;
+    double last = glfwGetTime();
+    int extraFrames = 3;  // after an event, draw a few frames so ImGui settles
+    while (!glfwWindowShouldClose(window_) && !gInterrupted) {
+        const bool busyDriver = driver_->running() && !driver_->paused();
+        const bool animate = shot || st_.playing || export_.busy() || profileJob_.valid() || !frameComplete_;
+        if (animate || extraFrames > 0) {
+            glfwPollEvents();
+            if (extraFrames > 0) --extraFrames;
+        } else {
+            const double t0 = glfwGetTime();
+            glfwWaitEventsTimeout(0.5);  // a finished pass wakes us (glfwPostEmptyEvent)
+            if (glfwGetTime() - t0 < 0.45) extraFrames = 3;
+        }
+        int fbw = 0, fbh = 0;
+        glfwGetFramebufferSize(window_, &fbw, &fbh);
+        if (fbw <= 0 || fbh <= 0) {  // minimised: nothing to draw
+            pollExport();
+            glfwWaitEventsTimeout(0.1);
+            continue;
+        }
+
+        ImGui_ImplOpenGL3_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        const double now = glfwGetTime();
+        const double dt = now - last;
+        last = now;
+        handleKeys();
+        advancePlayback(dt);
+        pollExport();
+        if (exportRequested_ && !exportStarted && !driver_->running()) {
+            // The same path as the Export buttons: current frame + steady state.
+            ExportRequest r;
+            r.dir = opt_.exportDir;
+            r.frame = r.steady = true;
+            r.bin = st_.bin;
+            r.axis = st_.axis;
+            r.mode = st_.mode;
+            startExport(r);
+            exportStarted = true;
+        }
+        updateFrame();
+        updateProfile();
+        drawUi();
+        ImGui::Render();
+
+        glViewport(0, 0, fbw, fbh);
+        glClearColor(0.06f, 0.06f, 0.07f, 1.0f);
+        glClear(GL_COLOR_BUFFER_BIT);
+        ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+        if (shot) {
+            settleFrames_ = screenshotReady() ? settleFrames_ + 1 : 0;
+            if (settleFrames_ >= 3) {  // two full frames with the final data drawn, then read this one
+                if (!exportError_.empty()) exitCode() = kExitUserError;
+                takeScreenshot(fbw, fbh);
+                break;
+            }
+        }
+        glfwSwapBuffers(window_);
+
+        if (!shot && (animate || extraFrames > 0)) {  // cap the frame rate; leave the cores to the workers
+            const double frame = busyDriver ? 1.0 / 30.0 : 1.0 / 60.0;
+            const double spent = glfwGetTime() - now;
+            if (spent < frame) std::this_thread::sleep_for(std::chrono::duration<double>(frame - spent));
+        }
+    }
+    if (shot && !screenshotTaken_) {
+        std::fprintf(stderr, "error: the viewer was closed before the screenshot was taken\n");
+        exitCode() = 1;
+    }
+}
+
+namespace {
+
+void runView(const ViewOptions& o) {
+    std::unique_ptr<Scene> scene = loadAndBuild(o.scene, o.ov);
+    DriverSettings ds = DriverSettings::fromScene(*scene);
+    o.ov.applyToSettings(ds);
+    const bool shot = !o.screenshot.empty();
+    if (shot) {  // run exactly N passes, then take the picture
+        ds.passes = o.afterPasses;
+        ds.timeBudgetSec = 0.0;
+    }
+    if (o.windowSize.size() != 2 || o.windowSize[0] < 64 || o.windowSize[1] < 64)
+        throw UserError("--window-size needs two sizes >= 64");
+    if (o.pixel.size() == 2 && (o.pixel[0] < 0 || o.pixel[1] < 0 || o.pixel[0] >= scene->camera.width ||
+                                o.pixel[1] >= scene->camera.height))
+        throw UserError("--pixel is outside the image");
+
+    GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + scene->desc.path, !shot);
+    ImGuiSession gui(window.get());
+    gInterrupted = false;
+    std::signal(SIGINT, onSigint);  // Ctrl-C closes the window like the close button
+    try {
+        Viewer viewer(*scene, ds, o, window.get());
+        viewer.run();
+    } catch (...) {
+        std::signal(SIGINT, SIG_DFL);
+        throw;
+    }
+    std::signal(SIGINT, SIG_DFL);
+    // ~Viewer stopped the driver; ~ImGuiSession and ~GlfwWindow now release ImGui and the window.
+}
+
+}  // namespace
+
+void registerView(CLI::App& app) {
+    auto o = std::make_shared<ViewOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "view", "Interactive viewer: the render refines in the background while you scrub through time");
+    cmd->add_option("scene", o->scene, "Scene file (JSON)")->required();
+    o->ov.add(cmd);
+    // In the viewer --time is the time shown (ns); the render's time budget is --time-budget.
+    cmd->remove_option(cmd->get_option("--time"));
+    cmd->add_option("--time-budget", o->ov.timeBudget, "Render time budget in seconds");
+    CLI::Option* shot = cmd->add_option("--screenshot", o->screenshot,
+                                        "Save a PNG of the window after --after-passes passes, then exit");
+    cmd->add_option("--after-passes", o->afterPasses, "Passes to render before the screenshot (default 1)")
+        ->needs(shot)
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--export", o->exportDir,
+                    "With --screenshot: once the passes are done, export the current frame and the steady "
+                    "state to this folder (the Export buttons' code path)")
+        ->needs(shot);
+    CLI::Option* t = cmd->add_option("--time", o->timeNs, "Time shown, in ns (the bin containing it)");
+    cmd->add_option("--bin", o->bin, "Time bin shown")->excludes(t);
+    cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
+    cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)");
+    cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
+    cmd->add_flag("--delta", o->delta, "Start with a delta pulse (the default)");
+    cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)");
+    cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
+    cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
+    cmd->add_flag("--steady", o->steady, "Start on the steady-state image");
+    cmd->add_option("--pixel", o->pixel, "Selected pixel: X Y (time profile; Y is the streak row)")->expected(2);
+    cmd->add_option("--window-size", o->windowSize, "Window size: W H (default 1280 800)")->expected(2);
+    cmd->callback([o] { runView(*o); });
+}
+
+}  // namespace tpb::app

@@ -1,0 +1,350 @@
+// Viewer: the ImGui panels (controls on the left, the film image top right, the streak image and
+// the selected pixel's time profile bottom right). Layout follows the window size.
+#include "view_app.h"
+
+#include <imgui_stdlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+
+namespace tpb::app {
+
+namespace {
+
+constexpr ImGuiWindowFlags kPanel = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                                    ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings |
+                                    ImGuiWindowFlags_NoBringToFrontOnFocus;
+
+ImTextureID texId(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
+
+const char* axisName(TimeAxis a) { return a == TimeAxis::Real ? "real time" : "camera-unwarped time"; }
+const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta pulse" : "continuous emission"; }
+
+}  // namespace
+
+void Viewer::setBin(int bin) { st_.bin = std::clamp(bin, 0, scene_.time.bins - 1); }
+
+void Viewer::handleKeys() {
+    const ImGuiIO& io = ImGui::GetIO();
+    if (io.WantTextInput) return;  // typing in a field
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_LeftArrow))) setBin(st_.bin - 1);
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_RightArrow))) setBin(st_.bin + 1);
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Home), false)) setBin(0);
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_End), false)) setBin(scene_.time.bins - 1);
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space), false)) st_.playing = !st_.playing;
+}
+
+void Viewer::advancePlayback(double dt) {
+    if (!st_.playing) {
+        st_.playAccum = 0.0;
+        return;
+    }
+    st_.playAccum += std::min(dt, 0.25) * st_.speed;
+    while (st_.playAccum >= 1.0) {
+        st_.playAccum -= 1.0;
+        if (st_.bin + 1 < scene_.time.bins) {
+            ++st_.bin;
+        } else if (st_.loop) {
+            st_.bin = 0;
+        } else {
+            st_.playing = false;
+            st_.playAccum = 0.0;
+            break;
+        }
+    }
+}
+
+void Viewer::drawUi() {
+    const ImVec2 ds = ImGui::GetIO().DisplaySize;
+    const float left = std::clamp(ds.x * 0.3f, 300.0f, 420.0f);
+    const float topH = std::floor(ds.y * 0.6f);
+
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ImVec2(left, ds.y));
+    if (ImGui::Begin("Controls", nullptr, kPanel)) drawControls();
+    ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(left, 0));
+    ImGui::SetNextWindowSize(ImVec2(ds.x - left, topH));
+    if (ImGui::Begin("Image", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawImagePanel();
+    ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(left, topH));
+    ImGui::SetNextWindowSize(ImVec2(ds.x - left, ds.y - topH));
+    if (ImGui::Begin("Streak and pixel profile", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawTimePanel();
+    ImGui::End();
+}
+
+void Viewer::drawControls() {
+    const TimeBins& tb = scene_.time;
+    ImGui::TextWrapped("%s", scene_.desc.path.c_str());
+    ImGui::Text("%d x %d px, %d bins, %.3f - %.3f ns", scene_.camera.width, scene_.camera.height, tb.bins,
+                tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
+    drawTimeSection();
+
+    if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) {
+        int show = st_.showSteady ? 1 : 0;
+        ImGui::RadioButton("Time frame", &show, 0);
+        ImGui::SameLine();
+        ImGui::RadioButton("Steady state", &show, 1);
+        st_.showSteady = show == 1;
+        bool unwarp = st_.axis == TimeAxis::Unwarped;
+        if (ImGui::Checkbox("Camera unwarping", &unwarp)) st_.axis = unwarp ? TimeAxis::Unwarped : TimeAxis::Real;
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Time since emission without the path to the camera");
+        bool cont = st_.mode == EmissionMode::Continuous;
+        if (ImGui::Checkbox("Continuous emission", &cont)) st_.mode = cont ? EmissionMode::Continuous : EmissionMode::Delta;
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Light on from the pulse instant (running sum of the delta response)");
+    }
+
+    if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+        float& ev = st_.showSteady ? st_.evSteady : st_.evFrame;
+        ImGui::SliderFloat("exposure (EV)", &ev, -40.0f, 40.0f, "%.2f");
+        ImGui::SameLine();
+        if (ImGui::Button("Auto")) {
+            (st_.showSteady ? st_.autoSteady : st_.autoFrame) = true;
+            frameKey_ = FetchKey{};  // fetch again: the exposure is computed from a fresh frame
+        }
+        ImGui::Checkbox("sRGB", &st_.display.srgb);
+        ImGui::SameLine();
+        ImGui::Checkbox("False colour", &st_.display.falseColor);
+        if (st_.display.falseColor) {
+            ImGui::SliderFloat("decades", &st_.display.decades, 1.0f, 12.0f, "%.1f");
+            ImGui::TextDisabled("log10 luminance: blue (dim) .. red (white point), white = clipped");
+        }
+    }
+    drawProgressSection();
+    drawSettingsSection();
+    drawExportSection();
+}
+
+void Viewer::drawTimeSection() {
+    if (!ImGui::CollapsingHeader("Time", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    const TimeBins& tb = scene_.time;
+    int bin = st_.bin;
+    if (ImGui::SliderInt("bin", &bin, 0, tb.bins - 1)) setBin(bin);
+    const double opl = binCentreOpl(st_.bin);
+    ImGui::Text("t = %.4f ns  |  %.4f m of OPL", opl / kC_m_per_ns, opl);
+    ImGui::TextDisabled("bin centre, %s; bin width %.4f ns (%.4f m)", axisName(st_.axis),
+                        tb.binWidth / kC_m_per_ns, tb.binWidth);
+    if (ImGui::ArrowButton("##prev", ImGuiDir_Left)) setBin(st_.bin - 1);
+    ImGui::SameLine();
+    if (ImGui::Button(st_.playing ? "Pause" : "Play", ImVec2(60, 0))) st_.playing = !st_.playing;
+    ImGui::SameLine();
+    if (ImGui::ArrowButton("##next", ImGuiDir_Right)) setBin(st_.bin + 1);
+    ImGui::SameLine();
+    ImGui::Checkbox("loop", &st_.loop);
+    ImGui::SliderFloat("speed (bins/s)", &st_.speed, 0.5f, 120.0f, "%.1f", ImGuiSliderFlags_Logarithmic);
+    ImGui::TextDisabled("keys: Left/Right one bin, Home/End, Space play");
+}
+
+void Viewer::drawProgressSection() {
+    if (!ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    const DriverSettings& s = driver_->settings();
+    const uint64_t done = driver_->completedPasses();
+    const PassStats last = driver_->lastPass();
+    const char* state = !driver_->running() ? "finished" : driver_->paused() ? "paused" : "rendering";
+    if (s.passes > 0)
+        ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes), state);
+    else
+        ImGui::Text("pass %llu  (%s)", static_cast<unsigned long long>(done), state);
+    if (s.passes > 0) ImGui::ProgressBar(static_cast<float>(done) / static_cast<float>(s.passes), ImVec2(-1, 0));
+    if (done > 0) {
+        ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
+        ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
+                    static_cast<long long>(last.photons));
+        ImGui::Text("pass time %.3f s (trace %.2f, build %.2f, camera %.2f)", last.passSec, last.photonSec,
+                    last.buildSec, last.cameraSec);
+        ImGui::Text("total time %.2f s", last.elapsedSec);
+    } else {
+        ImGui::TextDisabled("first pass in progress...");
+    }
+    const FilmStats& fs = driver_->film().stats;
+    ImGui::Text("rejected samples %lld", static_cast<long long>(fs.rejectedSamples.load()));
+    const int a = static_cast<int>(st_.axis);
+    const double in = fs.inside[a].load(), out = fs.outside[a].load();
+    if (in + out > 0) ImGui::Text("energy outside the film %.3g %%", 100.0 * out / (in + out));
+    if (driver_->running()) {
+        if (ImGui::Button(driver_->paused() ? "Resume" : "Pause", ImVec2(80, 0))) {
+            if (driver_->paused()) driver_->resume();
+            else driver_->pause();
+        }
+        if (driver_->paused()) {
+            ImGui::SameLine();
+            ImGui::TextDisabled("(takes effect between passes)");
+        }
+    }
+    if (ImGui::Button("Restart", ImVec2(80, 0))) restart(driver_->settings(), "accumulation restarted");
+    if (!status_.empty()) ImGui::TextColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), "%s", status_.c_str());
+}
+
+void Viewer::drawSettingsSection() {
+    if (!ImGui::CollapsingHeader("Render settings", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    ImGui::TextDisabled("a change restarts the accumulation");
+    bool apply = false;
+    const int64_t step = 1000, stepFast = 10000;
+    ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    ImGui::InputDouble("alpha", &edit_.alpha, 0.05, 0.1, "%.3f");
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    ImGui::InputDouble("initial radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    const int64_t one = 1, ten = 10;
+    ImGui::InputScalar("pass limit (0 = none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    if (!apply) return;
+    const DriverSettings& cur = driver_->settings();
+    if (edit_.photonsPerPass < 1 || !(edit_.alpha > 0.0 && edit_.alpha <= 1.0) || !(edit_.beamRadius0 > 0.0) ||
+        edit_.passes < 0) {
+        status_ = "invalid setting (photons >= 1, alpha in (0, 1], radius > 0, passes >= 0): not applied";
+        edit_ = cur;
+        return;
+    }
+    if (edit_.photonsPerPass == cur.photonsPerPass && edit_.alpha == cur.alpha &&
+        edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
+        return;
+    DriverSettings s = cur;  // everything else (seed, threads, radii ratio...) as before
+    s.photonsPerPass = edit_.photonsPerPass;
+    s.alpha = edit_.alpha;
+    s.beamRadius0 = edit_.beamRadius0;
+    s.passes = edit_.passes;
+    restart(s, "settings changed: accumulation restarted");
+}
+
+void Viewer::drawExportSection() {
+    if (!ImGui::CollapsingHeader("Export (EXR)", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    ImGui::InputText("folder", &st_.outDir);
+    ImGui::TextDisabled("in %s, %s", axisName(st_.axis), modeName(st_.mode));
+    ExportRequest r;
+    r.dir = st_.outDir.empty() ? "." : st_.outDir;
+    r.bin = st_.bin;
+    r.row = st_.selY;
+    r.x = st_.selX;
+    r.y = st_.selY;
+    r.axis = st_.axis;
+    r.mode = st_.mode;
+    const bool busy = export_.busy();
+    ImGui::BeginDisabled(busy);
+    bool go = false;
+    if (ImGui::Button("Current frame")) go = r.frame = true;
+    ImGui::SameLine();
+    if (ImGui::Button("All frames")) go = r.allFrames = true;
+    ImGui::SameLine();
+    if (ImGui::Button("Steady state")) go = r.steady = true;
+    if (ImGui::Button("Streak (selected row)")) go = r.streak = true;
+    ImGui::SameLine();
+    if (ImGui::Button("Pixel profile (CSV)")) go = r.profile = true;
+    ImGui::EndDisabled();
+    if (go) startExport(r);
+    if (busy) {
+        ImGui::ProgressBar(export_.progress(), ImVec2(-70, 0), export_.progressLabel().c_str());
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel")) export_.cancel();
+    } else if (!exportError_.empty()) {
+        ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), "%s", exportError_.c_str());
+    }
+    for (const std::string& w : exportLog_) ImGui::TextWrapped("wrote %s", w.c_str());
+}
+
+void Viewer::drawImagePanel() {
+    const int w = scene_.camera.width, h = scene_.camera.height;
+    if (st_.showSteady) {
+        ImGui::Text("Steady state (all time), %llu passes", static_cast<unsigned long long>(frameKey_.passes));
+    } else {
+        const double opl = binCentreOpl(st_.bin);
+        ImGui::Text("bin %d: t = %.4f ns (%.4f m), %s, %s", st_.bin, opl / kC_m_per_ns, opl, axisName(st_.axis),
+                    modeName(st_.mode));
+    }
+    const ImVec2 avail = ImGui::GetContentRegionAvail();
+    float zoom = std::min(avail.x / w, avail.y / h);
+    if (zoom >= 1.0f) zoom = std::floor(zoom);  // whole screen pixels per film pixel when it fits
+    zoom = std::max(zoom, 0.01f);
+    const ImVec2 size(w * zoom, h * zoom);
+    ImGui::SetCursorPosX(ImGui::GetCursorPosX() + std::floor(std::max(0.0f, (avail.x - size.x) * 0.5f)));
+    const ImVec2 p0 = ImGui::GetCursorScreenPos();
+    ImGui::Image(texId(image_.texture()), size);
+    const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+    imageMin_ = ImVec2(p0.x * scale.x, p0.y * scale.y);
+    imageSize_ = ImVec2(size.x * scale.x, size.y * scale.y);
+    imageZoom_ = zoom * scale.x;
+
+    if (ImGui::IsItemHovered()) {
+        const ImVec2 m = ImGui::GetIO().MousePos;
+        const int x = std::clamp(static_cast<int>((m.x - p0.x) / zoom), 0, w - 1);
+        const int y = std::clamp(static_cast<int>((m.y - p0.y) / zoom), 0, h - 1);
+        const size_t i = (static_cast<size_t>(y) * w + x) * 3;
+        if (i + 2 < frameRgb_.size())
+            ImGui::SetTooltip("pixel (%d, %d)\nRGB %.4g %.4g %.4g\nclick: profile + streak row", x, y, frameRgb_[i],
+                              frameRgb_[i + 1], frameRgb_[i + 2]);
+        if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+            st_.selX = x;
+            st_.selY = y;
+        }
+    }
+    // Selection markers: the pixel's outline and ticks beside the image for the streak row.
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const ImU32 col = IM_COL32(255, 200, 40, 255);
+    const float sx = p0.x + st_.selX * zoom, sy = p0.y + st_.selY * zoom;
+    dl->AddRect(ImVec2(sx - 1, sy - 1), ImVec2(sx + zoom + 1, sy + zoom + 1), col);
+    const float cy = sy + 0.5f * zoom;
+    dl->AddTriangleFilled(ImVec2(p0.x - 8, cy - 4), ImVec2(p0.x - 8, cy + 4), ImVec2(p0.x - 2, cy), col);
+    dl->AddTriangleFilled(ImVec2(p0.x + size.x + 8, cy - 4), ImVec2(p0.x + size.x + 8, cy + 4),
+                          ImVec2(p0.x + size.x + 2, cy), col);
+}
+
+void Viewer::drawTimePanel() {
+    const int w = scene_.camera.width, bins = scene_.time.bins;
+    ImGui::Text("Streak image of row %d (x across, time down), %s, %s", st_.selY, axisName(st_.axis),
+                modeName(st_.mode));
+    const ImVec2 avail = ImGui::GetContentRegionAvail();
+    const float lineH = ImGui::GetTextLineHeightWithSpacing();
+    const float plotH = std::max(60.0f, std::min(140.0f, avail.y * 0.4f));
+    const float streakH = std::max(20.0f, avail.y - plotH - 2.0f * lineH - 8.0f);
+    const ImVec2 size(avail.x, streakH);
+    const ImVec2 p0 = ImGui::GetCursorScreenPos();
+    if (!streak_.empty()) {
+        ImGui::Image(texId(streak_.texture()), size);
+        const float zx = size.x / w, zy = size.y / bins;
+        if (ImGui::IsItemHovered()) {
+            const ImVec2 m = ImGui::GetIO().MousePos;
+            const int x = std::clamp(static_cast<int>((m.x - p0.x) / zx), 0, w - 1);
+            const int k = std::clamp(static_cast<int>((m.y - p0.y) / zy), 0, bins - 1);
+            const double opl = binCentreOpl(k);
+            ImGui::SetTooltip("x %d, bin %d (%.4f ns)\nclick: go to this time and pixel", x, k, opl / kC_m_per_ns);
+            if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+                st_.selX = x;
+                setBin(k);
+            }
+        }
+        ImDrawList* dl = ImGui::GetWindowDrawList();
+        const float y = p0.y + (st_.bin + 0.5f) * zy;
+        dl->AddLine(ImVec2(p0.x, y), ImVec2(p0.x + size.x, y), IM_COL32(255, 200, 40, 160));
+        const float x = p0.x + (st_.selX + 0.5f) * zx;
+        dl->AddLine(ImVec2(x, p0.y), ImVec2(x, p0.y + size.y), IM_COL32(255, 200, 40, 90));
+    } else {
+        ImGui::Dummy(size);
+    }
+
+    ImGui::Text("Time profile of pixel (%d, %d), luminance", st_.selX, st_.selY);
+    if (!profileLum_.empty()) {
+        const float peak = *std::max_element(profileLum_.begin(), profileLum_.end());
+        char overlay[96];
+        std::snprintf(overlay, sizeof overlay, "peak %.4g, bin %d: %.4g", peak, st_.bin,
+                      st_.bin < static_cast<int>(profileLum_.size()) ? profileLum_[st_.bin] : 0.0f);
+        ImGui::PlotLines("##profile", profileLum_.data(), static_cast<int>(profileLum_.size()), 0, overlay, 0.0f,
+                         peak > 0 ? peak * 1.05f : 1.0f, ImVec2(avail.x, plotH));
+        const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+        const float pad = ImGui::GetStyle().FramePadding.x;
+        // PlotLines puts value k at k / (count - 1) of the inner frame.
+        const float span = std::max(1.0f, b.x - a.x - 2.0f * pad);
+        const float x = a.x + pad + (bins > 1 ? static_cast<float>(st_.bin) / (bins - 1) : 0.5f) * span;
+        ImGui::GetWindowDrawList()->AddLine(ImVec2(x, a.y), ImVec2(x, b.y), IM_COL32(255, 200, 40, 200));
+        if (ImGui::IsItemHovered() && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+            const float t = (ImGui::GetIO().MousePos.x - a.x - pad) / span;
+            setBin(static_cast<int>(std::lround(t * (bins - 1))));
+        }
+    }
+}
+
+}  // namespace tpb::app

@@ -1,0 +1,338 @@
+// Unbiased transient volumetric path tracer (see path_tracer.h for the algorithm and the time axes).
+//
+// Glossary (units): beta camera-path throughput (dimensionless RGB, 1 at the sensor); oplCam OPL
+// of the camera path from the sensor to the current vertex (m); oplUnw OPL of the camera path from
+// its first non-specular vertex to the current vertex (m, 0 while there is none: the unwarped time
+// of a contribution is emitOpl + connection + oplUnw, a sum of positive terms, so it never suffers
+// the cancellation of "total - camera prefix"); Li light term of a connection (incident radiance
+// times solid angle over the sampling pdfs, W / (m^2 sr)).
+#include "path_tracer.h"
+
+#include "bsdf.h"
+#include "error.h"
+#include "parallel.h"
+#include "rng.h"
+#include "sampling.h"
+
+#include <vector>
+
+namespace tpb {
+
+namespace {
+
+constexpr double kRayEps = 1e-6;       // same offset as camera_pass.cpp / photon_tracer.cpp
+constexpr double kAreaShrink = 1e-5;   // shadow rays to an area light stop this fraction short
+constexpr int kMaxShadowCrossings = 64;
+constexpr int kRussianRouletteDepth = 3;
+
+struct PathContext {
+    const Scene& scene;
+    const TimeBins& time;
+    PixelAccumulator& acc;
+    PathTracerStats& stats;
+    double sampleWeight;  // 1 / samplesPerPixel
+};
+
+// One contribution at real time tReal and unwarped time tUnw.
+void splat(PathContext& ctx, const Color& L, double tReal, double tUnw) {
+    if (!isFinite(L) || !std::isfinite(tReal) || !std::isfinite(tUnw)) { ++ctx.stats.rejected; return; }
+    if (isBlack(L)) return;
+    const Color c = L * ctx.sampleWeight;
+    const double lum = luminance(c);
+    const double t[2] = {tReal, tUnw};
+    for (int a = 0; a < 2; ++a) {
+        const int k = ctx.time.binOf(t[a]);
+        if (k >= 0 && k < ctx.time.bins) {
+            ctx.acc.add(static_cast<TimeAxis>(a), k, c);
+            ctx.stats.inside[a] += lum;
+        } else {
+            ctx.stats.outside[a] += lum;
+        }
+    }
+    ctx.acc.addSteady(c);
+    ++ctx.stats.contributions;
+}
+
+// Shadow ray from `from` (in the region on top of `stack`) to `to`. Null boundaries are crossed
+// (push on entering, pop on leaving), any other surface blocks. On success returns the product of
+// the regions' transmittances and the OPL of the connection.
+bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stack, bool toSurface, Color& tr,
+                 double& opl) {
+    tr = Color(1.0);
+    opl = 0.0;
+    const double shrink = toSurface ? kAreaShrink * glm::length(to - from) : 0.0;
+    for (int i = 0; i < kMaxShadowCrossings; ++i) {
+        const Vec3 v = to - from;
+        const double dist = glm::length(v);
+        if (!(dist > shrink)) return true;
+        const Ray ray{from, v / dist, 0.0, dist - shrink};
+        const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
+        const double seg = hit ? hit->t : dist;
+        const Region& region = scene.regions[stack.top()];
+        opl += region.ior * seg;
+        if (region.hasMedium) tr *= region.medium.transmittance(seg);
+        if (!hit) return true;
+        const ShapeInfo& shape = scene.shapes[hit->shape];
+        if (shape.areaLight >= 0 || shape.material < 0) return false;
+        if (scene.materials[shape.material].type != MaterialType::Null) return false;
+        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
+        const Vec3 ng = front ? hit->ng : -hit->ng;
+        if (front) stack.push(shape.interiorRegion); else stack.pop();
+        from = hit->p - kRayEps * ng;
+    }
+    return false;
+}
+
+// Next-event estimation at vertex x (shadow rays start at x + offset). `scatter(w)` returns the
+// vertex's phase function or BSDF-times-cosine value for the direction w towards the light.
+template <class Scatter>
+void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, const RegionStack& regions,
+               const Color& beta, double oplCam, double oplUnw, Scatter&& scatter) {
+    const Scene& scene = ctx.scene;
+    // Always draw the same count of numbers, so later decisions do not depend on the light type.
+    const double uLight = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    double pick = 0.0;
+    const int li = scene.pickLight(uLight, pick);
+    if (li < 0 || !(pick > 0.0)) return;
+    const Light& light = scene.lights[li];
+    Vec3 y;
+    Color Li(0.0);
+    switch (light.type) {
+        case LightType::Point:
+        case LightType::Spot: {
+            y = light.position;
+            const Vec3 v = y - x;
+            const double d2 = glm::dot(v, v);
+            if (!(d2 > 0.0)) return;
+            double intensity = 1.0 / (4.0 * kPi);  // per watt, point light
+            if (light.type == LightType::Spot) {
+                const double cosL = glm::dot(light.direction, -v / std::sqrt(d2));
+                intensity = light.spotIntegral > 0.0 ? light.spotProfile(cosL) / light.spotIntegral : 0.0;
+            }
+            Li = light.power * (intensity / d2);
+            break;
+        }
+        case LightType::AreaQuad: {
+            y = light.corner + u1 * light.edgeU + u2 * light.edgeV;  // pdf 1 / area
+            const Vec3 v = y - x;
+            const double d2 = glm::dot(v, v);
+            if (!(d2 > 0.0)) return;
+            const double cosL = -glm::dot(light.normal, v) / std::sqrt(d2);
+            if (cosL <= 0.0) return;  // one-sided: emits along its normal only
+            Li = light.areaRadiance() * (cosL * light.area / d2);
+            break;
+        }
+        case LightType::Laser:
+            ++ctx.stats.laserSamples;
+            return;
+    }
+    if (isBlack(Li)) return;
+    const Vec3 w = glm::normalize(y - x);
+    const Color f = scatter(w);
+    if (isBlack(f)) return;
+    ++ctx.stats.shadowRays;
+    Color tr;
+    double oplShadow;
+    if (!traceShadow(scene, x + offset, y, regions, light.type == LightType::AreaQuad, tr, oplShadow)) return;
+    const Color L = beta * f * Li * tr / pick;
+    splat(ctx, L, light.emitOpl + oplShadow + oplCam, light.emitOpl + oplShadow + oplUnw);
+}
+
+// Russian roulette on the throughput; false if the path dies.
+bool roulette(Rng& rng, Color& beta, int depth) {
+    if (depth < kRussianRouletteDepth) return true;
+    const double q = std::min(1.0, maxComponent(beta));
+    if (!(q > 0.0)) return false;
+    if (q < 1.0) {
+        if (rng.uniform() >= q) return false;
+        beta /= q;
+    }
+    return true;
+}
+
+void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng) {
+    const Scene& scene = ctx.scene;
+    Color beta(1.0);
+    double oplCam = 0.0, oplUnw = 0.0;
+    bool nonSpecular = false;    // the path has reached its first non-specular vertex
+    bool emitterVisible = true;  // previous vertex is the sensor or specular: emitter hits count
+    RegionStack regions;         // the camera sits in the outside region
+    int depth = 0;
+    ++ctx.stats.cameraPaths;
+    // Null crossings do not count as depth; this bounds the loop in degenerate geometry.
+    const int maxIterations = 4 * std::max(s.maxDepth, 1) + 256;
+
+    for (int it = 0; it < maxIterations; ++it) {
+        const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
+        const double dSurf = hit ? hit->t : kInf;
+        const Region& region = scene.regions[regions.top()];
+
+        if (region.hasMedium) {
+            const Medium& m = region.medium;
+            if (m.scattering) {
+                const double sigmaBar = m.samplingSigma();
+                const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
+                if (d < dSurf) {
+                    // Medium scattering vertex.
+                    beta *= m.sigma_s * m.transmittance(d) / (sigmaBar * std::exp(-sigmaBar * d));
+                    oplCam += region.ior * d;
+                    if (nonSpecular) oplUnw += region.ior * d;
+                    nonSpecular = true;
+                    if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
+                    const Vec3 x = ray.at(d);
+                    ++depth;
+                    const Vec3 wi = ray.d;
+                    nextEvent(ctx, rng, x, Vec3(0.0), regions, beta, oplCam, oplUnw,
+                              [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(wi, w))); });
+                    if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+                    if (!roulette(rng, beta, depth)) return;
+                    const double v1 = rng.uniform(), v2 = rng.uniform();
+                    ray = {x, m.phase.sample(wi, v1, v2)};
+                    emitterVisible = false;
+                    continue;
+                }
+                if (hit) beta *= m.transmittance(dSurf) / std::exp(-sigmaBar * dSurf);
+            } else if (hit) {
+                beta *= m.transmittance(dSurf);
+            }
+        }
+        if (!hit) return;  // escaped
+        oplCam += region.ior * hit->t;
+        if (nonSpecular) oplUnw += region.ior * hit->t;
+        if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
+        if (isBlack(beta)) return;
+
+        const ShapeInfo& shape = scene.shapes[hit->shape];
+        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
+        const Vec3 ng = front ? hit->ng : -hit->ng;  // facing the incoming ray
+        Vec3 ns = front ? hit->ns : -hit->ns;
+        if (glm::dot(ns, ng) <= 0.0) ns = ng;
+
+        if (shape.areaLight >= 0) {  // emitter: visible from its front side, absorbs
+            if (front && emitterVisible) {
+                const Light& l = scene.lights[shape.areaLight];
+                splat(ctx, beta * l.areaRadiance(), l.emitOpl + oplCam, l.emitOpl + oplUnw);
+            }
+            return;
+        }
+        if (shape.material < 0) return;
+        const Material& mat = scene.materials[shape.material];
+
+        if (mat.type == MaterialType::Null) {
+            // Index-matched boundary (as in the beam core): no bending, no reflection, no depth.
+            ray = {hit->p - kRayEps * ng, ray.d};
+            if (front) regions.push(shape.interiorRegion); else regions.pop();
+            continue;
+        }
+
+        ++depth;
+        if (mat.type == MaterialType::Diffuse) {
+            nonSpecular = true;
+            const Color fr = mat.albedo * kInvPi;
+            nextEvent(ctx, rng, hit->p, kRayEps * ng, regions, beta, oplCam, oplUnw, [&](const Vec3& w) {
+                if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
+                return fr * std::max(0.0, glm::dot(w, ns));
+            });
+            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            const double v1 = rng.uniform(), v2 = rng.uniform();
+            const Vec3 wo = glm::normalize(toWorld(sampleCosineHemisphere(v1, v2), ns));
+            if (glm::dot(wo, ng) <= 0.0) return;
+            beta *= mat.albedo;  // f cos / pdf
+            ray = {hit->p + kRayEps * ng, wo};
+            emitterVisible = false;
+        } else if (mat.type == MaterialType::Mirror) {
+            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            beta *= mat.specular;
+            ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+            emitterVisible = true;
+        } else {  // dielectric: reflection or refraction chosen by Fresnel
+            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            double etaI, etaT;
+            scene.interfaceEtas(shape, front, regions, etaI, etaT);
+            const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
+            Vec3 refr;
+            if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
+                ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+            } else {
+                ray = {hit->p - kRayEps * ng, refr};
+                if (front) regions.push(shape.interiorRegion); else regions.pop();
+            }
+            beta *= mat.specular;
+            emitterVisible = true;
+        }
+        if (!roulette(rng, beta, depth)) return;
+    }
+    ++ctx.stats.depthLimited;
+}
+
+}  // namespace
+
+void PathTracerStats::flushInto(FilmStats& f) const {
+    f.rejectedSamples.fetch_add(rejected);
+    for (int a = 0; a < 2; ++a) {
+        f.outside[a].fetch_add(outside[a]);
+        f.inside[a].fetch_add(inside[a]);
+    }
+}
+
+PathTracerStats& PathTracerStats::operator+=(const PathTracerStats& o) {
+    cameraPaths += o.cameraPaths;
+    contributions += o.contributions;
+    shadowRays += o.shadowRays;
+    rejected += o.rejected;
+    laserSamples += o.laserSamples;
+    depthLimited += o.depthLimited;
+    for (int a = 0; a < 2; ++a) { outside[a] += o.outside[a]; inside[a] += o.inside[a]; }
+    return *this;
+}
+
+void pathTracePixel(const Scene& scene, const PathTracerSettings& s, uint64_t pass, const TimeBins& time, int x,
+                    int y, PixelAccumulator& acc, PathTracerStats& stats) {
+    const int spp = std::max(1, s.samplesPerPixel);
+    const uint64_t pixelIndex = static_cast<uint64_t>(y) * static_cast<uint64_t>(scene.camera.width) + x;
+    Rng rng(s.seed, Stream::PathTracer, pass, pixelIndex);
+    PathContext ctx{scene, time, acc, stats, 1.0 / spp};
+    for (int i = 0; i < spp; ++i) {
+        const double jx = rng.uniform(), jy = rng.uniform();
+        tracePath(ctx, s, scene.camera.generate(x + jx, y + jy), rng);
+    }
+}
+
+void renderPathTracerPass(const Scene& scene, const PathTracerSettings& s, uint64_t pass, TransientFilm& film,
+                          PathTracerStats* stats, const std::atomic<bool>* abort) {
+    TPB_CHECK(film.width() == scene.camera.width && film.height() == scene.camera.height);
+    const int threads = resolveThreads(s.threads);
+    std::vector<PixelAccumulator> accs(static_cast<size_t>(threads), PixelAccumulator(film.bins()));
+    // Per-tile tallies, summed in tile order: the stats do not depend on the thread count either.
+    std::vector<PathTracerStats> tileStats(static_cast<size_t>(film.tileCount()));
+    parallelFor(film.tileCount(), threads, [&](int64_t tile, int t) {
+        PixelAccumulator& acc = accs[static_cast<size_t>(t)];
+        PathTracerStats& st = tileStats[static_cast<size_t>(tile)];
+        const TileRect r = film.tileRect(static_cast<int>(tile));
+        TransientFilm::TileWriter writer(film, static_cast<int>(tile));
+        for (int y = r.y0; y < r.y0 + r.h; ++y)
+            for (int x = r.x0; x < r.x0 + r.w; ++x) {
+                pathTracePixel(scene, s, pass, film.time(), x, y, acc, st);
+                writer.addPixel(x, y, acc);
+                acc.clearTouched();
+            }
+    }, abort);
+    PathTracerStats total;
+    for (const PathTracerStats& st : tileStats) total += st;
+    total.flushInto(film.stats);
+    if (stats) *stats += total;
+}
+
+int64_t renderPathTracer(const Scene& scene, const PathTracerSettings& s, uint64_t firstPass, int64_t passes,
+                         TransientFilm& film, PathTracerStats* stats, const std::atomic<bool>* abort) {
+    int64_t done = 0;
+    for (int64_t i = 0; i < passes; ++i) {
+        if (abort && abort->load()) break;
+        renderPathTracerPass(scene, s, firstPass + static_cast<uint64_t>(i), film, stats, abort);
+        if (abort && abort->load()) break;  // the pass may be incomplete
+        ++done;
+    }
+    return done;
+}
+
+}  // namespace tpb
