@@ -1,6 +1,7 @@
 #include "cli_common.h"
 
 #include "error.h"
+#include "time_range.h"
 
 #include <cstdio>
 
@@ -62,7 +63,13 @@ std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrid
     SceneDesc desc = loadScene(path);
     for (const std::string& w : desc.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     ov.applyToDesc(desc);
-    return Scene::build(desc);
+    std::unique_ptr<Scene> scene = Scene::build(desc);
+    if (desc.film.autoRange) {
+        const TimeRangeFit f = fitTimeRange(*scene, 4000, ov.threads.value_or(desc.render.threads));
+        if (!f.fromPilot)
+            std::fprintf(stderr, "note: the pilot pass saw no energy; the film keeps the scene-size range\n");
+    }
+    return scene;
 }
 
 std::string humanBytes(uint64_t b) {

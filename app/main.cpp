@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     tpb::app::registerRender(app);
     tpb::app::registerInfo(app);
+    tpb::app::registerBench(app);
 #ifdef TPB_HAVE_VIEWER
     tpb::app::registerView(app);
 #endif

@@ -19,6 +19,12 @@ constexpr ImGuiWindowFlags kPanel = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_N
 
 ImTextureID texId(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
 
+void hint(const char* text) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+    ImGui::TextWrapped("%s", text);
+    ImGui::PopStyleColor();
+}
+
 const char* axisName(TimeAxis a) { return a == TimeAxis::Real ? "real time" : "camera-unwarped time"; }
 const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta pulse" : "continuous emission"; }
 
@@ -79,6 +85,7 @@ void Viewer::drawUi() {
 
 void Viewer::drawControls() {
     const TimeBins& tb = scene_.time;
+    ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels
     ImGui::TextWrapped("%s", scene_.desc.path.c_str());
     ImGui::Text("%d x %d px, %d bins, %.3f - %.3f ns", scene_.camera.width, scene_.camera.height, tb.bins,
                 tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
@@ -101,22 +108,24 @@ void Viewer::drawControls() {
     if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
         float& ev = st_.showSteady ? st_.evSteady : st_.evFrame;
         ImGui::SliderFloat("exposure (EV)", &ev, -40.0f, 40.0f, "%.2f");
-        ImGui::SameLine();
-        if (ImGui::Button("Auto")) {
+        if (ImGui::Button("Auto exposure")) {
             (st_.showSteady ? st_.autoSteady : st_.autoFrame) = true;
             frameKey_ = FetchKey{};  // fetch again: the exposure is computed from a fresh frame
         }
+        ImGui::SameLine();
         ImGui::Checkbox("sRGB", &st_.display.srgb);
         ImGui::SameLine();
         ImGui::Checkbox("False colour", &st_.display.falseColor);
         if (st_.display.falseColor) {
             ImGui::SliderFloat("decades", &st_.display.decades, 1.0f, 12.0f, "%.1f");
-            ImGui::TextDisabled("log10 luminance: blue (dim) .. red (white point), white = clipped");
+            hint("log10 luminance over the decades below the white point: blue (dim) to red; "
+                 "white = clipped, black = no energy");
         }
     }
     drawProgressSection();
     drawSettingsSection();
     drawExportSection();
+    ImGui::PopItemWidth();
 }
 
 void Viewer::drawTimeSection() {
@@ -126,8 +135,8 @@ void Viewer::drawTimeSection() {
     if (ImGui::SliderInt("bin", &bin, 0, tb.bins - 1)) setBin(bin);
     const double opl = binCentreOpl(st_.bin);
     ImGui::Text("t = %.4f ns  |  %.4f m of OPL", opl / kC_m_per_ns, opl);
-    ImGui::TextDisabled("bin centre, %s; bin width %.4f ns (%.4f m)", axisName(st_.axis),
-                        tb.binWidth / kC_m_per_ns, tb.binWidth);
+    ImGui::TextDisabled("(bin centre, %s)", axisName(st_.axis));
+    ImGui::TextDisabled("bin width %.4f ns = %.4f m", tb.binWidth / kC_m_per_ns, tb.binWidth);
     if (ImGui::ArrowButton("##prev", ImGuiDir_Left)) setBin(st_.bin - 1);
     ImGui::SameLine();
     if (ImGui::Button(st_.playing ? "Pause" : "Play", ImVec2(60, 0))) st_.playing = !st_.playing;
@@ -136,7 +145,7 @@ void Viewer::drawTimeSection() {
     ImGui::SameLine();
     ImGui::Checkbox("loop", &st_.loop);
     ImGui::SliderFloat("speed (bins/s)", &st_.speed, 0.5f, 120.0f, "%.1f", ImGuiSliderFlags_Logarithmic);
-    ImGui::TextDisabled("keys: Left/Right one bin, Home/End, Space play");
+    hint("keys: Left/Right one bin, Home/End, Space play/pause");
 }
 
 void Viewer::drawProgressSection() {
@@ -154,8 +163,9 @@ void Viewer::drawProgressSection() {
         ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
         ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
                     static_cast<long long>(last.photons));
-        ImGui::Text("pass time %.3f s (trace %.2f, build %.2f, camera %.2f)", last.passSec, last.photonSec,
-                    last.buildSec, last.cameraSec);
+        ImGui::Text("time per pass %.3f s", last.passSec);
+        ImGui::TextDisabled("  trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
+                            last.cameraSec);
         ImGui::Text("total time %.2f s", last.elapsedSec);
     } else {
         ImGui::TextDisabled("first pass in progress...");
@@ -180,8 +190,8 @@ void Viewer::drawProgressSection() {
 }
 
 void Viewer::drawSettingsSection() {
-    if (!ImGui::CollapsingHeader("Render settings", ImGuiTreeNodeFlags_DefaultOpen)) return;
-    ImGui::TextDisabled("a change restarts the accumulation");
+    if (!ImGui::CollapsingHeader("Render settings")) return;
+    hint("a change (Enter or leaving the field) restarts the accumulation");
     bool apply = false;
     const int64_t step = 1000, stepFast = 10000;
     ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);
@@ -191,7 +201,7 @@ void Viewer::drawSettingsSection() {
     ImGui::InputDouble("initial radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     const int64_t one = 1, ten = 10;
-    ImGui::InputScalar("pass limit (0 = none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
+    ImGui::InputScalar("pass limit (0: none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     if (!apply) return;
     const DriverSettings& cur = driver_->settings();

@@ -12,7 +12,6 @@ namespace tpb {
 
 namespace {
 
-constexpr double kRayEps = 1e-6;
 
 struct PathState {
     Vec3 beta{1.0};
@@ -147,7 +146,7 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
         }
         if (mat.type == MaterialType::Mirror) {
             path.beta *= mat.specular;
-            ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+            ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
             continue;
         }
         // Dielectric or null boundary: follow reflection or refraction, chosen by Fresnel.
@@ -157,9 +156,9 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
         const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
         Vec3 refr;
         if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
-            ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+            ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
         } else {
-            ray = {hit->p - kRayEps * ng, refr};
+            ray = {hit->p - scene.rayEps * ng, refr};
             if (front) regions.push(shape.interiorRegion); else regions.pop();
         }
         if (mat.type == MaterialType::Dielectric) path.beta *= mat.specular;

@@ -9,7 +9,6 @@ namespace tpb {
 
 namespace {
 
-constexpr double kRayEps = 1e-6;
 
 // Length of a long beam that never hits a surface (infinite medium): until its transmittance
 // falls below 1e-7, at most 10 scene diagonals.
@@ -93,12 +92,12 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
                 newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), ns));
                 if (glm::dot(newDir, ng) <= 0.0) return;
                 power *= mat.albedo;
-                ray = {hit->p + kRayEps * ng, newDir};
+                ray = {hit->p + scene.rayEps * ng, newDir};
                 break;
             }
             case MaterialType::Mirror:
                 power *= mat.specular;
-                ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+                ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
                 break;
             case MaterialType::Dielectric:
             case MaterialType::Null: {
@@ -110,9 +109,9 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
                 const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
                 Vec3 refr;
                 if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
-                    ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+                    ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
                 } else {
-                    ray = {hit->p - kRayEps * ng, refr};
+                    ray = {hit->p - scene.rayEps * ng, refr};
                     if (front) regions.push(shape.interiorRegion); else regions.pop();
                 }
                 if (mat.type == MaterialType::Dielectric) power *= mat.specular;

@@ -24,10 +24,10 @@ std::vector<float> renderPreview(const Scene& scene, int threads) {
                 const Vec3 n = glm::dot(ray.d, hit->ng) < 0.0 ? hit->ns : -hit->ns;
                 if (m.type == MaterialType::Mirror) {
                     beta *= m.specular;
-                    ray = {hit->p + 1e-6 * n, glm::normalize(reflect(ray.d, n))};
+                    ray = {hit->p + scene.rayEps * n, glm::normalize(reflect(ray.d, n))};
                 } else {  // glass and null boundaries: look straight through, slightly tinted
                     beta *= m.type == MaterialType::Dielectric ? 0.9 * m.specular : Color(1.0);
-                    ray = {hit->p - 1e-6 * n, ray.d};
+                    ray = {hit->p - scene.rayEps * n, ray.d};
                 }
             }
             float* p = &img[(static_cast<size_t>(y) * cam.width + x) * 3];

@@ -119,6 +119,7 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
     s->bounds.expand(s->camera.position);
     double diag = s->bounds.diagonal();
     if (!(diag > 0.0)) diag = 1.0;
+    s->rayEps = 1e-5 * std::max(1.0, s->geometry.bounds().valid() ? s->geometry.bounds().diagonal() : 1.0);
     s->beamRadius0 = resolveRadius(d.render.radius, d.render.radiusRelative, diag);
     s->surfaceRadius0 = resolveRadius(d.render.surfaceRadius, d.render.radiusRelative, diag);
 

@@ -72,6 +72,9 @@ public:
     Bounds3 bounds;        // of geometry, lights and camera
     double beamRadius0 = 0.01;     // m, pass 1
     double surfaceRadius0 = 0.02;  // m, pass 1
+    // Offset along the normal for rays leaving a surface: float triangles need ~1e-5 of the scene
+    // size to never re-hit the surface they start on (measured in tests/test_geometry.cpp).
+    double rayEps = 1e-5;
     Stages stages;
 
     int pickLight(double u, double& pdf) const;
