@@ -31,6 +31,8 @@ struct RenderCmd {
     bool unwarp = false, realTime = false, continuous = false, delta = false, half = false;
     bool noFrames = false, previewOnly = false, quiet = false;
     int frameStep = 1;
+    int strip = 8;
+    double stripEv = 0.0;
 };
 
 std::string summaryJson(const Scene& scene, const Driver& drv, const ExportOptions& opt, double wallSec) {
@@ -149,6 +151,7 @@ void run(RenderCmd& c) {
         });
         if (tty) std::fprintf(stderr, "\n");
     }
+    if (c.strip > 0) exportStripPng(drv.film(), c.out + "/strip.png", c.strip, opt, c.stripEv);
     writeTextFile(c.out + "/summary.json", summaryJson(*scene, drv, opt, wall));
     if (!c.quiet) {
         const FilmStats& fs = drv.film().stats;
@@ -176,6 +179,8 @@ void registerRender(CLI::App& app) {
     cmd->add_flag("--half", c->half, "Write half-float EXR frames");
     cmd->add_option("--frame-step", c->frameStep, "Write every K-th frame")->check(CLI::PositiveNumber);
     cmd->add_flag("--no-frames", c->noFrames, "Do not write per-bin frames");
+    cmd->add_option("--strip", c->strip, "Frames in strip.png (PNG overview of the time axis; 0 = none)");
+    cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of strip.png in EV (it is auto-exposed first)");
     cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
     cmd->callback([c] { run(*c); });

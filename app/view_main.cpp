@@ -230,7 +230,7 @@ void Viewer::run() {
         }
         glfwSwapBuffers(window_);
 
-        if (!shot && (animate || extraFrames > 0)) {  // cap the frame rate; leave the cores to the workers
+        if (animate || extraFrames > 0) {  // cap the frame rate; leave the cores to the workers
             const double frame = busyDriver ? 1.0 / 30.0 : 1.0 / 60.0;
             const double spent = glfwGetTime() - now;
             if (spent < frame) std::this_thread::sleep_for(std::chrono::duration<double>(frame - spent));

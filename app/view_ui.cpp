@@ -198,7 +198,7 @@ void Viewer::drawSettingsSection() {
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     ImGui::InputDouble("alpha", &edit_.alpha, 0.05, 0.1, "%.3f");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
-    ImGui::InputDouble("initial radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
+    ImGui::InputDouble("initial beam radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     const int64_t one = 1, ten = 10;
     ImGui::InputScalar("pass limit (0: none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);

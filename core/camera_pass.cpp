@@ -95,7 +95,7 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
     Rng rng(s.seed, Stream::Camera, s.pass, pixelIndex);
     Ray ray = scene.camera.generate(x + rng.uniform(), y + rng.uniform());
     PathState path;
-    RegionStack regions;
+    RegionStack regions = scene.cameraRegions;
     ++stats.cameraRays;
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
@@ -122,7 +122,8 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
             if (front) {
                 const Light& l = scene.lights[shape.areaLight];
                 const Color L = path.beta * l.areaRadiance();
-                if (isFinite(L)) splatEstimate(time, scratch.acc, fs, L, Color(0.0), 0.0, 0.0,
+                if (!isFinite(L)) ++fs.rejected;
+                else splatEstimate(time, scratch.acc, fs, L, Color(0.0), 0.0, 0.0,
                                                path.oplCam + l.emitOpl, 0.0, l.emitOpl, 0.0);
             }
             break;

@@ -1,5 +1,7 @@
 #include "film_export.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -57,6 +59,33 @@ void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string
            << prof[k * 3 + 2] << '\n';
     }
     writeTextFile(path, os.str());
+}
+
+std::vector<int> exportStripPng(const TransientFilm& film, const std::string& path, int count, const ExportOptions& opt,
+                                double exposureEv) {
+    count = std::clamp(count, 1, film.bins());
+    const int W = film.width(), H = film.height();
+    std::vector<int> binsUsed;
+    std::vector<float> strip(static_cast<size_t>(W) * count * H * 3, 0.0f), img;
+    std::vector<float> lum;
+    for (int i = 0; i < count; ++i) {
+        // Frames centred in `count` equal slices of the film.
+        const int k = std::min(film.bins() - 1, static_cast<int>((i + 0.5) * film.bins() / count));
+        binsUsed.push_back(k);
+        film.frame(k, opt.axis, opt.mode, img);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x)
+                for (int c = 0; c < 3; ++c)
+                    strip[((static_cast<size_t>(y) * W * count) + static_cast<size_t>(i) * W + x) * 3 + c] =
+                        img[(static_cast<size_t>(y) * W + x) * 3 + c];
+    }
+    for (size_t p = 0; p < strip.size(); p += 3)
+        lum.push_back(0.2126f * strip[p] + 0.7152f * strip[p + 1] + 0.0722f * strip[p + 2]);
+    std::sort(lum.begin(), lum.end());
+    const float ref = lum.empty() ? 0.0f : lum[static_cast<size_t>(0.995 * (lum.size() - 1))];
+    const double norm = ref > 0.0f ? std::log2(1.0 / ref) : 0.0;
+    writePngPreview(path, W * count, H, strip, norm + exposureEv);
+    return binsUsed;
 }
 
 }  // namespace tpb

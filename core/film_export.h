@@ -31,4 +31,10 @@ void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string
 
 std::string frameFileName(int bin);
 
+// A PNG strip of `count` evenly spaced frames side by side (sRGB), for a quick look or a README.
+// Exposure: 2^exposureEv times a normalisation that maps the 99.5th percentile of the strip's
+// luminance to 1 (so strips of different scenes are comparable without tuning). Returns the bins used.
+std::vector<int> exportStripPng(const TransientFilm& film, const std::string& path, int count, const ExportOptions& opt,
+                                double exposureEv = 0.0);
+
 }  // namespace tpb

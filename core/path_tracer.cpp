@@ -20,7 +20,6 @@ namespace tpb {
 
 namespace {
 
-constexpr double kRayEps = 1e-6;       // same offset as camera_pass.cpp / photon_tracer.cpp
 constexpr double kAreaShrink = 1e-5;   // shadow rays to an area light stop this fraction short
 constexpr int kMaxShadowCrossings = 64;
 constexpr int kRussianRouletteDepth = 3;
@@ -78,7 +77,7 @@ bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stac
         const bool front = glm::dot(ray.d, hit->ng) < 0.0;
         const Vec3 ng = front ? hit->ng : -hit->ng;
         if (front) stack.push(shape.interiorRegion); else stack.pop();
-        from = hit->p - kRayEps * ng;
+        from = hit->p - scene.rayEps * ng;
     }
     return false;
 }
@@ -156,7 +155,7 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
     double oplCam = 0.0, oplUnw = 0.0;
     bool nonSpecular = false;    // the path has reached its first non-specular vertex
     bool emitterVisible = true;  // previous vertex is the sensor or specular: emitter hits count
-    RegionStack regions;         // the camera sits in the outside region
+    RegionStack regions = scene.cameraRegions;  // where the camera sits (usually the outside)
     int depth = 0;
     ++ctx.stats.cameraPaths;
     // Null crossings do not count as depth; this bounds the loop in degenerate geometry.
@@ -220,7 +219,7 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
 
         if (mat.type == MaterialType::Null) {
             // Index-matched boundary (as in the beam core): no bending, no reflection, no depth.
-            ray = {hit->p - kRayEps * ng, ray.d};
+            ray = {hit->p - scene.rayEps * ng, ray.d};
             if (front) regions.push(shape.interiorRegion); else regions.pop();
             continue;
         }
@@ -229,7 +228,7 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
         if (mat.type == MaterialType::Diffuse) {
             nonSpecular = true;
             const Color fr = mat.albedo * kInvPi;
-            nextEvent(ctx, rng, hit->p, kRayEps * ng, regions, beta, oplCam, oplUnw, [&](const Vec3& w) {
+            nextEvent(ctx, rng, hit->p, scene.rayEps * ng, regions, beta, oplCam, oplUnw, [&](const Vec3& w) {
                 if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
                 return fr * std::max(0.0, glm::dot(w, ns));
             });
@@ -238,12 +237,12 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
             const Vec3 wo = glm::normalize(toWorld(sampleCosineHemisphere(v1, v2), ns));
             if (glm::dot(wo, ng) <= 0.0) return;
             beta *= mat.albedo;  // f cos / pdf
-            ray = {hit->p + kRayEps * ng, wo};
+            ray = {hit->p + scene.rayEps * ng, wo};
             emitterVisible = false;
         } else if (mat.type == MaterialType::Mirror) {
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
             beta *= mat.specular;
-            ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+            ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
             emitterVisible = true;
         } else {  // dielectric: reflection or refraction chosen by Fresnel
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
@@ -252,9 +251,9 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
             const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
             Vec3 refr;
             if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
-                ray = {hit->p + kRayEps * ng, glm::normalize(reflect(ray.d, ns))};
+                ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
             } else {
-                ray = {hit->p - kRayEps * ng, refr};
+                ray = {hit->p - scene.rayEps * ng, refr};
                 if (front) regions.push(shape.interiorRegion); else regions.pop();
             }
             beta *= mat.specular;

@@ -32,27 +32,31 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
     if (!(power0 > 0.0)) return;
     Ray ray = em.ray;
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
-    RegionStack regions;
+    RegionStack regions = scene.lightRegions[li];
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
         const double dSurf = hit ? hit->t : kInf;
         const Region& region = scene.regions[regions.top()];
 
-        if (region.hasMedium) {
+        if (region.hasMedium && !region.medium.scattering) {
+            // Absorbing only: no scattering event to sample, just attenuate up to the surface.
+            if (!hit) break;
+            power *= region.medium.transmittance(hit->t);
+        } else if (region.hasMedium) {
             const Medium& m = region.medium;
             const double sigmaBar = m.samplingSigma();
             // Free-flight sampling with pdf sigma_bar exp(-sigma_bar d).
             const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
             const bool scatters = d < dSurf;
             const double segment = scatters ? d : dSurf;
-            if (s.storeBeams && m.scattering) {
+            if (s.storeBeams) {
                 double len = s.beamLength == BeamLength::Short ? segment : dSurf;
                 if (!std::isfinite(len)) len = openBeamLength(scene, m);
                 if (len > 0.0 && std::isfinite(len))
                     out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
             }
-            if (!std::isfinite(segment)) break;  // escaped (non-scattering infinite region)
+            if (!std::isfinite(segment)) break;
             // Weight: T(d) sigma_s / (sigma_bar T_bar(d)) at a scattering event, T / T_bar at a surface.
             const Color tr = m.transmittance(segment);
             const double trBar = std::exp(-sigmaBar * segment);

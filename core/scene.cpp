@@ -4,6 +4,7 @@
 #include "mesh.h"
 
 #include <algorithm>
+#include <map>
 
 namespace tpb {
 
@@ -135,6 +136,11 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
         s->time.binWidth = d.film.binWidthOpl;
     }
 
+    // Where the camera and the lights sit (inside glass or a medium container, or outside).
+    s->cameraRegions = s->regionsAt(s->camera.position);
+    for (const Light& l : s->lights)
+        s->lightRegions.push_back(l.type == LightType::AreaQuad ? RegionStack{} : s->regionsAt(l.position));
+
     // Stages this scene needs.
     Stages& st = s->stages;
     for (size_t r = 0; r < s->regions.size(); ++r)
@@ -156,6 +162,30 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
                                            : "no specular chains: no mirror or dielectric");
     st.reasons.push_back(st.visibleEmitters ? "visible emitters: area lights" : "no visible emitters (delta lights only)");
     return s;
+}
+
+RegionStack Scene::regionsAt(const Vec3& p) const {
+    // Walk outwards along a fixed, non-axis-aligned direction; record the shapes we leave.
+    std::vector<int> leaving;
+    std::map<int, int> entered;  // shapes entered further out along the ray (and not left yet)
+    Ray ray{p, glm::normalize(Vec3(0.5773, 0.5774, 0.5775))};
+    for (int guard = 0; guard < 256; ++guard) {
+        const auto hit = geometry.intersect(ray);
+        if (!hit) break;
+        const ShapeInfo& sh = shapes[hit->shape];
+        const bool exiting = glm::dot(ray.d, hit->ng) > 0.0;
+        if (sh.interiorRegion > 0) {
+            int& n = entered[hit->shape];
+            if (!exiting) ++n;
+            else if (n > 0) --n;                           // left a shape entered on the way
+            else leaving.push_back(sh.interiorRegion);     // left a shape that holds p
+        }
+        ray = {hit->p + ray.d * rayEps * 4.0, ray.d};
+    }
+    // Innermost shape left first: push from the outermost.
+    RegionStack st;
+    for (auto it = leaving.rbegin(); it != leaving.rend(); ++it) st.push(*it);
+    return st;
 }
 
 int Scene::pickLight(double u, double& pdf) const {

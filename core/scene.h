@@ -78,6 +78,11 @@ public:
     Stages stages;
 
     int pickLight(double u, double& pdf) const;
+    // Region stack of a point: nested closed dielectric/null shapes around it, found by walking a
+    // ray from the point to infinity (leaving a shape's surface = being inside it).
+    RegionStack regionsAt(const Vec3& p) const;
+    RegionStack cameraRegions;               // where the camera sits
+    std::vector<RegionStack> lightRegions;   // where each light sits
     // Indices on both sides of a dielectric/null surface crossed `entering` (against its normal)
     // or leaving. On transmission the caller pushes shape.interiorRegion or pops the stack.
     void interfaceEtas(const ShapeInfo& shape, bool entering, const RegionStack& stack, double& etaI,
