@@ -32,6 +32,9 @@ struct Piece {
 
 void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece>& pieces) {
     pieces.clear();
+    size_t n = 0;
+    for (const Beam& b : beams) n += beamPieceCount(b.length, radius);
+    pieces.reserve(n);
     for (uint32_t b = 0; b < beams.size(); ++b) {
         const uint32_t n = beamPieceCount(beams[b].length, radius);
         for (uint32_t k = 0; k < n; ++k)

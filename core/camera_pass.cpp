@@ -18,28 +18,10 @@ struct PathState {
     double oplCam = 0.0;
 };
 
-// Adds one estimate (energy along [s0, s1] of the segment, density exp(-kappa s), time a + b s on
-// each axis) to the pixel accumulator, and its luminance to the inside/outside counters.
-void splatEstimate(const TimeBins& time, PixelAccumulator& acc, CameraPassStats& fs, const Color& L, const Color& kappa,
-                   double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
-    Color outReal(0.0), outUnw(0.0);
-    splatTime(time, L, kappa, s0, s1, aReal, bReal,
-              [&](int k, const Color& c) { acc.add(TimeAxis::Real, k, c); }, outReal);
-    splatTime(time, L, kappa, s0, s1, aUnw, bUnw,
-              [&](int k, const Color& c) { acc.add(TimeAxis::Unwarped, k, c); }, outUnw);
-    acc.addSteady(L);
-    const double lum = luminance(L);
-    fs.outside[0] += luminance(outReal);
-    fs.outside[1] += luminance(outUnw);
-    fs.inside[0] += lum - luminance(outReal);
-    fs.inside[1] += lum - luminance(outUnw);
-}
-
 // Beam radiance estimate along the camera segment x_r + s w_r, s in [0, sMax] (eqs. 8, 10, 12-15).
 void gatherBeams(const Scene& scene, const PhotonMap& map, const BeamAccel& accel, const CameraPassSettings& s,
                  const TimeBins& time, const Ray& ray, double sMax, int regionId, const PathState& path,
                  CameraPassScratch& scratch, CameraPassStats& stats) {
-    CameraPassStats& fs = stats;
     const Region& region = scene.regions[regionId];
     const Medium& m = region.medium;
     const double eta = region.ior;
@@ -58,45 +40,34 @@ void gatherBeams(const Scene& scene, const PhotonMap& map, const BeamAccel& acce
         const double rho = m.phase.eval(-c);  // scattering from w_b into -w_r (towards the camera)
         const Color L = path.beta * m.sigma_s * rho * b.power * invArea * integral;
         ++stats.beamEstimates;
-        if (!isFinite(L)) { ++fs.rejected; continue; }
-        if (isBlack(L)) continue;
         // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r.
         const Color kappa = s.profile == TimeProfile::Exact ? m.sigma_t + tauB * c : Color(0.0);
         const double tBeam = b.opl0 + eta * o.sb0;
-        splatEstimate(time, scratch.acc, fs, L, kappa, o.sMinus, o.sPlus, path.oplCam + tBeam, eta * (1.0 + c), tBeam,
+        splatSpread(time, scratch.acc, stats, L, kappa, o.sMinus, o.sPlus, path.oplCam + tBeam, eta * (1.0 + c), tBeam,
                       eta * c);
     }
 }
 
 }  // namespace
 
-void CameraPassStats::flushInto(FilmStats& f) const {
-    f.rejectedSamples.fetch_add(rejected);
-    for (int a = 0; a < 2; ++a) {
-        f.outside[a].fetch_add(outside[a]);
-        f.inside[a].fetch_add(inside[a]);
-    }
-}
-
 CameraPassStats& CameraPassStats::operator+=(const CameraPassStats& o) {
+    FilmTally::operator+=(o);
     cameraRays += o.cameraRays;
     beamEstimates += o.beamEstimates;
     photonEstimates += o.photonEstimates;
-    rejected += o.rejected;
-    for (int a = 0; a < 2; ++a) { outside[a] += o.outside[a]; inside[a] += o.inside[a]; }
     return *this;
 }
 
 void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beams, const PhotonGrid* grid,
                  const CameraPassSettings& s, const TimeBins& time, int x, int y, CameraPassScratch& scratch,
                  CameraPassStats& stats) {
-    CameraPassStats& fs = stats;
     const uint64_t pixelIndex = static_cast<uint64_t>(y) * scene.camera.width + x;
     Rng rng(s.seed, Stream::Camera, s.pass, pixelIndex);
     Ray ray = scene.camera.generate(x + rng.uniform(), y + rng.uniform());
     PathState path;
     RegionStack regions = scene.cameraRegions;
     ++stats.cameraRays;
+    int nullCrossings = 0;  // index-matched boundaries are not events: they do not use up depth
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
@@ -121,10 +92,7 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
         if (shape.areaLight >= 0) {  // visible emitter, seen at its arrival time
             if (front) {
                 const Light& l = scene.lights[shape.areaLight];
-                const Color L = path.beta * l.areaRadiance();
-                if (!isFinite(L)) ++fs.rejected;
-                else splatEstimate(time, scratch.acc, fs, L, Color(0.0), 0.0, 0.0,
-                                               path.oplCam + l.emitOpl, 0.0, l.emitOpl, 0.0);
+                splatInstant(time, scratch.acc, stats, path.beta * l.areaRadiance(), path.oplCam + l.emitOpl, l.emitOpl);
             }
             break;
         }
@@ -139,8 +107,7 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
                     if (glm::dot(ph.normal, ng) <= 0.0) return;  // other side of a thin surface
                     const Color L = path.beta * fr * ph.power * invArea;
                     ++stats.photonEstimates;
-                    if (!isFinite(L)) { ++fs.rejected; return; }
-                    splatEstimate(time, scratch.acc, fs, L, Color(0.0), 0.0, 0.0, path.oplCam + ph.opl, 0.0, ph.opl, 0.0);
+                    splatInstant(time, scratch.acc, stats, L, path.oplCam + ph.opl, ph.opl);
                 });
             }
             break;
@@ -151,17 +118,8 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
             continue;
         }
         // Dielectric or null boundary: follow reflection or refraction, chosen by Fresnel.
-        double etaI, etaT;
-        scene.interfaceEtas(shape, front, regions, etaI, etaT);
-        if (mat.type == MaterialType::Null) etaT = etaI;
-        const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
-        Vec3 refr;
-        if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
-            ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
-        } else {
-            ray = {hit->p - scene.rayEps * ng, refr};
-            if (front) regions.push(shape.interiorRegion); else regions.pop();
-        }
+        ray = scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+        if (mat.type == MaterialType::Null && ++nullCrossings <= 64) --depth;
         if (mat.type == MaterialType::Dielectric) path.beta *= mat.specular;
     }
 }

@@ -21,14 +21,10 @@ struct CameraPassSettings {
     int maxDepth = 16;
 };
 
-struct CameraPassStats {
+struct CameraPassStats : FilmTally {
     int64_t cameraRays = 0;
     int64_t beamEstimates = 0;
     int64_t photonEstimates = 0;
-    int64_t rejected = 0;                // NaN/Inf estimates discarded
-    double outside[2] = {0.0, 0.0};      // luminance outside the film's time range, per axis
-    double inside[2] = {0.0, 0.0};       // luminance inside it
-    void flushInto(FilmStats& fs) const;  // adds the tallies to the film's counters
     CameraPassStats& operator+=(const CameraPassStats& o);
 };
 

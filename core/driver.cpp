@@ -76,10 +76,11 @@ bool Driver::runPass(uint64_t pass) {
     const double t1 = nowSec();
 
     // 2. Acceleration structures.
-    std::unique_ptr<BeamAccel> accel;
+    BeamAccel* accel = nullptr;
     if (scene_.stages.beams && !map.beams.empty()) {
-        accel = BeamAccel::create(settings_.accel);
-        accel->build(map.beams, ps.beamRadius, settings_.threads);
+        if (!accel_) accel_ = BeamAccel::create(settings_.accel);
+        accel_->build(map.beams, ps.beamRadius, settings_.threads);
+        accel = accel_.get();
         ps.beamPieces = static_cast<int64_t>(accel->pieceCount());
     }
     std::unique_ptr<PhotonGrid> grid;
@@ -103,7 +104,7 @@ bool Driver::runPass(uint64_t pass) {
     for (auto& sc : scratch) sc.acc.reset(film_->bins());
     std::vector<CameraPassStats> stats(static_cast<size_t>(threads));
     parallelFor(film_->tileCount(), threads, [&](int64_t tile, int t) {
-        renderTile(scene_, map, accel.get(), grid.get(), cs, *film_, static_cast<int>(tile), scratch[t], stats[t]);
+        renderTile(scene_, map, accel, grid.get(), cs, *film_, static_cast<int>(tile), scratch[t], stats[t]);
     }, &abort_);
     for (const CameraPassStats& st : stats) {
         ps.camera += st;

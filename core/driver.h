@@ -86,6 +86,7 @@ private:
     mutable std::mutex mutex_;
     std::condition_variable cv_;
     std::vector<PassStats> history_;
+    std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
     double startTime_ = 0.0;
 };
 

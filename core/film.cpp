@@ -12,6 +12,38 @@ uint64_t transientFilmBytes(int width, int height, int bins) {
     return px * (static_cast<uint64_t>(bins) * 2u * 3u * sizeof(float) + 3u * sizeof(double));
 }
 
+void FilmTally::flushInto(FilmStats& f) const {
+    f.rejectedSamples.fetch_add(rejected);
+    for (int a = 0; a < 2; ++a) {
+        f.outside[a].fetch_add(outside[a]);
+        f.inside[a].fetch_add(inside[a]);
+    }
+}
+
+FilmTally& FilmTally::operator+=(const FilmTally& o) {
+    rejected += o.rejected;
+    for (int a = 0; a < 2; ++a) { outside[a] += o.outside[a]; inside[a] += o.inside[a]; }
+    return *this;
+}
+
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
+                 double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
+    if (!isFinite(L) || !std::isfinite(aReal) || !std::isfinite(aUnw) || !std::isfinite(bReal) || !std::isfinite(bUnw)) {
+        ++tally.rejected;
+        return;
+    }
+    if (isBlack(L)) return;
+    Color outReal(0.0), outUnw(0.0);
+    splatTime(time, L, kappa, s0, s1, aReal, bReal, [&](int k, const Color& c) { acc.add(TimeAxis::Real, k, c); }, outReal);
+    splatTime(time, L, kappa, s0, s1, aUnw, bUnw, [&](int k, const Color& c) { acc.add(TimeAxis::Unwarped, k, c); }, outUnw);
+    acc.addSteady(L);
+    const double lum = luminance(L);
+    tally.outside[0] += luminance(outReal);
+    tally.outside[1] += luminance(outUnw);
+    tally.inside[0] += lum - luminance(outReal);
+    tally.inside[1] += lum - luminance(outUnw);
+}
+
 void PixelAccumulator::reset(int bins) {
     bins_ = bins;
     data_.assign(static_cast<size_t>(bins) * 2 * 3, 0.0);

@@ -61,6 +61,26 @@ struct FilmStats {
     std::atomic<double> inside[2] = {0.0, 0.0};
 };
 
+// Per-thread tallies of what estimates add to the film's counters, flushed once per pass.
+struct FilmTally {
+    int64_t rejected = 0;            // NaN/Inf estimates discarded
+    double outside[2] = {0.0, 0.0};  // luminance outside the film's time range, per axis
+    double inside[2] = {0.0, 0.0};   // luminance inside it
+    void flushInto(FilmStats& fs) const;
+    FilmTally& operator+=(const FilmTally& o);
+};
+
+// Adds one estimate to a pixel's accumulator on both time axes and the steady state. Its energy
+// L lies along s in [s0, s1] with density exp(-kappa s) and arrives at a + b s (time_splat.h); a
+// non-finite estimate is counted in tally.rejected and dropped.
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
+                 double s0, double s1, double aReal, double bReal, double aUnwarped, double bUnwarped);
+// An estimate that arrives at one instant on each axis (surface photons, path-traced paths).
+inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, double tReal,
+                         double tUnwarped) {
+    splatSpread(time, acc, tally, L, Color(0.0), 0.0, 0.0, tReal, 0.0, tUnwarped, 0.0);
+}
+
 class TransientFilm {
 public:
     static constexpr int kTile = 16;

@@ -68,9 +68,30 @@ std::vector<int> exportStripPng(const TransientFilm& film, const std::string& pa
     std::vector<int> binsUsed;
     std::vector<float> strip(static_cast<size_t>(W) * count * H * 3, 0.0f), img;
     std::vector<float> lum;
+    // Frames spread over the part of the time axis that carries the energy: from the 0.5% to the
+    // 90% quantile of the (delta) arrival-time distribution summed over the image.
+    std::vector<double> perBin(film.bins(), 0.0);
+    ExportOptions delta = opt;
+    delta.mode = EmissionMode::Delta;
+    for (int k = 0; k < film.bins(); ++k) {
+        film.frame(k, delta.axis, delta.mode, img);
+        for (size_t p = 0; p < img.size(); p += 3) perBin[k] += 0.2126 * img[p] + 0.7152 * img[p + 1] + 0.0722 * img[p + 2];
+    }
+    double total = 0.0;
+    for (double v : perBin) total += std::max(v, 0.0);
+    int kLo = 0, kHi = film.bins() - 1;
+    if (total > 0.0) {
+        double cum = 0.0;
+        kLo = -1;
+        for (int k = 0; k < film.bins(); ++k) {
+            cum += std::max(perBin[k], 0.0);
+            if (kLo < 0 && cum >= 0.005 * total) kLo = k;
+            if (cum >= 0.9 * total) { kHi = k; break; }
+        }
+        kLo = std::max(kLo, 0);
+    }
     for (int i = 0; i < count; ++i) {
-        // Frames centred in `count` equal slices of the film.
-        const int k = std::min(film.bins() - 1, static_cast<int>((i + 0.5) * film.bins() / count));
+        const int k = std::min(kHi, kLo + static_cast<int>(std::lround(i * double(kHi - kLo) / std::max(1, count - 1))));
         binsUsed.push_back(k);
         film.frame(k, opt.axis, opt.mode, img);
         for (int y = 0; y < H; ++y)

@@ -34,22 +34,9 @@ struct PathContext {
 
 // One contribution at real time tReal and unwarped time tUnw.
 void splat(PathContext& ctx, const Color& L, double tReal, double tUnw) {
-    if (!isFinite(L) || !std::isfinite(tReal) || !std::isfinite(tUnw)) { ++ctx.stats.rejected; return; }
-    if (isBlack(L)) return;
-    const Color c = L * ctx.sampleWeight;
-    const double lum = luminance(c);
-    const double t[2] = {tReal, tUnw};
-    for (int a = 0; a < 2; ++a) {
-        const int k = ctx.time.binOf(t[a]);
-        if (k >= 0 && k < ctx.time.bins) {
-            ctx.acc.add(static_cast<TimeAxis>(a), k, c);
-            ctx.stats.inside[a] += lum;
-        } else {
-            ctx.stats.outside[a] += lum;
-        }
-    }
-    ctx.acc.addSteady(c);
-    ++ctx.stats.contributions;
+    const int64_t rejectedBefore = ctx.stats.rejected;
+    splatInstant(ctx.time, ctx.acc, ctx.stats, L * ctx.sampleWeight, tReal, tUnw);
+    if (ctx.stats.rejected == rejectedBefore && !isBlack(L)) ++ctx.stats.contributions;
 }
 
 // Shadow ray from `from` (in the region on top of `stack`) to `to`. Null boundaries are crossed
@@ -246,16 +233,7 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
             emitterVisible = true;
         } else {  // dielectric: reflection or refraction chosen by Fresnel
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
-            double etaI, etaT;
-            scene.interfaceEtas(shape, front, regions, etaI, etaT);
-            const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
-            Vec3 refr;
-            if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
-                ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
-            } else {
-                ray = {hit->p - scene.rayEps * ng, refr};
-                if (front) regions.push(shape.interiorRegion); else regions.pop();
-            }
+            ray = scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
             beta *= mat.specular;
             emitterVisible = true;
         }
@@ -266,22 +244,13 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
 
 }  // namespace
 
-void PathTracerStats::flushInto(FilmStats& f) const {
-    f.rejectedSamples.fetch_add(rejected);
-    for (int a = 0; a < 2; ++a) {
-        f.outside[a].fetch_add(outside[a]);
-        f.inside[a].fetch_add(inside[a]);
-    }
-}
-
 PathTracerStats& PathTracerStats::operator+=(const PathTracerStats& o) {
+    FilmTally::operator+=(o);
     cameraPaths += o.cameraPaths;
     contributions += o.contributions;
     shadowRays += o.shadowRays;
-    rejected += o.rejected;
     laserSamples += o.laserSamples;
     depthLimited += o.depthLimited;
-    for (int a = 0; a < 2; ++a) { outside[a] += o.outside[a]; inside[a] += o.inside[a]; }
     return *this;
 }
 

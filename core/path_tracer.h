@@ -64,16 +64,12 @@ struct PathTracerSettings {
     int threads = 0;  // 0 = all cores
 };
 
-struct PathTracerStats {
+struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or throughputs) dropped
     int64_t cameraPaths = 0;
     int64_t contributions = 0;   // finite contributions added (NEE + emitter hits)
     int64_t shadowRays = 0;      // NEE connections traced
-    int64_t rejected = 0;        // non-finite contributions (or throughputs) dropped
     int64_t laserSamples = 0;    // NEE picked a laser (cannot be connected; contributes nothing)
     int64_t depthLimited = 0;    // paths stopped by maxDepth (not by escape, absorption or RR)
-    double outside[2] = {0.0, 0.0};  // luminance outside the film's time range, per axis
-    double inside[2] = {0.0, 0.0};   // luminance inside it
-    void flushInto(FilmStats& fs) const;  // adds rejected/outside/inside to the film's counters
     PathTracerStats& operator+=(const PathTracerStats& o);
 };
 

@@ -33,6 +33,7 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
     Ray ray = em.ray;
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
     RegionStack regions = scene.lightRegions[li];
+    int nullCrossings = 0;  // index-matched boundaries are not events: they do not use up depth
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
@@ -105,19 +106,8 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
                 break;
             case MaterialType::Dielectric:
             case MaterialType::Null: {
-                double etaI, etaT;
-                scene.interfaceEtas(shape, front, regions, etaI, etaT);
-                if (mat.type == MaterialType::Null) {
-                    etaT = etaI;  // index-matched boundary: no refraction, no reflection
-                }
-                const double F = fresnelDielectric(-glm::dot(ray.d, ns), etaI, etaT);
-                Vec3 refr;
-                if (rng.uniform() < F || !refract(ray.d, ns, etaI / etaT, refr)) {
-                    ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
-                } else {
-                    ray = {hit->p - scene.rayEps * ng, refr};
-                    if (front) regions.push(shape.interiorRegion); else regions.pop();
-                }
+                ray = scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+                if (mat.type == MaterialType::Null && ++nullCrossings <= 64) { --depth; continue; }
                 if (mat.type == MaterialType::Dielectric) power *= mat.specular;
                 break;
             }

@@ -1,5 +1,6 @@
 #include "scene.h"
 
+#include "bsdf.h"
 #include "error.h"
 #include "mesh.h"
 
@@ -31,7 +32,37 @@ double resolveRadius(double value, bool relative, double diagonal) {
     return relative ? value * diagonal : value;
 }
 
+// Does a camera ray through (px, py), followed through mirrors and both branches of dielectric and
+// null boundaries, reach a diffuse surface?
+bool reachesDiffuse(const Scene& s, Ray ray, int depth) {
+    for (; depth < 8; ++depth) {
+        const auto hit = s.geometry.intersect(ray);
+        if (!hit) return false;
+        const ShapeInfo& sh = s.shapes[hit->shape];
+        if (sh.areaLight >= 0 || sh.material < 0) return false;
+        const Material& m = s.materials[sh.material];
+        const Vec3 n = glm::dot(ray.d, hit->ng) < 0.0 ? hit->ng : -hit->ng;
+        if (m.type == MaterialType::Diffuse) return true;
+        if (m.type == MaterialType::Mirror) {
+            ray = {hit->p + s.rayEps * n, glm::normalize(ray.d - 2.0 * glm::dot(ray.d, n) * n)};
+            continue;
+        }
+        // Dielectric / null: the straight-through branch, then the reflection.
+        if (reachesDiffuse(s, {hit->p - s.rayEps * n, ray.d}, depth + 1)) return true;
+        if (m.type == MaterialType::Null) return false;
+        ray = {hit->p + s.rayEps * n, glm::normalize(ray.d - 2.0 * glm::dot(ray.d, n) * n)};
+    }
+    return false;
+}
+
 }  // namespace
+
+bool Scene::cameraSeesDiffuse() const {
+    for (int y = 0; y < camera.height; ++y)
+        for (int x = 0; x < camera.width; ++x)
+            if (reachesDiffuse(*this, camera.generate(x + 0.5, y + 0.5), 0)) return true;
+    return false;
+}
 
 std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
     auto s = std::make_unique<Scene>();
@@ -145,23 +176,52 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
     Stages& st = s->stages;
     for (size_t r = 0; r < s->regions.size(); ++r)
         if (s->regions[r].hasMedium && s->regions[r].medium.scattering) st.beams = true;
+    bool anyDiffuse = false;
     for (size_t i = 0; i < s->shapes.size(); ++i) {
         const int m = s->shapes[i].material;
         if (m < 0) continue;
         const MaterialType t = s->materials[m].type;
-        if (t == MaterialType::Diffuse) st.surfacePhotons = true;
+        if (t == MaterialType::Diffuse) anyDiffuse = true;
         if (t == MaterialType::Mirror || t == MaterialType::Dielectric) st.specularChains = true;
     }
+    // Surface photons only when the camera can see a diffuse surface (directly or through mirrors
+    // and glass: glass is followed both ways); photons still bounce off unseen diffuse surfaces.
+    st.surfacePhotons = anyDiffuse && s->cameraSeesDiffuse();
     for (const Light& l : s->lights)
         if (l.type == LightType::AreaQuad) st.visibleEmitters = true;
     st.reasons.push_back(st.beams ? "photon beams: a region holds a scattering medium"
                                   : "no photon beams: no scattering medium");
-    st.reasons.push_back(st.surfacePhotons ? "surface photons: the scene has diffuse surfaces"
-                                           : "no surface photon map: no diffuse surface");
+    st.reasons.push_back(st.surfacePhotons ? "surface photon map: the camera sees diffuse surfaces"
+                         : anyDiffuse ? "no surface photon map: no diffuse surface is visible to the camera"
+                                      : "no surface photon map: no diffuse surface");
     st.reasons.push_back(st.specularChains ? "specular chains: mirrors or dielectrics present"
                                            : "no specular chains: no mirror or dielectric");
     st.reasons.push_back(st.visibleEmitters ? "visible emitters: area lights" : "no visible emitters (delta lights only)");
     return s;
+}
+
+Ray Scene::followInterface(const ShapeInfo& shape, const Material& mat, const SurfaceHit& hit, const Vec3& d,
+                           bool front, const Vec3& ng, const Vec3& ns, RegionStack& regions, double u) const {
+    double etaI, etaT;
+    interfaceEtas(shape, front, regions, etaI, etaT);
+    if (mat.type == MaterialType::Null) etaT = etaI;  // index-matched: never bends, never reflects
+    const double F = fresnelDielectric(-glm::dot(d, ns), etaI, etaT);
+    // The continued ray starts on the surface and skips it with tmin (the distance along the ray to
+    // rayEps off the surface), so free flights, transmittance and OPL count from the surface itself.
+    // (Moving the origin by rayEps would skip that much medium - 100 mean free paths at 1e6 /m -
+    // and that much optical path at every crossing.) Grazing directions keep the moved origin.
+    const auto leave = [&](const Vec3& w, double side) -> Ray {
+        const double cosW = side * glm::dot(w, ng);
+        if (!(cosW > 1e-2)) return {hit.p + side * rayEps * ng, w};
+        Ray r{hit.p, w};
+        r.tmin = rayEps / cosW;
+        return r;
+    };
+    Vec3 refr;
+    if (u < F || !refract(d, ns, etaI / etaT, refr)) return leave(glm::normalize(reflect(d, ns)), 1.0);
+    if (front) regions.push(shape.interiorRegion);
+    else regions.pop();
+    return leave(refr, -1.0);
 }
 
 RegionStack Scene::regionsAt(const Vec3& p) const {

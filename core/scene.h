@@ -78,9 +78,17 @@ public:
     Stages stages;
 
     int pickLight(double u, double& pdf) const;
+    // Continues a path (propagation direction d) through a dielectric or null boundary: reflection
+    // or refraction chosen by Fresnel with the random number u (total internal reflection included),
+    // pushing/popping the region stack on transmission. ng/ns face the incoming side.
+    Ray followInterface(const ShapeInfo& shape, const Material& mat, const SurfaceHit& hit, const Vec3& d, bool front,
+                        const Vec3& ng, const Vec3& ns, RegionStack& regions, double u) const;
     // Region stack of a point: nested closed dielectric/null shapes around it, found by walking a
     // ray from the point to infinity (leaving a shape's surface = being inside it).
     RegionStack regionsAt(const Vec3& p) const;
+    // True when a camera ray (pixel centres, through mirrors and both ways through glass) reaches a
+    // diffuse surface: only then is a surface photon map needed.
+    bool cameraSeesDiffuse() const;
     RegionStack cameraRegions;               // where the camera sits
     std::vector<RegionStack> lightRegions;   // where each light sits
     // Indices on both sides of a dielectric/null surface crossed `entering` (against its normal)
