@@ -92,13 +92,14 @@ private:
     void drawProgressSection();
     void drawSettingsSection();
     void drawExportSection();
-    void handleKeys();
+    void handleKeys(const std::vector<int>& keys);  // GLFW key codes pressed since the last frame
     void advancePlayback(double dt);
     void setBin(int bin);
 
     // main loop (view_main.cpp)
     bool screenshotReady();
     void takeScreenshot(int fbWidth, int fbHeight);
+    void saveSnapshot(int fbWidth, int fbHeight);
 
     const Scene& scene_;
     ViewOptions opt_;
@@ -132,6 +133,9 @@ private:
     // Where the film image was drawn (framebuffer pixels), for the screenshot report.
     ImVec2 imageMin_{0, 0}, imageSize_{0, 0};
     float imageZoom_ = 1.0f;
+
+    bool snapRequested_ = false;  // F12 / the button: save the window to the export folder
+    int snapCount_ = 0;
 
     int settleFrames_ = 0;
     bool screenshotTaken_ = false;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 namespace tpb::app {
 
@@ -34,6 +35,11 @@ void Viewer::restart(const DriverSettings& s, const std::string& why) {
     edit_ = driver_->settings();
     driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
     status_ = why;
+    if (!why.empty()) {
+        std::printf("%s (photons/pass %lld, alpha %.4g, initial radius %.6g m, pass limit %lld)\n", why.c_str(),
+                    static_cast<long long>(s.photonsPerPass), s.alpha, s.beamRadius0, static_cast<long long>(s.passes));
+        std::fflush(stdout);
+    }
 }
 
 float Viewer::binCentreOpl(int bin) const {

@@ -31,6 +31,14 @@ void onGlfwError(int code, const char* msg) {
 
 void onSigint(int) { gInterrupted = true; }
 
+// Key presses (and auto-repeats), recorded by a GLFW key callback: ImGui 1.86 samples key states
+// once per frame, so a press and release between two frames would be lost. ImGui chains to it.
+std::vector<int> gKeys;
+void onKey(GLFWwindow*, int key, int, int action, int) {
+    const bool arrow = key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT;  // the only keys that repeat
+    if (action == GLFW_PRESS || (action == GLFW_REPEAT && arrow)) gKeys.push_back(key);
+}
+
 // The window and its GL context; glfwTerminate on destruction.
 class GlfwWindow {
 public:
@@ -73,6 +81,7 @@ public:
         ImGui::CreateContext();
         ImGui::GetIO().IniFilename = nullptr;  // the layout is fixed; write nothing to the cwd
         ImGui::StyleColorsDark();
+        glfwSetKeyCallback(window, onKey);  // before ImGui installs its callbacks, which chain to it
         ImGui_ImplGlfw_InitForOpenGL(window, true);
         if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
             ImGui_ImplGlfw_Shutdown();
@@ -166,6 +175,22 @@ void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
     std::fflush(stdout);
 }
 
+void Viewer::saveSnapshot(int fbWidth, int fbHeight) {
+    snapRequested_ = false;
+    char name[48];
+    std::snprintf(name, sizeof name, "/window_%03d.png", ++snapCount_);
+    const std::string dir = st_.outDir.empty() ? "." : st_.outDir;
+    try {
+        ensureWritableDir(dir);
+        writePng8(dir + name, fbWidth, fbHeight, readBackBuffer(fbWidth, fbHeight));
+        status_ = "saved " + dir + name;
+        std::printf("saved %s%s\n", dir.c_str(), name);
+        std::fflush(stdout);
+    } catch (const std::exception& e) {
+        status_ = e.what();
+    }
+}
+
 void Viewer::run() {
     const bool shot = !opt_.screenshot.empty();
     exportRequested_ = shot && !opt_.exportDir.empty();
@@ -185,7 +210,7 @@ void Viewer::run() {
         }
         int fbw = 0, fbh = 0;
         glfwGetFramebufferSize(window_, &fbw, &fbh);
-        if (fbw <= 0 || fbh <= 0) {  // minimised: nothing to draw
+        if (fbw <= 0 || fbh <= 0 || glfwGetWindowAttrib(window_, GLFW_ICONIFIED)) {  // minimised: nothing to draw
             pollExport();
             glfwWaitEventsTimeout(0.1);
             continue;
@@ -197,7 +222,8 @@ void Viewer::run() {
         const double now = glfwGetTime();
         const double dt = now - last;
         last = now;
-        handleKeys();
+        handleKeys(gKeys);
+        gKeys.clear();
         advancePlayback(dt);
         pollExport();
         if (exportRequested_ && !exportStarted && !driver_->running()) {
@@ -220,6 +246,7 @@ void Viewer::run() {
         glClearColor(0.06f, 0.06f, 0.07f, 1.0f);
         glClear(GL_COLOR_BUFFER_BIT);
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+        if (snapRequested_) saveSnapshot(fbw, fbh);
         if (shot) {
             settleFrames_ = screenshotReady() ? settleFrames_ + 1 : 0;
             if (settleFrames_ >= 3) {  // two full frames with the final data drawn, then read this one

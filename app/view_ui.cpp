@@ -4,6 +4,9 @@
 
 #include <imgui_stdlib.h>
 
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes (ImGui 1.86 indexes keys by the backend's codes)
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -32,14 +35,19 @@ const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta 
 
 void Viewer::setBin(int bin) { st_.bin = std::clamp(bin, 0, scene_.time.bins - 1); }
 
-void Viewer::handleKeys() {
-    const ImGuiIO& io = ImGui::GetIO();
-    if (io.WantTextInput) return;  // typing in a field
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_LeftArrow))) setBin(st_.bin - 1);
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_RightArrow))) setBin(st_.bin + 1);
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Home), false)) setBin(0);
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_End), false)) setBin(scene_.time.bins - 1);
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Space), false)) st_.playing = !st_.playing;
+void Viewer::handleKeys(const std::vector<int>& keys) {
+    if (ImGui::GetIO().WantTextInput) return;  // typing in a field
+    for (int key : keys) {
+        switch (key) {
+            case GLFW_KEY_LEFT: setBin(st_.bin - 1); break;
+            case GLFW_KEY_RIGHT: setBin(st_.bin + 1); break;
+            case GLFW_KEY_HOME: setBin(0); break;
+            case GLFW_KEY_END: setBin(scene_.time.bins - 1); break;
+            case GLFW_KEY_SPACE: st_.playing = !st_.playing; break;
+            case GLFW_KEY_F12: snapRequested_ = true; break;
+            default: break;
+        }
+    }
 }
 
 void Viewer::advancePlayback(double dt) {
@@ -64,12 +72,12 @@ void Viewer::advancePlayback(double dt) {
 
 void Viewer::drawUi() {
     const ImVec2 ds = ImGui::GetIO().DisplaySize;
-    const float left = std::clamp(ds.x * 0.3f, 300.0f, 420.0f);
+    const float left = std::floor(std::min(std::clamp(ds.x * 0.3f, 300.0f, 420.0f), ds.x * 0.5f));
     const float topH = std::floor(ds.y * 0.6f);
 
     ImGui::SetNextWindowPos(ImVec2(0, 0));
     ImGui::SetNextWindowSize(ImVec2(left, ds.y));
-    if (ImGui::Begin("Controls", nullptr, kPanel)) drawControls();
+    if (ImGui::Begin("Controls", nullptr, kPanel | ImGuiWindowFlags_AlwaysVerticalScrollbar)) drawControls();
     ImGui::End();
 
     ImGui::SetNextWindowPos(ImVec2(left, 0));
@@ -198,8 +206,9 @@ void Viewer::drawSettingsSection() {
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     ImGui::InputDouble("alpha", &edit_.alpha, 0.05, 0.1, "%.3f");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
-    ImGui::InputDouble("initial beam radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
+    ImGui::InputDouble("initial radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("beam kernel radius of pass 1 (as --radius)");
     const int64_t one = 1, ten = 10;
     ImGui::InputScalar("pass limit (0: none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
     apply |= ImGui::IsItemDeactivatedAfterEdit();
@@ -246,6 +255,7 @@ void Viewer::drawExportSection() {
     ImGui::SameLine();
     if (ImGui::Button("Pixel profile (CSV)")) go = r.profile = true;
     ImGui::EndDisabled();
+    if (ImGui::Button("Window screenshot (F12)")) snapRequested_ = true;
     if (go) startExport(r);
     if (busy) {
         ImGui::ProgressBar(export_.progress(), ImVec2(-70, 0), export_.progressLabel().c_str());
