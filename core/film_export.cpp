@@ -100,8 +100,10 @@ std::vector<int> exportStripPng(const TransientFilm& film, const std::string& pa
                     strip[((static_cast<size_t>(y) * W * count) + static_cast<size_t>(i) * W + x) * 3 + c] =
                         img[(static_cast<size_t>(y) * W + x) * 3 + c];
     }
-    for (size_t p = 0; p < strip.size(); p += 3)
-        lum.push_back(0.2126f * strip[p] + 0.7152f * strip[p + 1] + 0.0722f * strip[p + 2]);
+    for (size_t p = 0; p < strip.size(); p += 3) {
+        const float l = 0.2126f * strip[p] + 0.7152f * strip[p + 1] + 0.0722f * strip[p + 2];
+        if (l > 0.0f) lum.push_back(l);  // lit pixels only: a small lit region must not read as black
+    }
     std::sort(lum.begin(), lum.end());
     const float ref = lum.empty() ? 0.0f : lum[static_cast<size_t>(0.995 * (lum.size() - 1))];
     const double norm = ref > 0.0f ? std::log2(1.0 / ref) : 0.0;

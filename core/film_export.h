@@ -34,7 +34,7 @@ std::string frameFileName(int bin);
 // A PNG strip of `count` frames side by side (sRGB), for a quick look or a README: evenly spaced
 // over the part of the time axis that carries the energy (0.5% to 90% of the arrival times).
 // Exposure: 2^exposureEv times a normalisation that maps the 99.5th percentile of the strip's
-// luminance to 1 (so strips of different scenes are comparable without tuning). Returns the bins used.
+// lit pixels' luminance to 1 (so strips of different scenes are comparable without tuning). Returns the bins used.
 std::vector<int> exportStripPng(const TransientFilm& film, const std::string& path, int count, const ExportOptions& opt,
                                 double exposureEv = 0.0);
 
