@@ -17,7 +17,8 @@ void RenderOverrides::add(CLI::App* cmd) {
     cmd->add_option("--seed", seed, "Random seed");
     cmd->add_option("--width", width, "Override the camera's horizontal resolution");
     cmd->add_option("--height", height, "Override the camera's vertical resolution");
-    cmd->add_option("--bins", bins, "Override the film's number of time bins");
+    cmd->add_option("--bins", bins, "Override the film's number of time bins (same time range)");
+    cmd->add_option("--max-depth", maxDepth, "Maximum number of scattering events per path (1 = single scattering)");
     cmd->add_option("--profile", profile, "Time profile of a ray-beam estimate: exact | uniform (paper)")
         ->check(CLI::IsMember({"exact", "uniform"}));
     cmd->add_option("--beam-length", beamLength, "Photon beams end at the next event (short) or the surface (long)")
@@ -28,7 +29,16 @@ void RenderOverrides::add(CLI::App* cmd) {
 void RenderOverrides::applyToDesc(SceneDesc& d) const {
     if (width) d.camera.width = *width;
     if (height) d.camera.height = *height;
-    if (bins) d.film.bins = *bins;
+    if (bins && *bins < 1) throw UserError("--bins must be >= 1");
+    if (bins) {
+        // Keep the film's time range, change its resolution.
+        if (!d.film.autoRange) d.film.binWidthOpl = d.film.binWidthOpl * d.film.bins / *bins;
+        d.film.bins = *bins;
+    }
+    if (maxDepth) {
+        if (*maxDepth < 1) throw UserError("--max-depth must be >= 1");
+        d.render.maxDepth = *maxDepth;
+    }
     if (d.camera.width < 1 || d.camera.height < 1 || d.film.bins < 1)
         throw UserError("--width, --height and --bins must be >= 1");
     const uint64_t need = filmBytes(d.camera, d.film.bins);
@@ -48,12 +58,17 @@ void RenderOverrides::applyToSettings(DriverSettings& s) const {
     if (alpha) s.alpha = *alpha;
     if (threads) s.threads = *threads;
     if (seed) s.seed = *seed;
+    if (maxDepth) s.maxDepth = *maxDepth;
     if (profile == "exact") s.profile = TimeProfile::Exact;
     if (profile == "uniform") s.profile = TimeProfile::Uniform;
     if (beamLength == "short") s.beamLength = BeamLength::Short;
     if (beamLength == "long") s.beamLength = BeamLength::Long;
     s.accel = accel == "brute" ? BeamAccel::Kind::BruteForce : BeamAccel::Kind::Embree;
     if (s.photonsPerPass < 1) throw UserError("--photons must be >= 1");
+    if (photonMapBytes(s.photonsPerPass) > maxFilmBytes())
+        throw UserError("--photons " + std::to_string(s.photonsPerPass) + " needs about " +
+                        humanBytes(photonMapBytes(s.photonsPerPass)) + " per pass for the photon map, more than " +
+                        humanBytes(maxFilmBytes()) + "; use fewer photons per pass and more passes");
     if (!(s.alpha > 0.0 && s.alpha <= 1.0)) throw UserError("--alpha must be in (0, 1]");
     if (!(s.beamRadius0 > 0.0)) throw UserError("--radius must be > 0");
     if (s.timeBudgetSec < 0.0) throw UserError("--time must be >= 0");

@@ -1,5 +1,6 @@
 // `tpb render`: headless progressive render to EXR frames + steady state + JSON summary.
 #include "cli_common.h"
+#include "cli_converge.h"
 #include "commands.h"
 #include "error.h"
 #include "film_export.h"
@@ -33,6 +34,8 @@ struct RenderCmd {
     int frameStep = 1;
     int strip = 8;
     double stripEv = 0.0;
+    std::string method = "beams";
+    int spp = 1;
 };
 
 std::string summaryJson(const Scene& scene, const Driver& drv, const ExportOptions& opt, double wallSec) {
@@ -40,6 +43,7 @@ std::string summaryJson(const Scene& scene, const Driver& drv, const ExportOptio
     const auto hist = drv.history();
     json j;
     j["scene"] = scene.desc.path;
+    j["method"] = "beams";
     j["passes"] = hist.size();
     j["wall_seconds"] = wallSec;
     j["resolution"] = {scene.camera.width, scene.camera.height};
@@ -97,17 +101,22 @@ void run(RenderCmd& c) {
     if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
     if (c.previewOnly) return;
 
-    DriverSettings ds = DriverSettings::fromScene(*scene);
-    c.ov.applyToSettings(ds);
-    if (ds.passes == 0 && ds.timeBudgetSec == 0.0)
-        std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
-    Driver drv(*scene, ds);
     ExportOptions opt;
     opt.axis = (scene->desc.render.unwarp || c.unwarp) && !c.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
     opt.mode = (scene->desc.render.emission == EmissionMode::Continuous || c.continuous) && !c.delta
                    ? EmissionMode::Continuous : EmissionMode::Delta;
     opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
     opt.step = c.frameStep;
+    if (c.method == "pt") {  // same outputs, rendered by the path tracer (cli_converge.cpp)
+        renderPathTraced(*scene, c.ov, {c.out, opt, c.spp, c.noFrames, c.quiet, c.strip, c.stripEv});
+        return;
+    }
+
+    DriverSettings ds = DriverSettings::fromScene(*scene);
+    c.ov.applyToSettings(ds);
+    if (ds.passes == 0 && ds.timeBudgetSec == 0.0)
+        std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
+    Driver drv(*scene, ds);
 
     const bool tty = isatty(STDERR_FILENO) && !c.quiet;
     gDriver = &drv;
@@ -181,6 +190,9 @@ void registerRender(CLI::App& app) {
     cmd->add_flag("--no-frames", c->noFrames, "Do not write per-bin frames");
     cmd->add_option("--strip", c->strip, "Frames in strip.png (PNG overview of the time axis; 0 = none)");
     cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of strip.png in EV (it is auto-exposed first)");
+    cmd->add_option("--method", c->method, "Renderer: beams (progressive photon beams) | pt (unbiased path tracer)")
+        ->check(CLI::IsMember({"beams", "pt"}));
+    cmd->add_option("--spp", c->spp, "--method pt: camera paths per pixel per pass")->check(CLI::PositiveNumber);
     cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
     cmd->callback([c] { run(*c); });

@@ -7,6 +7,7 @@ namespace tpb::app {
 void registerRender(CLI::App& app);
 void registerInfo(CLI::App& app);
 void registerBench(CLI::App& app);
+void registerConverge(CLI::App& app);  // app/cli_converge.cpp: converge and reference
 void registerView(CLI::App& app);  // app/view_*.cpp (only when built with the viewer)
 
 // Exit codes: 0 success, 1 internal failure, 2 user error (bad scene, bad flag, unwritable output),
