@@ -107,7 +107,12 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
         const int id = static_cast<int>(i);
         switch (sd.type) {
             case ShapeType::Mesh: {
-                TriangleMesh m = loadObj(sd.meshPath);
+                TriangleMesh m;
+                try {
+                    m = loadObj(sd.meshPath);
+                } catch (const UserError& e) {  // name the scene's key too: "scene.json:8: shapes[0].file: x.obj:4: ..."
+                    throw UserError(d.where(key + ".file") + key + ".file: " + e.what());
+                }
                 m.transform(sd.transform);
                 if (sd.flipNormals) m.flip();
                 s->geometry.addMesh(m, id);

@@ -675,6 +675,10 @@ void readLight(Context& ctx, const JsonValue& obj, const std::string& path, Ligh
 void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     Bag b(ctx, obj, "render", "render settings");
     r.photonsPerPass = b.integer("photons_per_pass", 1, INT64_MAX).value_or(r.photonsPerPass);
+    if (photonMapBytes(r.photonsPerPass) > maxFilmBytes())
+        b.fail("photons_per_pass", "photons_per_pass " + std::to_string(r.photonsPerPass) + " needs about " +
+                                       humanBytes(photonMapBytes(r.photonsPerPass)) + " per pass for the photon map, more than " +
+                                       humanBytes(maxFilmBytes()) + "; use fewer photons per pass and more passes");
 
     // Both radii share RenderDesc::radiusRelative.
     const std::optional<double> abs = b.number("radius"), rel = b.number("radius_relative");
@@ -757,6 +761,10 @@ uint64_t filmBytes(const CameraDesc& cam, int bins) {
     // Transient: bins x 2 time axes x RGB x float. Steady state: 2 images x RGB x double.
     const uint64_t perPixel = satAdd(satMul(b, 2 * 3 * 4), 2 * 3 * 8);
     return satMul(satMul(w, h), perPixel);
+}
+
+uint64_t photonMapBytes(int64_t photonsPerPass) {
+    return satMul(static_cast<uint64_t>(std::max<int64_t>(photonsPerPass, 0)), 4 * (sizeof(double) * 12 + 16));
 }
 
 uint64_t maxFilmBytes() {

@@ -15,5 +15,8 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
 // steady-state images). The loader refuses films above `maxFilmBytes()`.
 uint64_t filmBytes(const CameraDesc& cam, int bins);
 uint64_t maxFilmBytes();  // default: 75% of physical memory; env TPB_MAX_FILM_BYTES overrides
+// Rough memory of one pass's photon map (~4 beam segments per photon, as `tpb info` prints). The
+// loader and --photons refuse photon counts whose map alone would exceed maxFilmBytes().
+uint64_t photonMapBytes(int64_t photonsPerPass);
 
 }  // namespace tpb
