@@ -87,6 +87,26 @@ std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrid
     return scene;
 }
 
+nlohmann::json filmJson(const Scene& scene) {
+    return {{"bins", scene.time.bins}, {"start_opl_m", scene.time.startOpl}, {"bin_width_opl_m", scene.time.binWidth},
+            {"start_ns", scene.time.startOpl / kC_m_per_ns}, {"bin_width_ns", scene.time.binWidth / kC_m_per_ns}};
+}
+
+nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t passes, double wallSec,
+                             const TransientFilm& film, const ExportOptions& opt) {
+    nlohmann::json j;
+    j["scene"] = scene.desc.path;
+    j["method"] = method;
+    j["passes"] = passes;
+    j["wall_seconds"] = wallSec;
+    j["resolution"] = {scene.camera.width, scene.camera.height};
+    j["film"] = filmJson(scene);
+    j["film"]["bytes"] = film.bytes();
+    j["frames"] = {{"axis", opt.axis == TimeAxis::Real ? "real" : "unwarped"},
+                   {"emission", opt.mode == EmissionMode::Delta ? "delta" : "continuous"}};
+    return j;
+}
+
 std::string humanBytes(uint64_t b) {
     char buf[64];
     if (b >= (1ull << 30)) std::snprintf(buf, sizeof buf, "%.2f GiB", b / double(1ull << 30));

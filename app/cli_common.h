@@ -2,8 +2,10 @@
 // and command-line overrides of the scene's render settings.
 #pragma once
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include "driver.h"
+#include "film_export.h"
 #include "scene.h"
 #include "scene_loader.h"
 
@@ -31,5 +33,11 @@ struct RenderOverrides {
 std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrides& ov);
 
 std::string humanBytes(uint64_t bytes);
+
+// The film's time axis as written in summary.json and reference headers.
+nlohmann::json filmJson(const Scene& scene);
+// Fields every summary.json starts with (scene, method, passes, wall time, resolution, film, frames).
+nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t passes, double wallSec,
+                             const TransientFilm& film, const ExportOptions& opt);
 
 }  // namespace tpb::app

@@ -74,11 +74,6 @@ PathTracerSettings ptSettings(const Scene& scene, const RenderOverrides& ov, int
     return ps;
 }
 
-json filmJson(const Scene& scene) {
-    return {{"bins", scene.time.bins}, {"start_opl_m", scene.time.startOpl}, {"bin_width_opl_m", scene.time.binWidth},
-            {"start_ns", scene.time.startOpl / kC_m_per_ns}, {"bin_width_ns", scene.time.binWidth / kC_m_per_ns}};
-}
-
 std::string shellQuote(const std::string& s) {
     std::string q = "'";
     for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -122,16 +117,7 @@ void referenceFrame(const ReferenceVolume& ref, TimeAxis axis, int k, std::vecto
 
 json ptSummary(const Scene& scene, const PathTracerSettings& ps, const TransientFilm& film, const ExportOptions& opt,
                const PathTracerStats& st, const std::vector<std::pair<double, double>>& passTimes, double wall) {
-    json j;
-    j["scene"] = scene.desc.path;
-    j["method"] = "pt";
-    j["passes"] = passTimes.size();
-    j["wall_seconds"] = wall;
-    j["resolution"] = {scene.camera.width, scene.camera.height};
-    j["film"] = filmJson(scene);
-    j["film"]["bytes"] = film.bytes();
-    j["frames"] = {{"axis", opt.axis == TimeAxis::Real ? "real" : "unwarped"},
-                   {"emission", opt.mode == EmissionMode::Delta ? "delta" : "continuous"}};
+    json j = summaryHeader(scene, "pt", passTimes.size(), wall, film, opt);
     j["settings"] = {{"samples_per_pixel", ps.samplesPerPixel}, {"max_depth", ps.maxDepth}, {"seed", ps.seed},
                      {"threads", ps.threads}};
     json per = json::array();

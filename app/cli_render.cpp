@@ -41,17 +41,7 @@ struct RenderCmd {
 std::string summaryJson(const Scene& scene, const Driver& drv, const ExportOptions& opt, double wallSec) {
     using nlohmann::json;
     const auto hist = drv.history();
-    json j;
-    j["scene"] = scene.desc.path;
-    j["method"] = "beams";
-    j["passes"] = hist.size();
-    j["wall_seconds"] = wallSec;
-    j["resolution"] = {scene.camera.width, scene.camera.height};
-    j["film"] = {{"bins", scene.time.bins}, {"start_opl_m", scene.time.startOpl}, {"bin_width_opl_m", scene.time.binWidth},
-                 {"start_ns", scene.time.startOpl / kC_m_per_ns}, {"bin_width_ns", scene.time.binWidth / kC_m_per_ns},
-                 {"bytes", drv.film().bytes()}};
-    j["frames"] = {{"axis", opt.axis == TimeAxis::Real ? "real" : "unwarped"},
-                   {"emission", opt.mode == EmissionMode::Delta ? "delta" : "continuous"}};
+    json j = summaryHeader(scene, "beams", hist.size(), wallSec, drv.film(), opt);
     json stages = json::array();
     for (const auto& r : scene.stages.reasons) stages.push_back(r);
     j["stages"] = stages;
