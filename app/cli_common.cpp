@@ -3,7 +3,13 @@
 #include "error.h"
 #include "time_range.h"
 
+#include "commands.h"
+
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
+#include <sys/statvfs.h>
+#include <unistd.h>
 
 namespace tpb::app {
 
@@ -107,13 +113,85 @@ nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t pass
     return j;
 }
 
-std::string humanBytes(uint64_t b) {
-    char buf[64];
-    if (b >= (1ull << 30)) std::snprintf(buf, sizeof buf, "%.2f GiB", b / double(1ull << 30));
-    else if (b >= (1ull << 20)) std::snprintf(buf, sizeof buf, "%.1f MiB", b / double(1ull << 20));
-    else if (b >= 1024) std::snprintf(buf, sizeof buf, "%.1f KiB", b / 1024.0);
-    else std::snprintf(buf, sizeof buf, "%llu B", static_cast<unsigned long long>(b));
-    return buf;
+void warnIfOutputsMayNotFit(const Scene& scene, const RenderOutputs& r) {
+    if (r.noFrames) return;
+    struct statvfs fsInfo {};
+    if (::statvfs(r.out.c_str(), &fsInfo) != 0) return;
+    const uint64_t freeBytes = static_cast<uint64_t>(fsInfo.f_bavail) * fsInfo.f_frsize;
+    const int step = std::max(1, r.opt.step);
+    const uint64_t frames = static_cast<uint64_t>((scene.time.bins + step - 1) / step);
+    const uint64_t perFrame = static_cast<uint64_t>(scene.camera.width) * scene.camera.height * 3 *
+                              (r.opt.pixel == ExrPixel::Half ? 2 : 4);
+    const uint64_t need = frames * perFrame;
+    if (need > freeBytes)
+        std::fprintf(stderr,
+                     "warning: %llu frames take up to %s uncompressed and %s has only %s free; they are "
+                     "compressed and may still fit, otherwise use --half, --frame-step, --no-frames or another -o\n",
+                     static_cast<unsigned long long>(frames), humanBytes(need).c_str(), r.out.c_str(),
+                     humanBytes(freeBytes).c_str());
+}
+
+OutputReport writeRenderOutputs(const TransientFilm& film, const Scene& scene, const RenderOutputs& r,
+                                const std::function<nlohmann::json()>& summary) {
+    OutputReport rep;
+    const bool tty = isatty(STDERR_FILENO) && !r.quiet;
+    if (!r.noFrames) {
+        const int last = r.opt.lastBin < 0 ? film.bins() - 1 : std::min(r.opt.lastBin, film.bins() - 1);
+        rep.framesExpected = last >= r.opt.firstBin ? (last - r.opt.firstBin) / std::max(1, r.opt.step) + 1 : 0;
+    }
+    const auto writeSummary = [&](bool final) {
+        nlohmann::json j = summary();
+        nlohmann::json o = {{"frames_expected", rep.framesExpected}, {"files", rep.kept}};
+        if (final) o["frames_written"] = rep.framesWritten;
+        else o["frames_written"] = nullptr;  // being written: the final summary replaces this one
+        if (!rep.error.empty()) o["error"] = rep.error;
+        j["outputs"] = o;
+        writeTextFile(r.out + "/summary.json", j.dump(2) + "\n");
+    };
+
+    exportSteady(film, r.out + "/steady.exr", r.opt.pixel);
+    rep.kept.push_back("steady.exr");
+    {
+        std::vector<float> steady;
+        film.steadyImage(steady);
+        writePngPreview(r.out + "/steady.png", scene.camera.width, scene.camera.height, steady);
+        rep.kept.push_back("steady.png");
+    }
+    rep.kept.push_back("summary.json");
+    writeSummary(false);
+
+    try {
+        if (!r.noFrames) {
+            exportFrames(film, r.out + "/frames", r.opt, [&](int done, int total) {
+                rep.framesWritten = done;
+                if (tty) std::fprintf(stderr, "\rwriting frames %d/%d", done, total);
+            });
+            if (tty) std::fprintf(stderr, "\n");
+            if (rep.framesWritten > 0) rep.kept.push_back("frames/");
+        }
+        if (r.strip > 0) {
+            exportStripPng(film, r.out + "/strip.png", r.strip, r.opt, r.stripEv);
+            rep.kept.push_back("strip.png");
+        }
+    } catch (const UserError& e) {
+        if (tty) std::fprintf(stderr, "\n");
+        rep.error = e.what();
+        if (rep.framesWritten > 0 && rep.framesWritten < rep.framesExpected) rep.kept.push_back("frames/ (partial)");
+    }
+    try {
+        writeSummary(true);
+    } catch (const UserError& e) {
+        if (rep.error.empty()) throw;
+        // The first summary.json stays (its frames_written is null: frames were being written).
+    }
+    if (!rep.error.empty()) {
+        std::string kept;
+        for (const std::string& k : rep.kept) kept += (kept.empty() ? "" : ", ") + k;
+        std::fprintf(stderr, "error: %s\nkept in %s (complete files only): %s; %d of %d frames\n", rep.error.c_str(),
+                     r.out.c_str(), kept.c_str(), rep.framesWritten, rep.framesExpected);
+        exitCode() = kExitUserError;
+    }
+    return rep;
 }
 
 }  // namespace tpb::app

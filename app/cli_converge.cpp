@@ -181,21 +181,10 @@ void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathT
         std::fprintf(stderr, "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
                              "light is missing from this render\n", static_cast<long long>(st.laserSamples));
 
-    exportSteady(film, req.out + "/steady.exr", req.opt.pixel);
-    {
-        std::vector<float> steady;
-        film.steadyImage(steady);
-        writePngPreview(req.out + "/steady.png", scene.camera.width, scene.camera.height, steady);
-    }
-    int frames = 0;
-    if (!req.noFrames) {
-        frames = exportFrames(film, req.out + "/frames", req.opt, [&](int done, int total) {
-            if (tty) std::fprintf(stderr, "\rwriting frames %d/%d", done, total);
-        });
-        if (tty) std::fprintf(stderr, "\n");
-    }
-    if (req.strip > 0) exportStripPng(film, req.out + "/strip.png", req.strip, req.opt, req.stripEv);
-    writeTextFile(req.out + "/summary.json", ptSummary(scene, ps, film, req.opt, st, passTimes, wall).dump(2) + "\n");
+    const OutputReport rep = writeRenderOutputs(film, scene, req, [&] {
+        return ptSummary(scene, ps, film, req.opt, st, passTimes, wall);
+    });
+    const int frames = rep.framesWritten;
     if (!req.quiet)
         std::printf("path tracer: %zu passes x %d spp in %.2f s; wrote %d frames (%s, %s) to %s/frames, steady.exr, "
                     "summary.json; %lld rejected samples\n",

@@ -9,13 +9,8 @@
 namespace tpb::app {
 
 // What `tpb render` asks of the path tracer: the same outputs as the beam renderer.
-struct PathTracedRenderRequest {
-    std::string out;
-    ExportOptions opt;
+struct PathTracedRenderRequest : RenderOutputs {
     int spp = 1;  // camera paths per pixel per pass
-    bool noFrames = false, quiet = false;
-    int strip = 8;
-    double stripEv = 0.0;
 };
 
 // Renders with the unbiased path tracer (core/path_tracer.h): passes = --passes (or the scene's),

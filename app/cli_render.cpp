@@ -38,7 +38,7 @@ struct RenderCmd {
     int spp = 1;
 };
 
-std::string summaryJson(const Scene& scene, const Driver& drv, const ExportOptions& opt, double wallSec) {
+nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOptions& opt, double wallSec) {
     using nlohmann::json;
     const auto hist = drv.history();
     json j = summaryHeader(scene, "beams", hist.size(), wallSec, drv.film(), opt);
@@ -77,7 +77,7 @@ std::string summaryJson(const Scene& scene, const Driver& drv, const ExportOptio
                    {"energy_outside_film_fraction_real", in0 + out0 > 0 ? out0 / (in0 + out0) : 0.0},
                    {"energy_outside_film_fraction_unwarped", in1 + out1 > 0 ? out1 / (in1 + out1) : 0.0},
                    {"peak_rss_bytes", peakRssBytes()}};
-    return j.dump(2) + "\n";
+    return j;
 }
 
 void run(RenderCmd& c) {
@@ -97,8 +97,17 @@ void run(RenderCmd& c) {
                    ? EmissionMode::Continuous : EmissionMode::Delta;
     opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
     opt.step = c.frameStep;
+    PathTracedRenderRequest outputs;
+    outputs.out = c.out;
+    outputs.opt = opt;
+    outputs.noFrames = c.noFrames;
+    outputs.quiet = c.quiet;
+    outputs.strip = c.strip;
+    outputs.stripEv = c.stripEv;
+    warnIfOutputsMayNotFit(*scene, outputs);
     if (c.method == "pt") {  // same outputs, rendered by the path tracer (cli_converge.cpp)
-        renderPathTraced(*scene, c.ov, {c.out, opt, c.spp, c.noFrames, c.quiet, c.strip, c.stripEv});
+        outputs.spp = c.spp;
+        renderPathTraced(*scene, c.ov, outputs);
         return;
     }
 
@@ -134,24 +143,25 @@ void run(RenderCmd& c) {
     std::signal(SIGINT, SIG_DFL);
     if (tty) std::fprintf(stderr, "\n");
     const double wall = nowSec() - t0;
+    if (drv.failure()) {
+        // The passes finished before the failure are kept and written; the exit code says it failed.
+        std::fprintf(stderr, "error: %s\nthe render stopped at pass %llu; writing the %llu finished passes\n",
+                     drv.failureMessage().c_str(), static_cast<unsigned long long>(drv.completedPasses() + 1),
+                     static_cast<unsigned long long>(drv.completedPasses()));
+        try {
+            std::rethrow_exception(drv.failure());
+        } catch (const UserError&) {
+            exitCode() = kExitUserError;
+        } catch (...) {
+            exitCode() = 1;
+        }
+    }
     if (gInterrupts > 0 && !c.quiet) std::fprintf(stderr, "interrupted: writing the %llu finished passes\n",
                                                   static_cast<unsigned long long>(drv.completedPasses()));
 
-    exportSteady(drv.film(), c.out + "/steady.exr", opt.pixel);
-    {
-        std::vector<float> steady;
-        drv.film().steadyImage(steady);
-        writePngPreview(c.out + "/steady.png", scene->camera.width, scene->camera.height, steady);
-    }
-    int frames = 0;
-    if (!c.noFrames) {
-        frames = exportFrames(drv.film(), c.out + "/frames", opt, [&](int done, int total) {
-            if (tty) std::fprintf(stderr, "\rwriting frames %d/%d", done, total);
-        });
-        if (tty) std::fprintf(stderr, "\n");
-    }
-    if (c.strip > 0) exportStripPng(drv.film(), c.out + "/strip.png", c.strip, opt, c.stripEv);
-    writeTextFile(c.out + "/summary.json", summaryJson(*scene, drv, opt, wall));
+    const OutputReport rep =
+        writeRenderOutputs(drv.film(), *scene, outputs, [&] { return summaryJson(*scene, drv, opt, wall); });
+    const int frames = rep.framesWritten;
     if (!c.quiet) {
         const FilmStats& fs = drv.film().stats;
         std::printf("%llu passes in %.2f s; wrote %d frames (%s, %s) to %s/frames, steady.exr, summary.json; "

@@ -161,7 +161,9 @@ void Viewer::drawProgressSection() {
     const DriverSettings& s = driver_->settings();
     const uint64_t done = driver_->completedPasses();
     const PassStats last = driver_->lastPass();
-    const char* state = !driver_->running() ? "finished" : driver_->paused() ? "paused" : "rendering";
+    const bool failed = !driver_->running() && driver_->failure();
+    const char* state = failed ? "stopped by an error" : !driver_->running() ? "finished"
+                        : driver_->paused() ? "paused" : "rendering";
     if (s.passes > 0)
         ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes), state);
     else
@@ -175,8 +177,14 @@ void Viewer::drawProgressSection() {
         ImGui::TextDisabled("  trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
                             last.cameraSec);
         ImGui::Text("total time %.2f s", last.elapsedSec);
-    } else {
+    } else if (!failed) {
         ImGui::TextDisabled("first pass in progress...");
+    }
+    if (failed) {
+        // The render thread caught it (core/driver.h): the finished passes stay on screen.
+        ImGui::PushTextWrapPos(0.0f);
+        ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "error: %s", driver_->failureMessage().c_str());
+        ImGui::PopTextWrapPos();
     }
     const FilmStats& fs = driver_->film().stats;
     ImGui::Text("rejected samples %lld", static_cast<long long>(fs.rejectedSamples.load()));

@@ -16,14 +16,6 @@ double nowSec() {
     return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
-uint64_t peakRssBytes() {
-    std::ifstream f("/proc/self/status");
-    std::string line;
-    while (std::getline(f, line))
-        if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024ull;
-    return 0;
-}
-
 DriverSettings DriverSettings::fromScene(const Scene& scene) {
     const RenderDesc& r = scene.desc.render;
     DriverSettings s;
@@ -68,6 +60,7 @@ bool Driver::runPass(uint64_t pass) {
     pt.storeSurfacePhotons = scene_.stages.surfacePhotons;
     pt.beamLength = settings_.beamLength;
     pt.threads = settings_.threads;
+    pt.maxMapBytes = settings_.maxPhotonMapBytes > 0 ? settings_.maxPhotonMapBytes : maxFilmBytes();
     PhotonMap map = tracePhotons(scene_, pt, &abort_);
     if (abort_) return false;
     ps.photons = map.emitted;
@@ -128,6 +121,11 @@ bool Driver::runPass(uint64_t pass) {
 
 void Driver::start(std::function<void(const PassStats&)> onPass) {
     stop();
+    {
+        std::lock_guard<std::mutex> g(mutex_);
+        failure_ = nullptr;
+        failureMessage_.clear();
+    }
     stopRequested_ = false;
     abort_ = false;
     running_ = true;
@@ -145,7 +143,19 @@ void Driver::loop(std::function<void(const PassStats&)> onPass) {
         if (stopRequested_ || abort_) break;
         if (settings_.passes > 0 && static_cast<int64_t>(pass) > settings_.passes) break;
         if (settings_.timeBudgetSec > 0.0 && nowSec() - t0 >= settings_.timeBudgetSec) break;
-        if (!runPass(pass)) break;
+        try {
+            if (!runPass(pass)) break;
+        } catch (const std::exception& e) {
+            std::lock_guard<std::mutex> g(mutex_);
+            failure_ = std::current_exception();
+            failureMessage_ = e.what();
+            break;
+        } catch (...) {
+            std::lock_guard<std::mutex> g(mutex_);
+            failure_ = std::current_exception();
+            failureMessage_ = "unknown exception";
+            break;
+        }
         if (onPass) onPass(lastPass());
     }
     running_ = false;
@@ -173,6 +183,16 @@ void Driver::wait() {
 std::vector<PassStats> Driver::history() const {
     std::lock_guard<std::mutex> g(mutex_);
     return history_;
+}
+
+std::exception_ptr Driver::failure() const {
+    std::lock_guard<std::mutex> g(mutex_);
+    return failure_;
+}
+
+std::string Driver::failureMessage() const {
+    std::lock_guard<std::mutex> g(mutex_);
+    return failureMessage_;
 }
 
 PassStats Driver::lastPass() const {

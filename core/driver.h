@@ -9,13 +9,16 @@
 #include "beam_accel.h"
 #include "camera_pass.h"
 #include "film.h"
+#include "memory_budget.h"
 #include "scene.h"
 
 #include <atomic>
 #include <condition_variable>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -34,6 +37,7 @@ struct DriverSettings {
     TimeProfile profile = TimeProfile::Exact;
     BeamLength beamLength = BeamLength::Short;
     BeamAccel::Kind accel = BeamAccel::Kind::Embree;
+    uint64_t maxPhotonMapBytes = 0;  // per pass; 0 = maxFilmBytes() (memory_budget.h)
 
     static DriverSettings fromScene(const Scene& scene);
 };
@@ -63,6 +67,11 @@ public:
     void stop();  // finishes the tile in progress, then returns; safe to call twice
     void wait();  // until the background run ends by itself (passes or budget)
     bool running() const { return running_.load(); }
+    // Why the background run stopped early, if a pass threw (e.g. the photon map outgrew the memory
+    // budget, or out of memory): the exception, and its message. The passes finished before it stay
+    // in the film; the failed pass may have added some tiles (as an aborted one does).
+    std::exception_ptr failure() const;
+    std::string failureMessage() const;
     bool paused() const { return paused_.load(); }
     void requestStop() { stopRequested_ = true; }
 
@@ -86,11 +95,12 @@ private:
     mutable std::mutex mutex_;
     std::condition_variable cv_;
     std::vector<PassStats> history_;
+    std::exception_ptr failure_;
+    std::string failureMessage_;
     std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
     double startTime_ = 0.0;
 };
 
 double nowSec();
-uint64_t peakRssBytes();
 
 }  // namespace tpb

@@ -1,5 +1,6 @@
 #include "image_io.h"
 
+#include "atomic_file.h"
 #include "error.h"
 
 #include <ImfChannelList.h>
@@ -14,7 +15,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
+#include <string_view>
 #include <unistd.h>
 
 #include <stb_image_write.h>
@@ -25,16 +26,26 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string tmpName(const std::string& path) { return path + ".tmp-" + std::to_string(::getpid()); }
-
-void commitFile(const std::string& tmp, const std::string& path) {
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw UserError(path, 0, "", "cannot move the finished file into place: " + ec.message());
+// OpenEXR writes into memory first: its OutputFile destructor writes the line-offset table and
+// swallows any error doing so, so writing straight to disk could leave a truncated file that
+// looks finished. From memory, the bytes go through AtomicFile, which checks every write.
+class MemoryOStream final : public Imf::OStream {
+public:
+    explicit MemoryOStream(const std::string& name) : Imf::OStream(name.c_str()) {}
+    void write(const char c[], int n) override {
+        const size_t end = pos_ + static_cast<size_t>(n);
+        if (end > bytes_.size()) bytes_.resize(end);
+        std::memcpy(bytes_.data() + pos_, c, static_cast<size_t>(n));
+        pos_ = end;
     }
-}
+    uint64_t tellp() override { return pos_; }
+    void seekp(uint64_t pos) override { pos_ = static_cast<size_t>(pos); }
+    std::string_view bytes() const { return {bytes_.data(), bytes_.size()}; }
+
+private:
+    std::vector<char> bytes_;
+    size_t pos_ = 0;
+};
 
 }  // namespace
 
@@ -56,7 +67,7 @@ void ensureWritableDir(const std::string& dir) {
 
 void writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb, ExrPixel type) {
     TPB_CHECK(rgb.size() == static_cast<size_t>(width) * height * 3);
-    const std::string tmp = tmpName(path);
+    MemoryOStream mem(path);
     try {
         Imf::Header header(width, height);
         const Imf::PixelType pt = type == ExrPixel::Half ? Imf::HALF : Imf::FLOAT;
@@ -81,16 +92,14 @@ void writeExr(const std::string& path, int width, int height, const std::vector<
             fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
         }
         {
-            Imf::OutputFile file(tmp.c_str(), header);
+            Imf::OutputFile file(mem, header);
             file.setFrameBuffer(fb);
             file.writePixels(height);
         }
     } catch (const std::exception& e) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw UserError(path, 0, "", std::string("cannot write EXR: ") + e.what());
+        throw UserError(path, 0, "", std::string("cannot encode EXR: ") + e.what());
     }
-    commitFile(tmp, path);
+    writeFileAtomic(path, mem.bytes());
 }
 
 void readExr(const std::string& path, int& width, int& height, std::vector<float>& rgb) {
@@ -115,13 +124,15 @@ void readExr(const std::string& path, int& width, int& height, std::vector<float
 }
 
 void writePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb) {
-    const std::string tmp = tmpName(path);
-    if (!stbi_write_png(tmp.c_str(), width, height, 3, rgb.data(), width * 3)) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw UserError(path, 0, "", "cannot write PNG (folder missing, not writable or disk full)");
-    }
-    commitFile(tmp, path);
+    TPB_CHECK(rgb.size() == static_cast<size_t>(width) * height * 3);
+    // Encoded in memory (stbi_write_png does not check its fwrite), written through AtomicFile.
+    std::string png;
+    const auto append = [](void* ctx, void* data, int size) {
+        static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), static_cast<size_t>(size));
+    };
+    if (!stbi_write_png_to_func(append, &png, width, height, 3, rgb.data(), width * 3))
+        throw UserError(path, 0, "", "cannot encode PNG (out of memory)");
+    writeFileAtomic(path, png);
 }
 
 void writePngPreview(const std::string& path, int width, int height, const std::vector<float>& rgb, double exposureEv) {
@@ -133,18 +144,7 @@ void writePngPreview(const std::string& path, int width, int height, const std::
 }
 
 void writeTextFile(const std::string& path, const std::string& text) {
-    const std::string tmp = tmpName(path);
-    {
-        std::ofstream f(tmp, std::ios::binary);
-        f << text;
-        f.flush();
-        if (!f) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            throw UserError(path, 0, "", "cannot write file (folder missing, not writable or disk full)");
-        }
-    }
-    commitFile(tmp, path);
+    writeFileAtomic(path, text);
 }
 
 }  // namespace tpb

@@ -1,7 +1,7 @@
 // Image output: OpenEXR (this file's .cpp is the only user of OpenEXR) and 8-bit PNG previews.
-// Every write goes to "<path>.tmp-<pid>" first and is renamed into place, so an interrupted or
-// failed write never leaves a half file under the final name. Failures throw UserError naming
-// the path and the reason (unwritable folder, disk full...).
+// Images are encoded in memory and written through AtomicFile (atomic_file.h): an interrupted or
+// failed write (full disk, unwritable folder, Ctrl-C) never leaves a half file under the final
+// name. Failures throw UserError naming the path and the system's reason.
 #pragma once
 #include <string>
 #include <vector>

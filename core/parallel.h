@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <exception>
 #include <functional>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -17,23 +19,39 @@ inline int resolveThreads(int requested) {
 }
 
 // Calls fn(item, threadIndex) for every item; stops handing out items once `abort` is set.
+// An exception thrown by fn on any thread stops the handing out of items and is rethrown on the
+// calling thread once every worker has finished (the first one wins; never std::terminate).
 inline void parallelFor(int64_t n, int threads, const std::function<void(int64_t, int)>& fn,
                         const std::atomic<bool>* abort = nullptr) {
     threads = std::max(1, std::min<int>(threads, static_cast<int>(std::max<int64_t>(n, 1))));
     std::atomic<int64_t> next{0};
+    std::atomic<bool> failed{false};
+    std::exception_ptr failure;
+    std::mutex failureMutex;
     auto worker = [&](int t) {
-        for (;;) {
-            if (abort && abort->load(std::memory_order_relaxed)) return;
-            const int64_t i = next.fetch_add(1, std::memory_order_relaxed);
-            if (i >= n) return;
-            fn(i, t);
+        try {
+            for (;;) {
+                if (failed.load(std::memory_order_relaxed)) return;
+                if (abort && abort->load(std::memory_order_relaxed)) return;
+                const int64_t i = next.fetch_add(1, std::memory_order_relaxed);
+                if (i >= n) return;
+                fn(i, t);
+            }
+        } catch (...) {
+            std::lock_guard<std::mutex> g(failureMutex);
+            if (!failure) failure = std::current_exception();
+            failed = true;
         }
     };
-    if (threads == 1) { worker(0); return; }
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(worker, t);
-    worker(0);
-    for (auto& th : pool) th.join();
+    if (threads == 1) {
+        worker(0);
+    } else {
+        std::vector<std::thread> pool;
+        for (int t = 1; t < threads; ++t) pool.emplace_back(worker, t);
+        worker(0);
+        for (auto& th : pool) th.join();
+    }
+    if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace tpb

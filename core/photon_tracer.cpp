@@ -1,6 +1,8 @@
 #include "photon_tracer.h"
 
 #include "bsdf.h"
+#include "error.h"
+#include "memory_budget.h"
 #include "parallel.h"
 #include "rng.h"
 #include "sampling.h"
@@ -18,6 +20,16 @@ double openBeamLength(const Scene& scene, const Medium& m) {
     return minSigma > 0.0 ? std::min(16.2 / minSigma, 10.0 * diag) : 10.0 * diag;
 }
 
+[[noreturn]] void mapTooLarge(const PhotonTraceSettings& s, const std::string& who) {
+    throw UserError("", 0, "render.photons_per_pass",
+                    "pass " + std::to_string(s.pass) + ": " + who + " stored more than " + humanBytes(s.maxMapBytes) +
+                        " of photon beams and surface photons, the memory limit (TPB_MAX_FILM_BYTES); lower "
+                        "photons_per_pass or render.max_depth (a medium or walls with albedo near 1 keep photons "
+                        "alive for up to max_depth bounces)");
+}
+
+uint64_t mapBytes(size_t beams, size_t photons) { return beams * sizeof(Beam) + photons * sizeof(SurfacePhoton); }
+
 }  // namespace
 
 void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index, PhotonMap& out) {
@@ -34,8 +46,13 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
     RegionStack regions = scene.lightRegions[li];
     int nullCrossings = 0;  // index-matched boundaries are not events: they do not use up depth
+    const size_t beams0 = out.beams.size(), photons0 = out.photons.size();
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
+        if (s.maxMapBytes > 0 && (depth & 4095) == 4095) {
+            const uint64_t mine = mapBytes(out.beams.size() - beams0, out.photons.size() - photons0);
+            if (mine > s.maxMapBytes) mapTooLarge(s, "photon " + std::to_string(index) + " alone");
+        }
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
         const double dSurf = hit ? hit->t : kInf;
         const Region& region = scene.regions[regions.top()];
@@ -126,10 +143,19 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s, const s
     constexpr int64_t kBatch = 1024;
     const int64_t batches = (s.photons + kBatch - 1) / kBatch;
     std::vector<PhotonMap> parts(static_cast<size_t>(batches));
+    std::atomic<uint64_t> stored{0};  // bytes of all batches so far, for the memory guard
     parallelFor(batches, s.threads, [&](int64_t b, int) {
         PhotonMap& part = parts[static_cast<size_t>(b)];
         const int64_t end = std::min(s.photons, (b + 1) * kBatch);
-        for (int64_t i = b * kBatch; i < end; ++i) tracePhoton(scene, s, i, part);
+        for (int64_t i = b * kBatch; i < end; ++i) {
+            const uint64_t before = mapBytes(part.beams.size(), part.photons.size());
+            tracePhoton(scene, s, i, part);
+            if (s.maxMapBytes > 0) {
+                const uint64_t total = stored.fetch_add(mapBytes(part.beams.size(), part.photons.size()) - before) +
+                                       mapBytes(part.beams.size(), part.photons.size()) - before;
+                if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
+            }
+        }
         part.emitted = end - b * kBatch;
     }, abort);
     PhotonMap all;

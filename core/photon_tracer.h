@@ -52,12 +52,17 @@ struct PhotonTraceSettings {
     bool storeSurfacePhotons = true;
     BeamLength beamLength = BeamLength::Short;
     int threads = 1;
+    // Memory guard: a pass whose beams and surface photons would take more than this throws
+    // UserError (key render.photons_per_pass) instead of exhausting memory, e.g. an albedo-1
+    // medium with a huge max_depth. 0 = no limit.
+    uint64_t maxMapBytes = 0;
 };
 
 PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s,
                        const std::atomic<bool>* abort = nullptr);
 
 // Traces photon `index` of the pass (deterministic given seed, pass, index). Appends to `out`.
+// Throws UserError if this photon alone stores more than s.maxMapBytes.
 void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index, PhotonMap& out);
 
 }  // namespace tpb

@@ -1,6 +1,7 @@
 // Reference volumes (see reference.h for the file format and what each field means).
 #include "reference.h"
 
+#include "atomic_file.h"
 #include "error.h"
 #include "parallel.h"
 
@@ -14,7 +15,6 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 namespace tpb {
 
@@ -262,30 +262,16 @@ void writeReference(const std::string& path, const ReferenceVolume& ref) {
         fs::create_directories(target.parent_path(), ec);
         if (ec) throw UserError(path, 0, "", "cannot create its folder: " + ec.message());
     }
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-    {
-        std::ofstream f(tmp, std::ios::binary);
-        const uint64_t n = text.size();
-        f.write(kMagic, 8);
-        f.write(reinterpret_cast<const char*>(&n), 8);
-        f.write(text.data(), static_cast<std::streamsize>(n));
-        for (const ArraySpec& s : specs) {
-            const std::vector<float>* a = arrayByName(const_cast<ReferenceVolume&>(ref), s.name);
-            f.write(reinterpret_cast<const char*>(a->data()), static_cast<std::streamsize>(a->size() * sizeof(float)));
-        }
-        f.flush();
-        if (!f) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-            throw UserError(path, 0, "", "cannot write the reference (folder not writable or disk full)");
-        }
+    AtomicFile f(path);
+    const uint64_t n = text.size();
+    f.write(kMagic, 8);
+    f.write(&n, 8);
+    f.write(text);
+    for (const ArraySpec& s : specs) {
+        const std::vector<float>* a = arrayByName(const_cast<ReferenceVolume&>(ref), s.name);
+        f.write(a->data(), a->size() * sizeof(float));
     }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw UserError(path, 0, "", "cannot write the reference: " + ec.message());
-    }
+    f.commit();
 }
 
 ReferenceInfo readReferenceInfo(const std::string& path) {

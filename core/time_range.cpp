@@ -1,5 +1,7 @@
 #include "time_range.h"
 
+#include "memory_budget.h"
+
 #include "beam_accel.h"
 #include "camera_pass.h"
 #include "parallel.h"
@@ -32,6 +34,7 @@ TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads) {
     pt.storeSurfacePhotons = scene.stages.surfacePhotons;
     pt.beamLength = scene.desc.render.beamLength;
     pt.threads = threads;
+    pt.maxMapBytes = maxFilmBytes();
     const PhotonMap map = tracePhotons(scene, pt);
     const double diag = std::max(scene.bounds.diagonal(), 1e-6);
     CameraPassSettings cs;

@@ -437,3 +437,101 @@ TEST_F(CliErrors, CtrlCFinishesThePassAndWritesTheResults) {
     EXPECT_EQ(q.signal, 0);
     EXPECT_EQ(q.code, 130) << q.err;
 }
+
+namespace {
+
+// Can this process mount a tmpfs in a private mount namespace (unshare -m, the user mapped to root),
+// which vanishes with the namespace? Root in a normal container can; some sandboxes cannot.
+bool canMountPrivateTmpfs() {
+    return std::system("unshare -m -r sh -c 'd=$(mktemp -d) && mount -t tmpfs -o size=64k tmpfs \"$d\" && "
+                       "umount \"$d\" && rmdir \"$d\"' >/dev/null 2>&1") == 0;
+}
+
+}  // namespace
+
+// A full disk while the frames are written: a real ENOSPC from a 96 KiB tmpfs. The render must end
+// with exit 2 and an error naming the frame file and "No space left on device"; every file that is
+// there must be complete (EXRs read back, summary.json parses and says how many frames were
+// written), no *.tmp-* file may be left, and the frames that fitted are kept.
+TEST_F(CliErrors, DiskFullDuringExportKeepsCompleteFiles) {
+    if (!canMountPrivateTmpfs()) GTEST_SKIP() << "this machine does not allow `unshare -m -r` + mount tmpfs";
+    const fs::path scene = write("scene.json", sceneWith(4, "  \"film\": {\"bins\": 64},"));
+    const fs::path copy = dir_ / "copy";
+    // In the namespace: mount, render into the tmpfs, copy what is there out, record the exit code.
+    const std::string script =
+        "set -u; m=\"$1\"; mkdir -p \"$m\" && mount -t tmpfs -o size=96k tmpfs \"$m\" || exit 99; "
+        "\"$2\" render \"$3\" -o \"$m/out\" --width 24 --height 24; echo $? > \"$4/code.txt\"; "
+        "cp -r \"$m/out\" \"$4/copy\"; df -k \"$m\" | tail -1 > \"$4/df.txt\"";
+    const std::string cmd = "unshare -m -r sh -c '" + script + "' sh '" + (dir_ / "mnt").string() + "' '" + TPB_BINARY +
+                            "' '" + scene.string() + "' '" + dir_.string() + "' >'" + (dir_ / "stdout.txt").string() +
+                            "' 2>'" + (dir_ / "stderr.txt").string() + "'";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir_ / "stderr.txt");
+    const std::string err = slurp(dir_ / "stderr.txt");
+    const int code = std::stoi(slurp(dir_ / "code.txt"));
+    EXPECT_EQ(code, 2) << err;
+    EXPECT_NE(err.find("No space left on device"), std::string::npos) << err;
+    EXPECT_NE(err.find("/frames/frame_"), std::string::npos) << err;  // names the file that did not fit
+    EXPECT_NE(err.find("kept in"), std::string::npos) << err;
+    EXPECT_EQ(err.find("internal error"), std::string::npos) << err;
+
+    // What is there is complete.
+    int w = 0, h = 0;
+    std::vector<float> rgb;
+    tpb::readExr((copy / "steady.exr").string(), w, h, rgb);
+    EXPECT_EQ(w, 24);
+    const nlohmann::json summary = nlohmann::json::parse(slurp(copy / "summary.json"));
+    EXPECT_EQ(summary["outputs"]["frames_expected"].get<int>(), 64);
+    int frames = 0, tmp = 0;
+    for (const auto& e : fs::recursive_directory_iterator(copy)) {
+        const std::string name = e.path().filename().string();
+        tmp += name.find(".tmp-") != std::string::npos;
+        if (name.rfind("frame_", 0) == 0) {
+            ++frames;
+            int fw = 0, fh = 0;
+            std::vector<float> f;
+            EXPECT_NO_THROW(tpb::readExr(e.path().string(), fw, fh, f)) << name;
+            EXPECT_EQ(fw * fh, 24 * 24) << name;
+        }
+    }
+    EXPECT_EQ(tmp, 0);
+    EXPECT_GT(frames, 0);   // the frames that fitted are kept
+    EXPECT_LT(frames, 64);  // and the disk really filled up
+    std::printf("tmpfs 96 KiB: %d of 64 frames fitted; summary.json frames_written = %s\n%s", frames,
+                summary["outputs"]["frames_written"].dump().c_str(), err.c_str());
+    // summary.json is either the final one (it fitted) with the exact count and the error, or the
+    // first one, written before the frames, whose frames_written is null.
+    const nlohmann::json& written = summary["outputs"]["frames_written"];
+    if (!written.is_null()) {
+        EXPECT_EQ(written.get<int>(), frames);
+        EXPECT_NE(summary["outputs"]["error"].get<std::string>().find("No space left"), std::string::npos);
+    }
+}
+
+// A pass that fails on the render thread (here: an albedo-1 box with max_depth 1e8 outgrows the
+// memory limit, TPB_MAX_FILM_BYTES) ends the render with exit 2 and the reason, not a crash; the
+// outputs are still written from the passes finished before it (none here, so the images are black).
+TEST_F(CliErrors, PassThatOutgrowsMemoryStopsTheRenderCleanly) {
+    const fs::path scene = write("scene.json", R"({"version": 1,
+      "camera": {"position": [0, 0, 0.9], "look_at": [0, 0, 0], "fov": 60, "resolution": [8, 8]},
+      "film": {"start_m": 0, "bin_width_m": 0.25, "bins": 8},
+      "media": {"m": {"sigma_s": 2.0}}, "global_medium": "m",
+      "materials": {"wall": {"type": "diffuse", "albedo": 1}},
+      "shapes": [{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": "wall", "flip_normals": true}],
+      "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
+      "render": {"photons_per_pass": 2000, "max_depth": 100000000, "passes": 3, "seed": 8}})");
+    const Proc p = render(scene, {"--threads", "2"}, {"TPB_MAX_FILM_BYTES=4000000"});
+    EXPECT_FALSE(p.timedOut);
+    EXPECT_EQ(p.signal, 0) << p.err;
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("error: render.photons_per_pass: pass 1: "), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("max_depth"), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("writing the 0 finished passes"), std::string::npos) << p.err;
+    EXPECT_EQ(p.err.find("internal error"), std::string::npos) << p.err;
+    const nlohmann::json summary = nlohmann::json::parse(slurp(dir_ / "out" / "summary.json"));
+    EXPECT_EQ(summary["passes"].get<int>(), 0);
+    int w = 0, h = 0;
+    std::vector<float> rgb;
+    tpb::readExr((dir_ / "out" / "steady.exr").string(), w, h, rgb);
+    EXPECT_EQ(w, 8);
+    for (float v : rgb) EXPECT_EQ(v, 0.0f);
+}

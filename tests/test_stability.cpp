@@ -20,6 +20,7 @@
 #include "bsdf.h"
 #include "camera_pass.h"
 #include "driver.h"
+#include "error.h"
 #include "parallel.h"
 #include "photon_tracer.h"
 #include "progressive.h"
@@ -1026,6 +1027,67 @@ TEST(StabilityAlbedoOne, ClosedBoxFurnace) {
         expectFiniteFilm(r.driver->film(), "white furnace");
         EXPECT_LT(nowSec() - t0, 15.0);
         EXPECT_LE(r.passes[0].beams, 4000 * 48);
+    }
+}
+
+// A pass that cannot be done (the photon map of an albedo-1 box with a huge max_depth outgrows the
+// memory budget) must not take the process down: the photon tracer throws UserError on a worker
+// thread, parallelFor carries it to the driver thread, the driver records it and stops, and the
+// film keeps what the finished passes gave (here: none, so it stays exactly zero).
+TEST(StabilityAlbedoOne, PhotonMapOverTheMemoryBudgetStopsTheRenderWithAMessage) {
+    const std::string json = R"({"version": 1,
+      "camera": {"position": [0, 0, 0.9], "look_at": [0, 0, 0], "fov": 60, "resolution": [8, 8]},
+      "film": {"start_m": 0, "bin_width_m": 0.25, "bins": 8},
+      "media": {"m": {"sigma_s": 2.0}}, "global_medium": "m",
+      "materials": {"wall": {"type": "diffuse", "albedo": 1}},
+      "shapes": [{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": "wall", "flip_normals": true}],
+      "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
+      "render": {"photons_per_pass": 2000, "max_depth": 100000000, "passes": 3, "seed": 8}})";
+    auto sc = sceneFrom(json);
+    DriverSettings ds = DriverSettings::fromScene(*sc);
+    ds.threads = 2;
+    ds.maxPhotonMapBytes = 4u << 20;  // 4 MiB: about 40k beams, while one photon alone would store 1e8
+    Driver drv(*sc, ds);
+    const double t0 = nowSec();
+    drv.start();
+    drv.wait();
+    EXPECT_LT(nowSec() - t0, 30.0);
+    ASSERT_TRUE(drv.failure());
+    EXPECT_THROW(std::rethrow_exception(drv.failure()), UserError);
+    const std::string msg = drv.failureMessage();
+    EXPECT_NE(msg.find("render.photons_per_pass"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("max_depth"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("4.00 MiB"), std::string::npos) << msg;
+    EXPECT_EQ(drv.completedPasses(), 0u);
+    EXPECT_FALSE(drv.running());
+    std::vector<float> img;
+    drv.film().steadyImage(img);
+    for (float v : img) ASSERT_EQ(v, 0.0f);
+
+    // Within the budget the same scene renders: max_depth 48 stores at most 2 x 48 events per photon
+    // (2000 x 96 x ~100 B = 19 MB).
+    ds.maxDepth = 48;
+    ds.maxPhotonMapBytes = 64u << 20;
+    Driver ok(*sc, ds);
+    ok.start();
+    ok.wait();
+    EXPECT_FALSE(ok.failure()) << ok.failureMessage();
+    EXPECT_EQ(ok.completedPasses(), 3u);
+    expectFiniteFilm(ok.film(), "albedo-1 box within budget");
+}
+
+// parallelFor rethrows a worker's exception on the calling thread after joining every worker, and
+// stops handing out work: it must never reach std::terminate.
+TEST(StabilityFaults, ParallelForRethrowsAWorkersExceptionOnTheCallingThread) {
+    for (int threads : {1, 2, 4}) {
+        SCOPED_TRACE(threads);
+        std::atomic<int64_t> ran{0};
+        EXPECT_THROW(parallelFor(100000, threads, [&](int64_t i, int) {
+            ++ran;
+            if (i == 37) throw std::runtime_error("item 37");
+        }), std::runtime_error);
+        EXPECT_GE(ran.load(), 38);
+        EXPECT_LT(ran.load(), 100000);  // the other items were not all run after the failure
     }
 }
 
