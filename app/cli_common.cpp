@@ -29,6 +29,9 @@ void RenderOverrides::add(CLI::App* cmd) {
         ->check(CLI::IsMember({"exact", "uniform"}));
     cmd->add_option("--beam-length", beamLength, "Photon beams end at the next event (short) or the surface (long)")
         ->check(CLI::IsMember({"short", "long"}));
+    cmd->add_flag("--pt-free-flight", ptFreeFlight,
+                  "Path tracer: connect point/spot lights only from free-flight vertices, without equiangular "
+                  "sampling (unbiased too, but with infinite variance next to a light in a medium)");
     cmd->add_option("--accel", accel, "Beam query backend: embree | brute")->check(CLI::IsMember({"embree", "brute"}));
 }
 

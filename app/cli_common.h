@@ -22,6 +22,7 @@ struct RenderOverrides {
     std::optional<int> threads, width, height, bins, maxDepth;
     std::optional<uint64_t> seed;
     std::string profile, beamLength, accel = "embree";
+    bool ptFreeFlight = false;  // path tracer: no equiangular sampling (for comparisons)
 
     void add(CLI::App* cmd);
     // Applies the overrides that change the scene description (resolution, bins).

@@ -71,6 +71,7 @@ PathTracerSettings ptSettings(const Scene& scene, const RenderOverrides& ov, int
     ps.maxDepth = scene.desc.render.maxDepth;  // --max-depth is applied to the description
     ps.threads = ov.threads.value_or(scene.desc.render.threads);
     ps.samplesPerPixel = std::max(1, spp);
+    ps.equiangular = !ov.ptFreeFlight;
     return ps;
 }
 
@@ -119,7 +120,7 @@ json ptSummary(const Scene& scene, const PathTracerSettings& ps, const Transient
                const PathTracerStats& st, const std::vector<std::pair<double, double>>& passTimes, double wall) {
     json j = summaryHeader(scene, "pt", passTimes.size(), wall, film, opt);
     j["settings"] = {{"samples_per_pixel", ps.samplesPerPixel}, {"max_depth", ps.maxDepth}, {"seed", ps.seed},
-                     {"threads", ps.threads}};
+                     {"threads", ps.threads}, {"equiangular", ps.equiangular}};
     json per = json::array();
     double renderSec = 0.0;
     for (size_t i = 0; i < passTimes.size(); ++i) {

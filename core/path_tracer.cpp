@@ -69,17 +69,15 @@ bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stac
     return false;
 }
 
-// Next-event estimation at vertex x (shadow rays start at x + offset). `scatter(w)` returns the
-// vertex's phase function or BSDF-times-cosine value for the direction w towards the light.
+bool isDeltaPositionLight(const Light& l) { return l.type == LightType::Point || l.type == LightType::Spot; }
+
+// The connection of vertex x to light `li` (picked with probability `pick`; u1, u2 place the point
+// on an area light): light term, shadow ray from x + offset, splat at the connection's times.
+// `scatter(w)` is the vertex's phase function or BSDF-times-cosine for the direction w to the light.
 template <class Scatter>
-void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, const RegionStack& regions,
-               const Color& beta, double oplCam, double oplUnw, Scatter&& scatter) {
+void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, const Vec3& x, const Vec3& offset,
+                  const RegionStack& regions, const Color& beta, double oplCam, double oplUnw, Scatter&& scatter) {
     const Scene& scene = ctx.scene;
-    // Always draw the same count of numbers, so later decisions do not depend on the light type.
-    const double uLight = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-    double pick = 0.0;
-    const int li = scene.pickLight(uLight, pick);
-    if (li < 0 || !(pick > 0.0)) return;
     const Light& light = scene.lights[li];
     Vec3 y;
     Color Li(0.0);
@@ -124,6 +122,98 @@ void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, co
     splat(ctx, L, light.emitOpl + oplShadow + oplCam, light.emitOpl + oplShadow + oplUnw);
 }
 
+// Equiangular sampling (Kulla and Fajardo 2012) of a point on the medium segment x(t) = o + t w,
+// 0 <= t < tMax, towards a light at y. With D = (y - o).w and h the distance from y to the line,
+// |x(t) - y|^2 = h^2 + (t - D)^2; the angle theta(t) = atan((t - D) / h) has
+// d theta / dt = h / (h^2 + (t - D)^2), so theta uniform in [theta(0), theta(tMax)] gives
+//     pdf(t) = h / ((theta_b - theta_a) (h^2 + (t - D)^2)),     t = D + h tan(theta),
+// whose 1/|x - y|^2 cancels the light's. (Checked against free-flight NEE in test_path_tracer.)
+struct EquiangularFrame {
+    double D = 0.0, h = 0.0, thetaA = 0.0, thetaB = 0.0;
+    bool valid = false;
+
+    EquiangularFrame(const Ray& ray, double tMax, const Vec3& y) {
+        const Vec3 oy = y - ray.o;
+        D = glm::dot(oy, ray.d);
+        h = glm::length(oy - D * ray.d);
+        if (!(h > 0.0) || !(tMax > 0.0)) return;  // the light on the ray's line: a set of measure zero
+        thetaA = std::atan2(-D, h);
+        thetaB = std::isfinite(tMax) ? std::atan2(tMax - D, h) : 0.5 * kPi;
+        valid = thetaB > thetaA;
+    }
+    double sample(double u) const { return D + h * std::tan(thetaA + u * (thetaB - thetaA)); }
+    double pdf(double t) const { return h / ((thetaB - thetaA) * (h * h + (t - D) * (t - D))); }
+};
+
+// Where equiangular sampling stops on a segment: transmittance e^-30 in the clearest channel.
+// Beyond it, free-flight vertices alone connect to delta lights, so an unbounded segment (an open
+// medium) neither wastes samples at negligible transmittance nor puts them at absurd times.
+double equiangularReach(const Medium& m) {
+    const double sigmaMin = std::min(m.sigma_t.x, std::min(m.sigma_t.y, m.sigma_t.z));
+    return sigmaMin > 0.0 ? 30.0 / sigmaMin : kInf;
+}
+
+// The two techniques that place a scattering point on a medium segment and connect it to a point
+// or spot light: free flight (pdf sigma_bar exp(-sigma_bar t), the vertex the path continues
+// from) and equiangular (pdf above, on [0, reach)). Each takes one sample; the balance heuristic
+// weights them, so the sum stays unbiased while each covers where the other is poor: equiangular
+// next to the light (where free flight has infinite variance: the integral of 1/d^4 over a ball
+// around the light diverges), free flight far from it, where the transmittance dominates.
+struct SegmentMis {
+    Ray ray;
+    double reach = 0.0, sigmaBar = 0.0;
+    double freeFlightPdf(double t) const { return sigmaBar * std::exp(-sigmaBar * t); }
+};
+
+// Next-event estimation at vertex x: one light picked with Scene::pickLight, then connectLight.
+// At a free-flight medium vertex (distance t along `mis->ray`) a delta light's connection carries
+// the free-flight technique's MIS weight.
+template <class Scatter>
+void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, const RegionStack& regions,
+               Color beta, double oplCam, double oplUnw, const SegmentMis* mis, double t, Scatter&& scatter) {
+    // Always draw the same count of numbers, so later decisions do not depend on the light type.
+    const double uLight = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    double pick = 0.0;
+    const int li = ctx.scene.pickLight(uLight, pick);
+    if (li < 0 || !(pick > 0.0)) return;
+    const Light& light = ctx.scene.lights[li];
+    if (mis && isDeltaPositionLight(light) && t < mis->reach) {
+        const EquiangularFrame f(mis->ray, mis->reach, light.position);
+        if (f.valid) {
+            const double pff = mis->freeFlightPdf(t), peq = f.pdf(t);
+            beta *= pff / (pff + peq);
+        }
+    }
+    connectLight(ctx, li, pick, u1, u2, x, offset, regions, beta, oplCam, oplUnw, scatter);
+}
+
+// The equiangular technique on one medium segment (see SegmentMis): a light picked with
+// Scene::pickLight; a point or spot light gets an equiangular point t on [0, reach) and the
+// estimate  beta sigma_s(t) T(t) / pdf_eq(t) * w_eq(t) * connection.
+void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const Region& region,
+                        const RegionStack& regions, const Color& beta, double oplCam, double oplUnw, bool nonSpecular) {
+    const double uLight = rng.uniform(), uT = rng.uniform();  // always two numbers
+    double pick = 0.0;
+    const int li = ctx.scene.pickLight(uLight, pick);
+    if (li < 0 || !(pick > 0.0)) return;
+    const Light& light = ctx.scene.lights[li];
+    if (!isDeltaPositionLight(light)) return;
+    const EquiangularFrame f(mis.ray, mis.reach, light.position);
+    if (!f.valid) return;
+    const double t = f.sample(uT);
+    if (!(t >= 0.0 && t < mis.reach)) return;  // rounding at the ends
+    const double peq = f.pdf(t), pff = mis.freeFlightPdf(t);
+    if (!(peq > 0.0) || !std::isfinite(peq)) return;
+    const Medium& m = region.medium;
+    // sigma_s T / pdf_eq * w_eq = sigma_s T / pdf_eq * pdf_eq / (pdf_eq + pdf_ff) = sigma_s T / (pdf_eq + pdf_ff)
+    const Color weight = beta * m.sigma_s * m.transmittance(t) / (peq + pff);
+    const double dOpl = region.ior * t;
+    ++ctx.stats.equiangularSamples;
+    connectLight(ctx, li, pick, 0.0, 0.0, mis.ray.at(t), Vec3(0.0), regions, weight, oplCam + dOpl,
+                 nonSpecular ? oplUnw + dOpl : 0.0,
+                 [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(mis.ray.d, w))); });
+}
+
 // Russian roulette on the throughput; false if the path dies.
 bool roulette(Rng& rng, Color& beta, int depth) {
     if (depth < kRussianRouletteDepth) return true;
@@ -156,7 +246,10 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
         if (region.hasMedium) {
             const Medium& m = region.medium;
             if (m.scattering) {
+                // A scattering vertex on this segment would be at depth + 1 <= maxDepth.
                 const double sigmaBar = m.samplingSigma();
+                const SegmentMis mis{ray, s.equiangular ? std::min(dSurf, equiangularReach(m)) : 0.0, sigmaBar};
+                if (s.equiangular) equiangularSegment(ctx, rng, mis, region, regions, beta, oplCam, oplUnw, nonSpecular);
                 const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
                 if (d < dSurf) {
                     // Medium scattering vertex.
@@ -168,7 +261,7 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
                     const Vec3 x = ray.at(d);
                     ++depth;
                     const Vec3 wi = ray.d;
-                    nextEvent(ctx, rng, x, Vec3(0.0), regions, beta, oplCam, oplUnw,
+                    nextEvent(ctx, rng, x, Vec3(0.0), regions, beta, oplCam, oplUnw, s.equiangular ? &mis : nullptr, d,
                               [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(wi, w))); });
                     if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
                     if (!roulette(rng, beta, depth)) return;
@@ -215,7 +308,7 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
         if (mat.type == MaterialType::Diffuse) {
             nonSpecular = true;
             const Color fr = mat.albedo * kInvPi;
-            nextEvent(ctx, rng, hit->p, scene.rayEps * ng, regions, beta, oplCam, oplUnw, [&](const Vec3& w) {
+            nextEvent(ctx, rng, hit->p, scene.rayEps * ng, regions, beta, oplCam, oplUnw, nullptr, 0.0, [&](const Vec3& w) {
                 if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
                 return fr * std::max(0.0, glm::dot(w, ns));
             });
@@ -250,6 +343,7 @@ PathTracerStats& PathTracerStats::operator+=(const PathTracerStats& o) {
     contributions += o.contributions;
     shadowRays += o.shadowRays;
     laserSamples += o.laserSamples;
+    equiangularSamples += o.equiangularSamples;
     depthLimited += o.depthLimited;
     return *this;
 }

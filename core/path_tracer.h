@@ -9,7 +9,9 @@
 //    vertex and T / T_bar when the surface comes first; non-scattering absorbing regions just
 //    attenuate by T;
 //  - medium vertex: next-event estimation (NEE) to one light picked with Scene::pickLight, phase
-//    function value; then Henyey-Greenstein sampling (weight 1);
+//    function value; then Henyey-Greenstein sampling (weight 1). Point and spot lights are
+//    connected instead from an equiangular point on every medium segment (settings.equiangular,
+//    on by default): same expectation, bounded variance next to the light;
 //  - diffuse surface: NEE with f = albedo / pi and the cosine at the vertex; cosine sampling;
 //  - mirror, dielectric (Fresnel choice, total internal reflection, region stack push/pop) and null
 //    boundaries (always crossed, no bending) continue the path; the region stack, ray epsilons and
@@ -62,6 +64,10 @@ struct PathTracerSettings {
     int samplesPerPixel = 1;
     int maxDepth = 64;
     int threads = 0;  // 0 = all cores
+    // Point and spot lights seen from media: equiangular sampling along each medium segment
+    // (path_tracer.cpp, equiangularSegment) instead of next-event estimation at free-flight
+    // vertices, whose variance is infinite next to the light. Both are unbiased.
+    bool equiangular = true;
 };
 
 struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or throughputs) dropped
@@ -69,6 +75,7 @@ struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or 
     int64_t contributions = 0;   // finite contributions added (NEE + emitter hits)
     int64_t shadowRays = 0;      // NEE connections traced
     int64_t laserSamples = 0;    // NEE picked a laser (cannot be connected; contributes nothing)
+    int64_t equiangularSamples = 0;  // equiangular points placed towards point/spot lights
     int64_t depthLimited = 0;    // paths stopped by maxDepth (not by escape, absorption or RR)
     PathTracerStats& operator+=(const PathTracerStats& o);
 };

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <numeric>
 #include <vector>
 
 using namespace tpb;
@@ -437,6 +438,66 @@ TEST(PathTracer, SingleScatteringMatchesQuadrature) {
     RecordProperty("max_abs_z_pixel", std::to_string(maxZ));
 }
 
+// Equiangular sampling towards the point light, MIS-combined with free flight (the default), and
+// next-event estimation at free-flight vertices alone are two unbiased estimators of the same
+// film: they must agree pixel by pixel, with single and with multiple scattering. Next to the light
+// free flight alone has infinite variance (1/d^2 at vertices close to the light); the combination
+// must have a clearly smaller standard error there at equal sample counts, and no larger elsewhere.
+TEST(PathTracer, EquiangularAgreesWithFreeFlightAndCutsTheVarianceNearThePointLight) {
+    const int W = 16, H = 16;
+    SceneDesc d = baseDesc(W, H, Vec3(0.2, 0.1, 3.0), Vec3(0.0), 40.0);
+    setFilm(d, 0.0, 0.5, 24);
+    d.globalMedium = addMedium(d, Color(0.30, 0.40, 0.50), Color(0.10, 0.05, 0.20), 0.4, 1.33);
+    d.lights.push_back(pointLight(Vec3(0.0), Color(10.0, 8.0, 6.0), 0.3));
+    auto scene = Scene::build(d);
+    double lx, ly;
+    ASSERT_TRUE(scene->camera.project(Vec3(0.0), lx, ly));
+
+    for (int depth : {1, 4}) {
+        SCOPED_TRACE("max depth " + std::to_string(depth));
+        PathTracerSettings s;
+        s.seed = 11;
+        s.samplesPerPixel = 8;
+        s.maxDepth = depth;
+        const int passes = 32;
+        PathTracerStats stEq, stFf;
+        s.equiangular = true;
+        const Estimates eq = estimate(*scene, s, passes, stEq);
+        s.equiangular = false;
+        const Estimates ff = estimate(*scene, s, passes, stFf);
+        EXPECT_GT(stEq.equiangularSamples, 0);
+        EXPECT_EQ(stFf.equiangularSamples, 0);
+        EXPECT_EQ(stEq.rejected + stFf.rejected, 0);
+
+        ZTally agree("equiangular vs free flight: pixels");
+        std::vector<double> ratioFar, ratioNear;
+        for (int px = 0; px < W * H; ++px) {
+            const double r = std::hypot(px % W + 0.5 - lx, px / W + 0.5 - ly);
+            for (int c = 0; c < 3; ++c) {
+                const MeanSe a = overPasses(passes, [&](int p) { return eq.at(p, px, 2 * eq.bins, c); });
+                const MeanSe b = overPasses(passes, [&](int p) { return ff.at(p, px, 2 * ff.bins, c); });
+                ASSERT_GT(a.mean, 0.0);
+                (r < 1.5 ? ratioNear : ratioFar).push_back(a.se / b.se);
+                if (r < 2.5) continue;  // the free-flight error estimate is not trustworthy there
+                const double z = (a.mean - b.mean) / std::sqrt(a.se * a.se + b.se * b.se);
+                agree.add({a.mean - b.mean, std::sqrt(a.se * a.se + b.se * b.se)}, 0.0, 0.0);
+                EXPECT_LT(std::abs(z), 4.5) << "pixel " << px << " channel " << c << ": " << a.mean << " +- " << a.se
+                                            << " vs " << b.mean << " +- " << b.se;
+            }
+        }
+        std::sort(ratioNear.begin(), ratioNear.end());
+        std::sort(ratioFar.begin(), ratioFar.end());
+        const double medNear = ratioNear[ratioNear.size() / 2], medFar = ratioFar[ratioFar.size() / 2];
+        std::printf("max depth %d: standard error equiangular / free flight, median: %.3f near the light "
+                    "(%zu values), %.3f elsewhere\n", depth, medNear, ratioNear.size(), medFar);
+        // Measured (seed 11): 0.54 / 0.60 at depth 1, 0.32 / 0.88 at depth 4. The free-flight error
+        // estimate near the light is itself an underestimate (its variance is infinite), so the
+        // true gain there is larger than this ratio shows.
+        EXPECT_LT(medNear, 0.7);
+        EXPECT_LT(medFar, 1.0);  // MIS keeps free flight where it is the better technique
+    }
+}
+
 // ---- 2. first arrival = geometric OPL, with a mirror in the camera path --------------------------
 
 // Own tracer for "floor y = 0 (|x|, |z| < 100) + mirror z = zm (|x| < 5, 0 < y < 2, facing +z)":
@@ -695,11 +756,15 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
         TransientFilm film(16, 16, scene->time);
         PathTracerStats st;
         renderPathTracer(*scene, s2, 1, passes, film, &st);
-        EXPECT_EQ(st.outside[0], 0.0);
-        EXPECT_EQ(st.outside[1], 0.0);
         EXPECT_GT(st.depthLimited, 0);
         std::vector<float> img;
         film.steadyImage(img);
+        // The box is open at the front, in fog: a segment leaving it is unbounded. Equiangular points
+        // towards the point and spot lights reach out to transmittance e^-30 (86 m in this fog), so
+        // a few contributions land past 120 m, each weighted by at most e^-30 of a path's radiance.
+        const double total = std::accumulate(img.begin(), img.end(), 0.0) / 3.0;
+        EXPECT_LT(st.outside[0] / passes, 1e-12 * total);
+        EXPECT_LT(st.outside[1] / passes, 1e-12 * total);
         for (int a = 0; a < 2; ++a) {
             std::vector<double> vol;
             film.volume(static_cast<TimeAxis>(a), EmissionMode::Continuous, vol);  // running sum
