@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <filesystem>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -121,8 +120,7 @@ void warnIfOutputsMayNotFit(const Scene& scene, const RenderOutputs& r) {
     struct statvfs fsInfo {};
     if (::statvfs(r.out.c_str(), &fsInfo) != 0) return;
     const uint64_t freeBytes = static_cast<uint64_t>(fsInfo.f_bavail) * fsInfo.f_frsize;
-    const int step = std::max(1, r.opt.step);
-    const uint64_t frames = static_cast<uint64_t>((scene.time.bins + step - 1) / step);
+    const uint64_t frames = static_cast<uint64_t>(exportFrameCount(scene.time.bins, r.opt));
     const uint64_t perFrame = static_cast<uint64_t>(scene.camera.width) * scene.camera.height * 3 *
                               (r.opt.pixel == ExrPixel::Half ? 2 : 4);
     const uint64_t need = frames * perFrame;
@@ -134,14 +132,11 @@ void warnIfOutputsMayNotFit(const Scene& scene, const RenderOutputs& r) {
                      humanBytes(freeBytes).c_str());
 }
 
-OutputReport writeRenderOutputs(const TransientFilm& film, const Scene& scene, const RenderOutputs& r,
+OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& r,
                                 const std::function<nlohmann::json()>& summary) {
     OutputReport rep;
     const bool tty = isatty(STDERR_FILENO) && !r.quiet;
-    if (!r.noFrames) {
-        const int last = r.opt.lastBin < 0 ? film.bins() - 1 : std::min(r.opt.lastBin, film.bins() - 1);
-        rep.framesExpected = last >= r.opt.firstBin ? (last - r.opt.firstBin) / std::max(1, r.opt.step) + 1 : 0;
-    }
+    if (!r.noFrames) rep.framesExpected = exportFrameCount(film.bins(), r.opt);
     const auto writeSummary = [&](bool final) {
         nlohmann::json j = summary();
         nlohmann::json o = {{"frames_expected", rep.framesExpected}, {"files", rep.kept}};
@@ -152,12 +147,12 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const Scene& scene, c
         writeTextFile(r.out + "/summary.json", j.dump(2) + "\n");
     };
 
-    exportSteady(film, r.out + "/steady.exr", r.opt.pixel);
-    rep.kept.push_back("steady.exr");
     {
-        std::vector<float> steady;
+        std::vector<float> steady;  // one image for both files
         film.steadyImage(steady);
-        writePngPreview(r.out + "/steady.png", scene.camera.width, scene.camera.height, steady);
+        writeExr(r.out + "/steady.exr", film.width(), film.height(), steady, r.opt.pixel);
+        rep.kept.push_back("steady.exr");
+        writePngPreview(r.out + "/steady.png", film.width(), film.height(), steady);
         rep.kept.push_back("steady.png");
     }
     rep.kept.push_back("summary.json");
@@ -183,7 +178,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const Scene& scene, c
     }
     try {
         writeSummary(true);
-    } catch (const UserError& e) {
+    } catch (const UserError&) {
         if (rep.error.empty()) throw;
         // The first summary.json stays (its frames_written is null: frames were being written).
     }

@@ -65,7 +65,7 @@ void warnIfOutputsMayNotFit(const Scene& scene, const RenderOutputs& r);
 // A failure writing frames or the strip (full disk...) keeps every complete file, records it in
 // summary.json if it still fits, prints the error and what was kept, and sets the exit code to 2.
 // A failure writing steady.exr/.png or the first summary.json is thrown as UserError.
-OutputReport writeRenderOutputs(const TransientFilm& film, const Scene& scene, const RenderOutputs& r,
+OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& r,
                                 const std::function<nlohmann::json()>& summary);
 
 }  // namespace tpb::app

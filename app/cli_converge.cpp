@@ -182,7 +182,7 @@ void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathT
         std::fprintf(stderr, "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
                              "light is missing from this render\n", static_cast<long long>(st.laserSamples));
 
-    const OutputReport rep = writeRenderOutputs(film, scene, req, [&] {
+    const OutputReport rep = writeRenderOutputs(film, req, [&] {
         return ptSummary(scene, ps, film, req.opt, st, passTimes, wall);
     });
     const int frames = rep.framesWritten;

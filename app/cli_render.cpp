@@ -160,7 +160,7 @@ void run(RenderCmd& c) {
                                                   static_cast<unsigned long long>(drv.completedPasses()));
 
     const OutputReport rep =
-        writeRenderOutputs(drv.film(), *scene, outputs, [&] { return summaryJson(*scene, drv, opt, wall); });
+        writeRenderOutputs(drv.film(), outputs, [&] { return summaryJson(*scene, drv, opt, wall); });
     const int frames = rep.framesWritten;
     if (!c.quiet) {
         const FilmStats& fs = drv.film().stats;

@@ -19,12 +19,21 @@ void exportFrame(const TransientFilm& film, int bin, const std::string& path, co
     writeExr(path, film.width(), film.height(), img, opt.pixel);
 }
 
+namespace {
+int lastExportBin(int bins, const ExportOptions& opt) { return opt.lastBin < 0 ? bins - 1 : std::min(opt.lastBin, bins - 1); }
+}  // namespace
+
+int exportFrameCount(int bins, const ExportOptions& opt) {
+    const int last = lastExportBin(bins, opt);
+    return last >= opt.firstBin ? (last - opt.firstBin) / std::max(1, opt.step) + 1 : 0;
+}
+
 int exportFrames(const TransientFilm& film, const std::string& dir, const ExportOptions& opt,
                  const std::function<void(int, int)>& progress, const std::atomic<bool>* cancel) {
     ensureWritableDir(dir);
-    const int last = opt.lastBin < 0 ? film.bins() - 1 : std::min(opt.lastBin, film.bins() - 1);
+    const int last = lastExportBin(film.bins(), opt);
     const int step = std::max(1, opt.step);
-    const int total = last >= opt.firstBin ? (last - opt.firstBin) / step + 1 : 0;
+    const int total = exportFrameCount(film.bins(), opt);
     int done = 0;
     for (int k = opt.firstBin; k <= last; k += step) {
         if (cancel && cancel->load()) break;

@@ -30,6 +30,8 @@ void exportStreak(const TransientFilm& film, int row, const std::string& path, c
 void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string& path, const ExportOptions& opt);
 
 std::string frameFileName(int bin);
+// How many frames exportFrames writes for a film of `bins` bins with these options.
+int exportFrameCount(int bins, const ExportOptions& opt);
 
 // A PNG strip of `count` frames side by side (sRGB), for a quick look or a README: evenly spaced
 // over the part of the time axis that carries the energy (0.5% to 90% of the arrival times).
