@@ -64,7 +64,7 @@ void run(const std::string& path, const RenderOverrides& ov) {
                 t.binWidth / kC_m_per_ns, t.startOpl, t.endOpl(), t.startOpl / kC_m_per_ns, t.endOpl() / kC_m_per_ns,
                 s->desc.film.autoRange ? " [auto]" : "");
     std::printf("memory     transient film (2 time axes, RGB float + steady double): %s\n",
-                humanBytes(transientFilmBytes(cam.width, cam.height, t.bins)).c_str());
+                humanBytes(filmBytes(cam.width, cam.height, t.bins)).c_str());
     std::printf("           per worker thread: pixel accumulator %s\n",
                 humanBytes(static_cast<uint64_t>(t.bins) * 2 * 3 * sizeof(double)).c_str());
     const uint64_t beamBytes = static_cast<uint64_t>(ds.photonsPerPass) * 4 * (sizeof(double) * 12 + 16);

@@ -59,6 +59,7 @@ bool Driver::runPass(uint64_t pass) {
     pt.storeBeams = scene_.stages.beams;
     pt.storeSurfacePhotons = scene_.stages.surfacePhotons;
     pt.beamLength = settings_.beamLength;
+    pt.filmEndOpl = film_->time().endOpl();
     pt.threads = settings_.threads;
     pt.maxMapBytes = settings_.maxPhotonMapBytes > 0 ? settings_.maxPhotonMapBytes : maxFilmBytes();
     PhotonMap map = tracePhotons(scene_, pt, &abort_);
@@ -66,6 +67,8 @@ bool Driver::runPass(uint64_t pass) {
     ps.photons = map.emitted;
     ps.beams = static_cast<int64_t>(map.beams.size());
     ps.surfacePhotons = static_cast<int64_t>(map.photons.size());
+    ps.emittedFlux = map.emittedFlux;
+    ps.cutFlux = map.cutFlux;
     const double t1 = nowSec();
 
     // 2. Acceleration structures.
@@ -128,6 +131,7 @@ void Driver::start(std::function<void(const PassStats&)> onPass) {
     }
     stopRequested_ = false;
     abort_ = false;
+    gate_.rearm();
     running_ = true;
     startTime_ = nowSec();
     thread_ = std::thread([this, onPass] { loop(onPass); });
@@ -136,11 +140,7 @@ void Driver::start(std::function<void(const PassStats&)> onPass) {
 void Driver::loop(std::function<void(const PassStats&)> onPass) {
     const double t0 = nowSec();
     for (uint64_t pass = completed_ + 1;; ++pass) {
-        {
-            std::unique_lock<std::mutex> lk(mutex_);
-            cv_.wait(lk, [&] { return !paused_ || stopRequested_ || abort_; });
-        }
-        if (stopRequested_ || abort_) break;
+        if (!gate_.waitUntilOpen() || stopRequested_ || abort_) break;
         if (settings_.passes > 0 && static_cast<int64_t>(pass) > settings_.passes) break;
         if (settings_.timeBudgetSec > 0.0 && nowSec() - t0 >= settings_.timeBudgetSec) break;
         try {
@@ -159,19 +159,15 @@ void Driver::loop(std::function<void(const PassStats&)> onPass) {
         if (onPass) onPass(lastPass());
     }
     running_ = false;
-    cv_.notify_all();
 }
 
-void Driver::pause() { paused_ = true; }
-void Driver::resume() {
-    paused_ = false;
-    cv_.notify_all();
-}
+void Driver::pause() { gate_.pause(); }
+void Driver::resume() { gate_.resume(); }
 
 void Driver::stop() {
     abort_ = true;
     stopRequested_ = true;
-    cv_.notify_all();
+    gate_.stop();
     if (thread_.joinable()) thread_.join();
     running_ = false;
 }

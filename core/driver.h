@@ -10,6 +10,7 @@
 #include "camera_pass.h"
 #include "film.h"
 #include "memory_budget.h"
+#include "pause_gate.h"
 #include "scene.h"
 
 #include <atomic>
@@ -46,6 +47,9 @@ struct PassStats {
     uint64_t pass = 0;  // 1-based
     double beamRadius = 0.0, surfaceRadius = 0.0;
     int64_t photons = 0, beams = 0, beamPieces = 0, surfacePhotons = 0;
+    // Flux the photons started with, and the part still carried at the end of long beams cut in an
+    // unbounded medium (missing from the steady image only: see photon_tracer.cpp, openBeamLength).
+    Color emittedFlux{0.0}, cutFlux{0.0};
     CameraPassStats camera;
     double photonSec = 0.0, buildSec = 0.0, cameraSec = 0.0, passSec = 0.0;
     double elapsedSec = 0.0;  // since start()
@@ -72,8 +76,12 @@ public:
     // in the film; the failed pass may have added some tiles (as an aborted one does).
     std::exception_ptr failure() const;
     std::string failureMessage() const;
-    bool paused() const { return paused_.load(); }
-    void requestStop() { stopRequested_ = true; }
+    bool paused() const { return gate_.paused(); }
+    // Stops the background run after the pass in progress (wakes it if paused).
+    void requestStop() {
+        stopRequested_ = true;
+        gate_.stop();
+    }
 
     const TransientFilm& film() const { return *film_; }
     TransientFilm& film() { return *film_; }
@@ -90,10 +98,10 @@ private:
     DriverSettings settings_;
     std::unique_ptr<TransientFilm> film_;
     std::thread thread_;
-    std::atomic<bool> running_{false}, paused_{false}, stopRequested_{false}, abort_{false};
+    std::atomic<bool> running_{false}, stopRequested_{false}, abort_{false};
+    PauseGate gate_;  // pause/resume between passes (takes its lock to notify: no lost wakeup)
     std::atomic<uint64_t> completed_{0};
     mutable std::mutex mutex_;
-    std::condition_variable cv_;
     std::vector<PassStats> history_;
     std::exception_ptr failure_;
     std::string failureMessage_;

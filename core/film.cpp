@@ -1,28 +1,30 @@
 #include "film.h"
 
 #include "error.h"
+#include "memory_budget.h"
 
 #include <algorithm>
+#include <cfloat>
 #include <cstring>
 
 namespace tpb {
-
-uint64_t transientFilmBytes(int width, int height, int bins) {
-    const uint64_t px = static_cast<uint64_t>(width) * static_cast<uint64_t>(height);
-    return px * (static_cast<uint64_t>(bins) * 2u * 3u * sizeof(float) + 3u * sizeof(double));
-}
 
 void FilmTally::flushInto(FilmStats& f) const {
     f.rejectedSamples.fetch_add(rejected);
     for (int a = 0; a < 2; ++a) {
         f.outside[a].fetch_add(outside[a]);
+        f.before[a].fetch_add(before[a]);
         f.inside[a].fetch_add(inside[a]);
     }
 }
 
 FilmTally& FilmTally::operator+=(const FilmTally& o) {
     rejected += o.rejected;
-    for (int a = 0; a < 2; ++a) { outside[a] += o.outside[a]; inside[a] += o.inside[a]; }
+    for (int a = 0; a < 2; ++a) {
+        outside[a] += o.outside[a];
+        before[a] += o.before[a];
+        inside[a] += o.inside[a];
+    }
     return *this;
 }
 
@@ -33,15 +35,21 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
         return;
     }
     if (isBlack(L)) return;
-    Color outReal(0.0), outUnw(0.0);
-    splatTime(time, L, kappa, s0, s1, aReal, bReal, [&](int k, const Color& c) { acc.add(TimeAxis::Real, k, c); }, outReal);
-    splatTime(time, L, kappa, s0, s1, aUnw, bUnw, [&](int k, const Color& c) { acc.add(TimeAxis::Unwarped, k, c); }, outUnw);
+    const OutsideFilm outReal = splatTime(time, L, kappa, s0, s1, aReal, bReal,
+                                          [&](int k, const Color& c) { acc.add(TimeAxis::Real, k, c); });
+    const OutsideFilm outUnw = splatTime(time, L, kappa, s0, s1, aUnw, bUnw,
+                                         [&](int k, const Color& c) { acc.add(TimeAxis::Unwarped, k, c); });
     acc.addSteady(L);
+    acc.addOutside(TimeAxis::Real, outReal);
+    acc.addOutside(TimeAxis::Unwarped, outUnw);
     const double lum = luminance(L);
-    tally.outside[0] += luminance(outReal);
-    tally.outside[1] += luminance(outUnw);
-    tally.inside[0] += lum - luminance(outReal);
-    tally.inside[1] += lum - luminance(outUnw);
+    const OutsideFilm* outs[2] = {&outReal, &outUnw};
+    for (int a = 0; a < 2; ++a) {
+        const double before = luminance(outs[a]->before), outside = before + luminance(outs[a]->after);
+        tally.before[a] += before;
+        tally.outside[a] += outside;
+        tally.inside[a] += std::max(lum - outside, 0.0);
+    }
 }
 
 void PixelAccumulator::reset(int bins) {
@@ -50,6 +58,7 @@ void PixelAccumulator::reset(int bins) {
     lo_[0] = lo_[1] = bins;
     hi_[0] = hi_[1] = -1;
     steady_ = Color(0.0);
+    for (int a = 0; a < 2; ++a) before_[a] = after_[a] = Color(0.0);
 }
 
 void PixelAccumulator::clearTouched() {
@@ -60,6 +69,7 @@ void PixelAccumulator::clearTouched() {
         }
         lo_[a] = bins_;
         hi_[a] = -1;
+        before_[a] = after_[a] = Color(0.0);
     }
     steady_ = Color(0.0);
 }
@@ -76,13 +86,25 @@ TransientFilm::TransientFilm(int width, int height, const TimeBins& time)
             t.rect = {tx * kTile, ty * kTile, std::min(kTile, width - tx * kTile), std::min(kTile, height - ty * kTile)};
             t.offset = offset;
             t.steady.assign(static_cast<size_t>(t.rect.w) * t.rect.h * 3, 0.0);
+            for (int a = 0; a < 2; ++a) {
+                t.before[a].assign(t.steady.size(), 0.0);
+                t.after[a].assign(t.steady.size(), 0.0);
+            }
             offset += static_cast<size_t>(t.rect.w) * t.rect.h * time.bins * 3;
         }
     sums_[0].assign(offset, 0.0f);
     sums_[1].assign(offset, 0.0f);
 }
 
-uint64_t TransientFilm::bytes() const { return transientFilmBytes(width_, height_, time_.bins); }
+uint64_t TransientFilm::bytes() const {
+    // What the film really holds (the formula in memory_budget.cpp must agree: test_film checks it).
+    uint64_t n = (sums_[0].size() + sums_[1].size()) * sizeof(float);
+    for (const Tile& t : tiles_) {
+        n += t.steady.size() * sizeof(double);
+        for (int a = 0; a < 2; ++a) n += (t.before[a].size() + t.after[a].size()) * sizeof(double);
+    }
+    return n;
+}
 
 void TransientFilm::clear() {
     for (Tile& t : tiles_) {
@@ -90,12 +112,15 @@ void TransientFilm::clear() {
         t.passes = 0;
         std::fill(t.steady.begin(), t.steady.end(), 0.0);
         for (int a = 0; a < 2; ++a) {
+            std::fill(t.before[a].begin(), t.before[a].end(), 0.0);
+            std::fill(t.after[a].begin(), t.after[a].end(), 0.0);
             const size_t n = static_cast<size_t>(t.rect.w) * t.rect.h * time_.bins * 3;
             std::fill(sums_[a].begin() + t.offset, sums_[a].begin() + t.offset + n, 0.0f);
         }
     }
     stats.rejectedSamples = 0;
-    for (int a = 0; a < 2; ++a) { stats.outside[a] = 0.0; stats.inside[a] = 0.0; }
+    stats.overflowedPixels = 0;
+    for (int a = 0; a < 2; ++a) { stats.outside[a] = 0.0; stats.before[a] = 0.0; stats.inside[a] = 0.0; }
 }
 
 TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile)
@@ -106,6 +131,36 @@ TransientFilm::TileWriter::~TileWriter() { ++film_.tiles_[tile_].passes; }
 void TransientFilm::TileWriter::addPixel(int x, int y, const PixelAccumulator& acc) {
     Tile& t = film_.tiles_[tile_];
     const int px = x - t.rect.x0, py = y - t.rect.y0;
+    // The sums are float: a pass whose contribution would push a sum past FLT_MAX (a light power
+    // near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this pixel and
+    // counted, so the film never holds Inf. Checked first, then added, so a pixel gets all of the
+    // pass or none of it.
+    const auto fits = [](float sum, double add) {
+        const double r = static_cast<double>(sum) + add;
+        return r >= -static_cast<double>(FLT_MAX) && r <= static_cast<double>(FLT_MAX);  // false for NaN too
+    };
+    bool ok = true;
+    for (int a = 0; a < 2 && ok; ++a) {
+        const TimeAxis axis = static_cast<TimeAxis>(a);
+        const float* sums = film_.sums_[a].data();
+        for (int k = acc.lo(axis); k <= acc.hi(axis) && ok; ++k) {
+            const double* v = acc.bin(axis, k);
+            const float* dst = sums + film_.index(t, k, px, py);
+            ok = fits(dst[0], v[0]) && fits(dst[1], v[1]) && fits(dst[2], v[2]);
+        }
+    }
+    // The double images (steady, before, after) are read back as float too: same limit.
+    const size_t i = (static_cast<size_t>(py) * t.rect.w + px) * 3;
+    const auto fits3 = [&](const std::vector<double>& sum, const Color& add) {
+        return fits(0.0f, sum[i] + add.x) && fits(0.0f, sum[i + 1] + add.y) && fits(0.0f, sum[i + 2] + add.z);
+    };
+    ok = ok && fits3(t.steady, acc.steady());
+    for (int a = 0; a < 2 && ok; ++a)
+        ok = fits3(t.before[a], acc.before(static_cast<TimeAxis>(a))) && fits3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
+    if (!ok) {
+        film_.stats.overflowedPixels.fetch_add(1, std::memory_order_relaxed);
+        return;
+    }
     for (int a = 0; a < 2; ++a) {
         const TimeAxis axis = static_cast<TimeAxis>(a);
         float* sums = film_.sums_[a].data();
@@ -117,10 +172,16 @@ void TransientFilm::TileWriter::addPixel(int x, int y, const PixelAccumulator& a
             dst[2] += static_cast<float>(v[2]);
         }
     }
-    double* s = &t.steady[(static_cast<size_t>(py) * t.rect.w + px) * 3];
-    s[0] += acc.steady().x;
-    s[1] += acc.steady().y;
-    s[2] += acc.steady().z;
+    const auto add3 = [i](std::vector<double>& dst, const Color& c) {
+        dst[i] += c.x;
+        dst[i + 1] += c.y;
+        dst[i + 2] += c.z;
+    };
+    add3(t.steady, acc.steady());
+    for (int a = 0; a < 2; ++a) {
+        add3(t.before[a], acc.before(static_cast<TimeAxis>(a)));
+        add3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
+    }
 }
 
 bool TransientFilm::frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out, bool wait) const {
@@ -135,8 +196,9 @@ bool TransientFilm::frame(int bin, TimeAxis axis, EmissionMode mode, std::vector
         else if (!lock.try_lock()) { complete = false; continue; }
         const size_t n = static_cast<size_t>(t.rect.w) * t.rect.h * 3;
         const double inv = t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0;
-        acc.assign(n, 0.0);
         const int k0 = mode == EmissionMode::Continuous ? 0 : bin;
+        if (mode == EmissionMode::Continuous) acc = t.before[static_cast<int>(axis)];  // step response
+        else acc.assign(n, 0.0);
         for (int k = k0; k <= bin; ++k) {
             const float* src = sums + index(t, k, 0, 0);
             for (size_t i = 0; i < n; ++i) acc[i] += src[i];
@@ -150,7 +212,12 @@ bool TransientFilm::frame(int bin, TimeAxis axis, EmissionMode mode, std::vector
     return complete;
 }
 
-bool TransientFilm::steadyImage(std::vector<float>& out, bool wait) const {
+const std::vector<double>& TransientFilm::perPixel(const Tile& t, PerPixel which, TimeAxis axis) {
+    const int a = static_cast<int>(axis);
+    return which == PerPixel::Steady ? t.steady : which == PerPixel::Before ? t.before[a] : t.after[a];
+}
+
+bool TransientFilm::perPixelImage(PerPixel which, TimeAxis axis, std::vector<float>& out, bool wait) const {
     out.resize(static_cast<size_t>(width_) * height_ * 3);
     bool complete = true;
     for (const Tile& t : tiles_) {
@@ -158,13 +225,24 @@ bool TransientFilm::steadyImage(std::vector<float>& out, bool wait) const {
         if (wait) lock.lock();
         else if (!lock.try_lock()) { complete = false; continue; }
         const double inv = t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0;
+        const std::vector<double>& src = perPixel(t, which, axis);
         for (int py = 0; py < t.rect.h; ++py)
             for (int px = 0; px < t.rect.w; ++px)
                 for (int c = 0; c < 3; ++c)
                     out[((static_cast<size_t>(t.rect.y0 + py) * width_) + t.rect.x0 + px) * 3 + c] =
-                        static_cast<float>(t.steady[(static_cast<size_t>(py) * t.rect.w + px) * 3 + c] * inv);
+                        static_cast<float>(src[(static_cast<size_t>(py) * t.rect.w + px) * 3 + c] * inv);
     }
     return complete;
+}
+
+bool TransientFilm::steadyImage(std::vector<float>& out, bool wait) const {
+    return perPixelImage(PerPixel::Steady, TimeAxis::Real, out, wait);
+}
+bool TransientFilm::beforeImage(TimeAxis axis, std::vector<float>& out, bool wait) const {
+    return perPixelImage(PerPixel::Before, axis, out, wait);
+}
+bool TransientFilm::afterImage(TimeAxis axis, std::vector<float>& out, bool wait) const {
+    return perPixelImage(PerPixel::After, axis, out, wait);
 }
 
 void TransientFilm::pixelProfile(int x, int y, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {
@@ -174,9 +252,12 @@ void TransientFilm::pixelProfile(int x, int y, TimeAxis axis, EmissionMode mode,
     std::lock_guard<std::mutex> g(t.mutex);
     const double inv = t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0;
     const float* sums = sums_[static_cast<int>(axis)].data();
+    const int px = x - t.rect.x0, py = y - t.rect.y0;
+    const double* before = &t.before[static_cast<int>(axis)][(static_cast<size_t>(py) * t.rect.w + px) * 3];
     double run[3] = {0.0, 0.0, 0.0};
+    if (mode == EmissionMode::Continuous) std::copy(before, before + 3, run);
     for (int k = 0; k < time_.bins; ++k) {
-        const float* v = sums + index(t, k, x - t.rect.x0, y - t.rect.y0);
+        const float* v = sums + index(t, k, px, py);
         for (int c = 0; c < 3; ++c) {
             run[c] = (mode == EmissionMode::Continuous ? run[c] : 0.0) + v[c];
             out[static_cast<size_t>(k) * 3 + c] = static_cast<float>(run[c] * inv);
@@ -207,6 +288,10 @@ void TransientFilm::volume(TimeAxis axis, EmissionMode mode, std::vector<double>
             for (int px = 0; px < t.rect.w; ++px) {
                 double* dst = &out[((static_cast<size_t>(t.rect.y0 + py) * width_) + t.rect.x0 + px) * bins * 3];
                 double run[3] = {0.0, 0.0, 0.0};
+                if (mode == EmissionMode::Continuous) {
+                    const double* before = &t.before[static_cast<int>(axis)][(static_cast<size_t>(py) * t.rect.w + px) * 3];
+                    std::copy(before, before + 3, run);
+                }
                 for (size_t k = 0; k < bins; ++k) {
                     const float* v = sums + index(t, static_cast<int>(k), px, py);
                     for (int c = 0; c < 3; ++c) {

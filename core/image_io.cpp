@@ -10,6 +10,7 @@
 #include <ImfOutputFile.h>
 #include <half.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -65,8 +66,15 @@ void ensureWritableDir(const std::string& dir) {
         throw UserError(dir, 0, "", "the output folder is not writable; choose another folder with -o");
 }
 
-void writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb, ExrPixel type) {
+int64_t writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb, ExrPixel type) {
     TPB_CHECK(rgb.size() == static_cast<size_t>(width) * height * 3);
+    // The film never holds NaN/Inf (film.cpp guards every sum): a non-finite texel here is a bug,
+    // and it is refused rather than written.
+    for (size_t i = 0; i < rgb.size(); ++i)
+        if (!std::isfinite(rgb[i]))
+            throw std::logic_error("internal error (bug): non-finite texel at pixel (" + std::to_string((i / 3) % width) +
+                                   ", " + std::to_string(i / 3 / width) + ") for " + path + "; nothing was written");
+    int64_t clamped = 0;
     MemoryOStream mem(path);
     try {
         Imf::Header header(width, height);
@@ -78,7 +86,13 @@ void writeExr(const std::string& path, int width, int height, const std::vector<
         std::vector<half> h;
         if (type == ExrPixel::Half) {
             h.resize(rgb.size());
-            for (size_t i = 0; i < rgb.size(); ++i) h[i] = half(rgb[i]);
+            // Half holds at most 65504: larger values are clamped (and counted), never turned into Inf.
+            constexpr float kHalfMax = 65504.0f;
+            for (size_t i = 0; i < rgb.size(); ++i) {
+                const float v = std::clamp(rgb[i], -kHalfMax, kHalfMax);
+                clamped += v != rgb[i];
+                h[i] = half(v);
+            }
             char* base = reinterpret_cast<char*>(h.data());
             const size_t xs = 3 * sizeof(half), ys = xs * width;
             fb.insert("R", Imf::Slice(Imf::HALF, base, xs, ys));
@@ -100,6 +114,7 @@ void writeExr(const std::string& path, int width, int height, const std::vector<
         throw UserError(path, 0, "", std::string("cannot encode EXR: ") + e.what());
     }
     writeFileAtomic(path, mem.bytes());
+    return clamped;
 }
 
 void readExr(const std::string& path, int& width, int& height, std::vector<float>& rgb) {

@@ -3,6 +3,7 @@
 // failed write (full disk, unwritable folder, Ctrl-C) never leaves a half file under the final
 // name. Failures throw UserError naming the path and the system's reason.
 #pragma once
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -10,8 +11,10 @@ namespace tpb {
 
 enum class ExrPixel { Float, Half };
 
-// rgb: width*height*3 floats, row-major from the top row.
-void writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb,
+// rgb: width*height*3 floats, row-major from the top row, all finite (a NaN/Inf texel throws
+// std::logic_error: the film never holds one, so it is a bug). Returns the number of values clamped
+// to half's range (|v| <= 65504) when type is Half, 0 for Float.
+int64_t writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb,
               ExrPixel type = ExrPixel::Float);
 // Reads an RGB(A) EXR into rgb (width*height*3). Throws UserError on failure.
 void readExr(const std::string& path, int& width, int& height, std::vector<float>& rgb);

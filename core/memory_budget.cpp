@@ -18,12 +18,12 @@ uint64_t satAdd(uint64_t a, uint64_t b) { return b > UINT64_MAX - a ? UINT64_MAX
 
 }  // namespace
 
-uint64_t filmBytes(const CameraDesc& cam, int bins) {
-    const uint64_t w = static_cast<uint64_t>(std::max(cam.width, 0));
-    const uint64_t h = static_cast<uint64_t>(std::max(cam.height, 0));
+uint64_t filmBytes(int width, int height, int bins) {
+    const uint64_t w = static_cast<uint64_t>(std::max(width, 0));
+    const uint64_t h = static_cast<uint64_t>(std::max(height, 0));
     const uint64_t b = static_cast<uint64_t>(std::max(bins, 0));
-    // Transient: bins x 2 time axes x RGB x float. Steady state: 2 images x RGB x double.
-    const uint64_t perPixel = satAdd(satMul(b, 2 * 3 * 4), 2 * 3 * 8);
+    // Transient: bins x 2 time axes x RGB x float. Double: steady RGB + 2 axes x (before, after) x RGB.
+    const uint64_t perPixel = satAdd(satMul(b, 2 * 3 * sizeof(float)), (3 + 2 * 2 * 3) * sizeof(double));
     return satMul(satMul(w, h), perPixel);
 }
 

@@ -9,8 +9,12 @@
 
 namespace tpb {
 
-// Memory the transient film will need, in bytes (both time axes, RGB, plus the steady-state images).
-uint64_t filmBytes(const CameraDesc& cam, int bins);
+// Memory the transient film needs, in bytes: the one formula (TransientFilm::bytes() counts what it
+// really allocated and must agree; tests/test_film.cpp checks it). Per pixel: bins x 2 time axes x
+// RGB x float, plus in double the steady-state RGB and, per axis, the RGB that arrived before and
+// after the film. Saturates at UINT64_MAX instead of wrapping.
+uint64_t filmBytes(int width, int height, int bins);
+inline uint64_t filmBytes(const CameraDesc& cam, int bins) { return filmBytes(cam.width, cam.height, bins); }
 // Rough memory of one pass's photon map (~4 beam segments per photon, as `tpb info` prints).
 uint64_t photonMapBytes(int64_t photonsPerPass);
 // The limit for the film and for one pass's photon map: 75% of physical memory by default; the

@@ -12,12 +12,21 @@ namespace tpb {
 namespace {
 
 
-// Length of a long beam that never hits a surface (infinite medium): until its transmittance
-// falls below 1e-7, at most 10 scene diagonals.
-double openBeamLength(const Scene& scene, const Medium& m) {
-    const double minSigma = std::min(m.sigma_t.x, std::min(m.sigma_t.y, m.sigma_t.z));
+// Length of a long beam that never reaches a surface (an unbounded medium). A contribution from
+// the point s along the beam arrives at OPL >= opl0 + eta s on both time axes (the unwarped time is
+// that of the scattering point, the real one adds the camera path), so a beam that reaches the
+// film's end loses nothing the frames show: only the steady image and the energy counted after the
+// film miss the flux the beam still carries at its end, which is counted (PhotonMap::cutFlux).
+// At least 10 scene diagonals (the steady image near the scene), and never past the distance where
+// the transmittance of every scattering channel is below 1e-7 (exp(-16.2)).
+double openBeamLength(const Scene& scene, const Medium& m, double eta, double opl0, double filmEndOpl) {
+    double sigmaScatter = kInf;  // smallest extinction among the channels that scatter
+    for (int c = 0; c < 3; ++c)
+        if (m.sigma_s[c] > 0.0) sigmaScatter = std::min(sigmaScatter, m.sigma_t[c]);
     const double diag = std::max(scene.bounds.diagonal(), 1e-3);
-    return minSigma > 0.0 ? std::min(16.2 / minSigma, 10.0 * diag) : 10.0 * diag;
+    const double toFilmEnd = filmEndOpl > opl0 ? (filmEndOpl - opl0) / eta : 0.0;
+    const double wanted = std::max(10.0 * diag, toFilmEnd);
+    return std::isfinite(sigmaScatter) ? std::min(wanted, 16.2 / sigmaScatter) : 10.0 * diag;
 }
 
 [[noreturn]] void mapTooLarge(const PhotonTraceSettings& s, const std::string& who) {
@@ -42,6 +51,7 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
     Color power = em.power / (lightPdf * static_cast<double>(s.photons));
     const double power0 = maxComponent(power);
     if (!(power0 > 0.0)) return;
+    out.emittedFlux += power;
     Ray ray = em.ray;
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
     RegionStack regions = scene.lightRegions[li];
@@ -70,7 +80,10 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
             const double segment = scatters ? d : dSurf;
             if (s.storeBeams) {
                 double len = s.beamLength == BeamLength::Short ? segment : dSurf;
-                if (!std::isfinite(len)) len = openBeamLength(scene, m);
+                if (!std::isfinite(len)) {
+                    len = openBeamLength(scene, m, region.ior, opl, s.filmEndOpl);
+                    out.cutFlux += power * m.transmittance(len);  // what flows on past the beam's end
+                }
                 if (len > 0.0 && std::isfinite(len))
                     out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
             }
@@ -168,6 +181,8 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s, const s
         all.photons.insert(all.photons.end(), p.photons.begin(), p.photons.end());
         all.emitted += p.emitted;
         all.rejected += p.rejected;
+        all.emittedFlux += p.emittedFlux;
+        all.cutFlux += p.cutFlux;
     }
     return all;
 }

@@ -40,7 +40,9 @@ struct PhotonMap {
     std::vector<Beam> beams;
     std::vector<SurfacePhoton> photons;
     int64_t emitted = 0;
-    int64_t rejected = 0;  // non-finite photon weights discarded
+    int64_t rejected = 0;      // non-finite photon weights discarded
+    Color emittedFlux{0.0};    // W: the flux the pass's photons started with (estimates the lights' power)
+    Color cutFlux{0.0};        // W: flux still carried at the end of long beams cut in an unbounded medium
 };
 
 struct PhotonTraceSettings {
@@ -51,6 +53,9 @@ struct PhotonTraceSettings {
     bool storeBeams = true;
     bool storeSurfacePhotons = true;
     BeamLength beamLength = BeamLength::Short;
+    // OPL of the film's end (m): long beams in an unbounded medium reach at least that far, so the
+    // frames lose nothing to their cut (photon_tracer.cpp, openBeamLength). 0 = no film yet.
+    double filmEndOpl = 0.0;
     int threads = 1;
     // Memory guard: a pass whose beams and surface photons would take more than this throws
     // UserError (key render.photons_per_pass) instead of exhausting memory, e.g. an albedo-1

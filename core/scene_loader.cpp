@@ -45,7 +45,7 @@
 //      "transform": {...}, "interior_medium": "juice", "flip_normals": false}
 //   ],
 //   "lights": [                          // may be empty (warning); every light has "type"
-//                                        // (required), "name" [""], "power" (W, >= 0) [1],
+//                                        // (required), "name" [""], "power" (W, 0..1e20) [1],
 //                                        // "emit_time_m" / "emit_time_ns" [0]
 //     {"type": "point", "position": [0, 0, 0]},
 //     {"type": "spot", "position": [..], "direction": [0, -1, 0],
@@ -622,6 +622,12 @@ void readLight(Context& ctx, const JsonValue& obj, const std::string& path, Ligh
     l.name = b.string("name").value_or("");
     if (auto p = b.color("power")) l.power = *p;
     b.check(nonNegative(l.power), "power", "must be >= 0");
+    // The film sums radiance in 32-bit floats (at most 3.4e38) over up to millions of passes, and
+    // a small kernel concentrates a photon's power by many decades: 1e20 W leaves room for both.
+    b.check(maxComponent(l.power) <= 1e20, "power",
+            "must be <= 1e20 W: the film accumulates in 32-bit floats (max 3.4e38), which a larger power can "
+            "overflow; transport is linear, so express the powers in a smaller unit (scaling every light by s "
+            "scales the whole film by s)");
     l.emitOpl = b.opl("emit_time").value_or(l.emitOpl);
     switch (l.type) {
         case LightType::Point:

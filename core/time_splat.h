@@ -6,8 +6,8 @@
 //   Exact:   the density above, integrated over each bin in closed form (stable form with g(x)).
 //   Uniform: the paper's even spread over [t-, t+] (= kappa 0, since t is linear in s).
 // When the interval collapses (|b| (s1 - s0) tiny, e.g. a beam pointing straight at the camera)
-// all energy goes to one bin. Energy before the film's start or after its end is added to
-// `outside` (counted, never dropped silently).
+// all energy goes to one bin. Energy before the film's start and after its end is returned
+// (OutsideFilm), never dropped silently: the film keeps both, per pixel and axis.
 #pragma once
 #include "beam_kernel.h"
 #include "math.h"
@@ -59,38 +59,54 @@ inline double expMassFraction(double kappa, double s0, double s1, double u, doub
     return ExpProfile(kappa, s0, s1).mass(u, v);
 }
 
+// Energy of one estimate that fell outside the film, split by side: `before` arrived before the
+// film's first bin (it still counts for continuous emission: a step response includes everything
+// that arrived earlier), `after` after its last bin (it counts only for the steady state).
+struct OutsideFilm {
+    Color before{0.0};
+    Color after{0.0};
+};
+
 template <class Sink>
-inline void splatTime(const TimeBins& tb, const Color& energy, const Color& kappa, double s0, double s1,
-                      double a, double b, Sink&& sink, Color& outside) {
+inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Color& kappa, double s0, double s1,
+                             double a, double b, Sink&& sink) {
+    OutsideFilm out;
     const double tA0 = a + b * s0, tB0 = a + b * s1;
     const double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
     const double len = s1 - s0;
     if (!(len > 0.0) || (tB - tA) <= 1e-9 * tb.binWidth) {
         const int k = tb.binOf(0.5 * (tA + tB));
-        if (k >= 0 && k < tb.bins) sink(k, energy);
-        else outside += energy;
-        return;
+        if (k < 0) out.before = energy;
+        else if (k >= tb.bins) out.after = energy;
+        else sink(k, energy);
+        return out;
     }
-    const int k0 = std::max(tb.binOf(tA), 0);
-    const int k1 = std::min(tb.binOf(tB), tb.bins - 1);
     const bool grey = kappa.x == kappa.y && kappa.y == kappa.z;
     const ExpProfile px(kappa.x, s0, s1);
     const ExpProfile py = grey ? px : ExpProfile(kappa.y, s0, s1);
     const ExpProfile pz = grey ? px : ExpProfile(kappa.z, s0, s1);
-    Color inside(0.0);
+    const auto massOn = [&](double u, double v) {  // share of the energy on s in [u, v], clipped to [s0, s1]
+        u = std::max(u, s0);
+        v = std::min(v, s1);
+        if (!(v > u)) return Color(0.0);
+        const double fx = px.mass(u, v);
+        return grey ? Color(fx) : Color(fx, py.mass(u, v), pz.mass(u, v));
+    };
+    // t(s) = a + b s crosses the film's start and end at these s (b != 0 here: the interval spans time).
+    const double sStart = (tb.startOpl - a) / b, sEnd = (tb.endOpl() - a) / b;
+    if (tA < tb.startOpl) out.before = energy * (b > 0.0 ? massOn(s0, sStart) : massOn(sStart, s1));
+    if (tB > tb.endOpl()) out.after = energy * (b > 0.0 ? massOn(sEnd, s1) : massOn(s0, sEnd));
+    const int k0 = std::max(tb.binOf(tA), 0);
+    const int k1 = std::min(tb.binOf(tB), tb.bins - 1);
     for (int k = k0; k <= k1; ++k) {
         const double tLo = tb.startOpl + k * tb.binWidth;
         double u = (tLo - a) / b, v = (tLo + tb.binWidth - a) / b;
         if (u > v) std::swap(u, v);
-        u = std::max(u, s0);
-        v = std::min(v, s1);
-        if (!(v > u)) continue;
-        const double fx = px.mass(u, v);
-        const Color f = grey ? Color(fx) : Color(fx, py.mass(u, v), pz.mass(u, v));
+        const Color f = massOn(u, v);
+        if (isBlack(f)) continue;
         sink(k, energy * f);
-        inside += f;
     }
-    outside += energy * glm::max(Color(1.0) - inside, Color(0.0));
+    return out;
 }
 
 }  // namespace tpb

@@ -169,13 +169,23 @@ TEST(TimeSplat, MassConservedAndMatchesQuadrature) {
         const double kappa = (rng.uniform() - 0.3) * 30.0;
         const double a = 1.0 + rng.uniform() * 0.8, b = (rng.uniform() - 0.5) * 4.0;
         std::vector<double> bins(100, 0.0);
-        Color outside(0.0);
-        splatTime(tb, Color(1.0), Color(kappa), s0, s1, a, b, [&](int k, const Color& c) { bins[k] += c.x; }, outside);
-        double total = outside.x;
+        const OutsideFilm out =
+            splatTime(tb, Color(1.0), Color(kappa), s0, s1, a, b, [&](int k, const Color& c) { bins[k] += c.x; });
+        double total = out.before.x + out.after.x;
         for (double v : bins) total += v;
         EXPECT_NEAR(total, 1.0, 1e-12) << trial;
         // Each bin vs quadrature of the normalised density over the s-range mapped to the bin.
         const double norm = quad([&](double s) { return std::exp(-kappa * s); }, s0, s1, 400);
+        // What falls before t = start and after t = end: quadrature of the density over the s-range
+        // whose time a + b s lies there (the crossing s_c = (t_c - a) / b; which side depends on sign(b)).
+        const auto massBeyond = [&](double tCross, bool below) {
+            const double sc = (tCross - a) / b;
+            const bool lowerSide = (b > 0.0) == below;  // s < sc maps to t < tCross when b > 0
+            const double u = lowerSide ? s0 : std::max(s0, sc), v = lowerSide ? std::min(s1, sc) : s1;
+            return v > u ? quad([&](double s) { return std::exp(-kappa * s); }, u, v, 200) / norm : 0.0;
+        };
+        EXPECT_NEAR(out.before.x, massBeyond(tb.startOpl, true), 1e-10) << trial;
+        EXPECT_NEAR(out.after.x, massBeyond(tb.endOpl(), false), 1e-10) << trial;
         for (int k = 0; k < 100; ++k) {
             const double tLo = tb.startOpl + k * tb.binWidth;
             double u = (tLo - a) / b, v = (tLo + tb.binWidth - a) / b;
@@ -191,37 +201,55 @@ TEST(TimeSplat, MassConservedAndMatchesQuadrature) {
 TEST(TimeSplat, CollapsedIntervalGoesToOneBin) {
     TimeBins tb{0.0, 0.1, 10};
     std::vector<double> bins(10, 0.0);
-    Color outside(0.0);
     // b = 0: beam pointing straight at the camera, all energy at one instant.
-    splatTime(tb, Color(2.0), Color(1.0), 0.0, 0.5, 0.55, 0.0, [&](int k, const Color& c) { bins[k] += c.x; }, outside);
+    OutsideFilm out =
+        splatTime(tb, Color(2.0), Color(1.0), 0.0, 0.5, 0.55, 0.0, [&](int k, const Color& c) { bins[k] += c.x; });
     EXPECT_DOUBLE_EQ(bins[5], 2.0);
-    EXPECT_EQ(outside.x, 0.0);
+    EXPECT_EQ(out.before.x + out.after.x, 0.0);
+    // The same instant before the film and after it goes to the matching side.
+    out = splatTime(tb, Color(2.0), Color(1.0), 0.0, 0.5, -0.5, 0.0, [&](int, const Color&) { ADD_FAILURE(); });
+    EXPECT_EQ(out.before.x, 2.0);
+    EXPECT_EQ(out.after.x, 0.0);
+    out = splatTime(tb, Color(2.0), Color(1.0), 0.0, 0.5, 1.0, 0.0, [&](int, const Color&) { ADD_FAILURE(); });
+    EXPECT_EQ(out.before.x, 0.0);
+    EXPECT_EQ(out.after.x, 2.0);
 }
 
 TEST(TimeSplat, PartlyOutsideAndNarrowerThanABin) {
     TimeBins tb{1.0, 0.5, 4};  // [1, 3)
     std::vector<double> bins(4, 0.0);
-    Color outside(0.0);
+    const auto sink = [&](int k, const Color& c) { bins[k] += c.x; };
     // Uniform over t in [0.5, 1.5]: half before the film.
-    splatTime(tb, Color(1.0), Color(0.0), 0.0, 1.0, 0.5, 1.0, [&](int k, const Color& c) { bins[k] += c.x; }, outside);
+    OutsideFilm out = splatTime(tb, Color(1.0), Color(0.0), 0.0, 1.0, 0.5, 1.0, sink);
     EXPECT_NEAR(bins[0], 0.5, 1e-15);
-    EXPECT_NEAR(outside.x, 0.5, 1e-15);
+    EXPECT_NEAR(out.before.x, 0.5, 1e-15);
+    EXPECT_EQ(out.after.x, 0.0);
+    // The same with time running backwards along s (b < 0): t in [0.5, 1.5] again.
+    std::fill(bins.begin(), bins.end(), 0.0);
+    out = splatTime(tb, Color(1.0), Color(0.0), 0.0, 1.0, 1.5, -1.0, sink);
+    EXPECT_NEAR(bins[0], 0.5, 1e-15);
+    EXPECT_NEAR(out.before.x, 0.5, 1e-15);
+    EXPECT_EQ(out.after.x, 0.0);
     // Interval far narrower than a bin.
     std::fill(bins.begin(), bins.end(), 0.0);
-    outside = Color(0.0);
-    splatTime(tb, Color(1.0), Color(5.0), 0.0, 1e-6, 2.2, 1.0, [&](int k, const Color& c) { bins[k] += c.x; }, outside);
+    out = splatTime(tb, Color(1.0), Color(5.0), 0.0, 1e-6, 2.2, 1.0, sink);
     EXPECT_NEAR(bins[2], 1.0, 1e-15);
-    // Wider than the film on both sides.
+    // Wider than the film on both sides: t in [-2, 8], film [1, 3): 0.3 before, 0.5 after.
     std::fill(bins.begin(), bins.end(), 0.0);
-    outside = Color(0.0);
-    splatTime(tb, Color(1.0), Color(0.0), 0.0, 10.0, -2.0, 1.0, [&](int k, const Color& c) { bins[k] += c.x; }, outside);
+    out = splatTime(tb, Color(1.0), Color(0.0), 0.0, 10.0, -2.0, 1.0, sink);
     for (double v : bins) EXPECT_NEAR(v, 0.05, 1e-14);
-    EXPECT_NEAR(outside.x, 0.8, 1e-14);
+    EXPECT_NEAR(out.before.x, 0.3, 1e-14);
+    EXPECT_NEAR(out.after.x, 0.5, 1e-14);
+    // Per channel: the exponential profile differs by channel, and so do the two sides.
+    std::fill(bins.begin(), bins.end(), 0.0);
+    out = splatTime(tb, Color(1.0), Color(0.0, 1.0, -1.0), 0.0, 10.0, -2.0, 1.0, [](int, const Color&) {});
+    EXPECT_NEAR(out.before.y, -std::expm1(-3.0) / -std::expm1(-10.0), 1e-12);  // s in [0, 3] of exp(-s) on [0, 10]
+    EXPECT_NEAR(out.after.y, (std::exp(-5.0) - std::exp(-10.0)) / -std::expm1(-10.0), 1e-12);
+    EXPECT_NEAR(out.before.z, (std::exp(3.0) - 1.0) / (std::exp(10.0) - 1.0), 1e-12);
     // Far in time with very fine bins (1e4 m of OPL, bins of 1e-4 m): still exact.
     TimeBins fine{1e4, 1e-4, 100};
     std::vector<double> fb(100, 0.0);
-    outside = Color(0.0);
-    splatTime(fine, Color(1.0), Color(0.0), 0.0, 1e-3, 1e4 + 2e-3, 2.0, [&](int k, const Color& c) { fb[k] += c.x; }, outside);
+    out = splatTime(fine, Color(1.0), Color(0.0), 0.0, 1e-3, 1e4 + 2e-3, 2.0, [&](int k, const Color& c) { fb[k] += c.x; });
     for (int k = 20; k < 40; ++k) EXPECT_NEAR(fb[k], 0.05, 1e-9) << k;
     EXPECT_NEAR(fb[19] + fb[40], 0.0, 1e-9);
 }
