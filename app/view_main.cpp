@@ -431,8 +431,9 @@ void registerView(CLI::App& app) {
         ->needs(shot)
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    CLI::Option* t = cmd->add_option("--time", o->timeNs, "Time shown, in ns (the bin containing it)");
-    cmd->add_option("--bin", o->bin, "Time bin shown")->excludes(t);
+    CLI::Option* t = cmd->add_option(
+        "--time", o->timeNs, "Time shown, in ns, within the film (the bin containing it; default: the bin of peak energy)");
+    cmd->add_option("--bin", o->bin, "Time bin shown, 0 to bins - 1 (default: the bin of peak energy)")->excludes(t);
     CLI::Option* unwarp = cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
     cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)")->excludes(unwarp);
     CLI::Option* continuous = cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
