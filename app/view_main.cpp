@@ -11,8 +11,11 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cfloat>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -114,15 +117,11 @@ Viewer::Viewer(const Scene& scene, const DriverSettings& settings, const ViewOpt
     st_.axis = (rd.unwarp || opt.unwarp) && !opt.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
     st_.mode = (rd.emission == EmissionMode::Continuous || opt.continuous) && !opt.delta ? EmissionMode::Continuous
                                                                                         : EmissionMode::Delta;
-    if (opt.bin) {
-        setBin(*opt.bin);
-    } else if (opt.timeNs) {
-        const int k = scene.time.binOf(*opt.timeNs * kC_m_per_ns);
-        if (k < 0 || k >= scene.time.bins)
-            std::fprintf(stderr, "warning: --time %.4g ns is outside the film (%.4g - %.4g ns); showing the nearest bin\n",
-                         *opt.timeNs, scene.time.startOpl / kC_m_per_ns, scene.time.endOpl() / kC_m_per_ns);
-        setBin(k);
-    }
+    // --bin and --time were checked against the film (runView). Without them, the bin of peak
+    // energy once light arrives (updateBinEnergy): bin 0 is often before any light.
+    if (opt.bin) setBin(*opt.bin);
+    else if (opt.timeNs) setBin(scene.time.binOf(*opt.timeNs * kC_m_per_ns));
+    st_.autoBin = !opt.bin && !opt.timeNs;
     if (opt.exposure) {
         st_.evFrame = st_.evSteady = static_cast<float>(*opt.exposure);
         st_.autoFrame = st_.autoSteady = false;
@@ -136,6 +135,14 @@ Viewer::Viewer(const Scene& scene, const DriverSettings& settings, const ViewOpt
         st_.selX = std::clamp(opt.pixel[0], 0, scene.camera.width - 1);
         st_.selY = std::clamp(opt.pixel[1], 0, scene.camera.height - 1);
     }
+    if (!opt.exportFolder.empty()) st_.outDir = opt.exportFolder;
+    // --export presses the Export buttons (screenshot mode), after the --click ones.
+    clicks_ = opt.clicks;
+    if (!opt.exportDir.empty()) {
+        st_.outDir = opt.exportDir;
+        clicks_.push_back("Export/Current frame");
+        clicks_.push_back("Export/Steady state");
+    }
     frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
     image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
     restart(settings, "");
@@ -146,14 +153,63 @@ Viewer::~Viewer() {
     // (members) are deleted afterwards, while the context still exists.
     export_.cancelAndJoin();
     if (profileJob_.valid()) profileJob_.wait();
+    if (binEnergyJob_.valid()) binEnergyJob_.wait();
     if (driver_) driver_->stop();
 }
 
-bool Viewer::screenshotReady() {
-    if (driver_->running()) return false;
-    if (exportRequested_ && !exportDone_) return false;
+bool Viewer::settled() {
+    if (driver_->running() || export_.busy() || profileJob_.valid() || binEnergyJob_.valid()) return false;
+    if (st_.autoBin && !(binEnergyRequested_ == binEnergyKey())) return false;
     if (!(frameKey_ == frameKey()) || !frameComplete_) return false;
     return profileKey_ == profileKey();
+}
+
+namespace {
+
+// "Export (EXR)/Current frame" may be written "Export/Current frame" (a section without its note).
+bool controlNamed(const ControlRect& c, const std::string& want) {
+    if (c.name == want) return true;
+    const size_t slash = c.name.find('/'), paren = c.name.find(" (");
+    return slash != std::string::npos && paren < slash && c.name.substr(0, paren) + c.name.substr(slash) == want;
+}
+
+}  // namespace
+
+void Viewer::scriptedInput() {
+    // Screenshot mode: the pointer stays off the window (no hover in the picture) except to do the
+    // --click and --export clicks, as ImGui mouse input, so they go where a user's clicks go: the
+    // control's hit test and ID. Each waits until the previous one's effect is over.
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
+    for (bool& down : io.MouseDown) down = false;
+    if (clickIndex_ >= clicks_.size() || !scriptError_.empty()) return;
+    if (clickPhase_ == 0) {
+        if (settleFrames_ < 3) return;
+        const std::string& want = clicks_[clickIndex_];
+        const auto c = std::find_if(controls_.begin(), controls_.end(),
+                                    [&](const ControlRect& r) { return controlNamed(r, want); });
+        if (c == controls_.end()) {
+            scriptError_ = "--click '" + want + "': no such control in the window; the controls are:";
+            for (const ControlRect& r : controls_) scriptError_ += "\n  " + r.name;
+            return;
+        }
+        if (!c->visible) {
+            scriptError_ = "--click '" + want + "': the control is scrolled out of view; use a taller --window-size";
+            return;
+        }
+        clickPos_ = ImVec2(std::floor(0.5f * (c->min.x + c->max.x)), std::floor(0.5f * (c->min.y + c->max.y)));
+        std::printf("click: %s at %.0f %.0f\n", c->name.c_str(), clickPos_.x, clickPos_.y);
+        std::fflush(stdout);
+    }
+    // Frames: 1 hover, 2 press, 3 release (a button fires on release over it).
+    ++clickPhase_;
+    io.MousePos = clickPos_;
+    io.MouseDown[0] = clickPhase_ == 2;
+    if (clickPhase_ == 3) {
+        clickPhase_ = 0;
+        ++clickIndex_;
+        settleFrames_ = 0;
+    }
 }
 
 void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
@@ -169,9 +225,21 @@ void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
     std::printf("screenshot: %s (%dx%d) after %llu passes\n", opt_.screenshot.c_str(), fbWidth, fbHeight,
                 static_cast<unsigned long long>(passes));
     // Machine-readable: where the film image is in the screenshot and how it was mapped.
-    std::printf("image_area %.3f %.3f %.3f %.3f zoom %.6f exposure_ev %.9g bin %d steady %d\n", imageMin_.x,
-                imageMin_.y, imageSize_.x, imageSize_.y, imageZoom_,
-                static_cast<double>(st_.showSteady ? st_.evSteady : st_.evFrame), st_.bin, st_.showSteady ? 1 : 0);
+    std::printf("image_area %.3f %.3f %.3f %.3f zoom %.6f exposure_ev %.9g bin %d steady %d mode %s axis %s\n",
+                imageMin_.x, imageMin_.y, imageSize_.x, imageSize_.y, imageZoom_,
+                static_cast<double>(st_.showSteady ? st_.evSteady : st_.evFrame), st_.bin, st_.showSteady ? 1 : 0,
+                st_.mode == EmissionMode::Delta ? "delta" : "continuous",
+                st_.axis == TimeAxis::Real ? "real" : "unwarped");
+    // The controls (window pixels) now and in the first frame, drawn while the first pass rendered.
+    std::printf("messages_area %.1f %.1f\n", controlsMinX_, controlsMaxX_);
+    std::printf("layout_first passes %llu running %d\n", static_cast<unsigned long long>(firstPasses_),
+                firstRunning_ ? 1 : 0);
+    for (const ControlRect& c : firstControls_)
+        std::printf("control_first %.1f %.1f %.1f %.1f %s\n", c.min.x, c.min.y, c.max.x - c.min.x, c.max.y - c.min.y,
+                    c.name.c_str());
+    for (const ControlRect& c : controls_)
+        std::printf("control %.1f %.1f %.1f %.1f %s\n", c.min.x, c.min.y, c.max.x - c.min.x, c.max.y - c.min.y,
+                    c.name.c_str());
     std::fflush(stdout);
 }
 
@@ -191,15 +259,29 @@ void Viewer::saveSnapshot(int fbWidth, int fbHeight) {
     }
 }
 
+void Viewer::endFrameChecks() {
+    // Screenshot mode: the film is final, every click done and its effect over. Checks, then the
+    // picture is taken by the caller.
+    if (!exportError_.empty()) exitCode() = kExitUserError;
+    if (!opt_.exportDir.empty()) {
+        const std::string frame = st_.outDir + "/" + exportFrameName(st_.bin, st_.axis, st_.mode);
+        for (const std::string& want : {frame, st_.outDir + "/steady.exr"})
+            if (std::find(exported_.begin(), exported_.end(), want) == exported_.end()) {
+                std::fprintf(stderr, "error: --export: the Export buttons did not write %s\n", want.c_str());
+                exitCode() = 1;
+            }
+    }
+    if (!idClashes_.empty()) exitCode() = 1;  // reported on stderr when found
+}
+
 void Viewer::run() {
     const bool shot = !opt_.screenshot.empty();
-    exportRequested_ = shot && !opt_.exportDir.empty();
-    bool exportStarted = false;
     double last = glfwGetTime();
     int extraFrames = 3;  // after an event, draw a few frames so ImGui settles
     while (!glfwWindowShouldClose(window_) && !gInterrupted) {
         const bool busyDriver = driver_->running() && !driver_->paused();
-        const bool animate = shot || st_.playing || export_.busy() || profileJob_.valid() || !frameComplete_;
+        const bool animate =
+            shot || st_.playing || export_.busy() || profileJob_.valid() || binEnergyJob_.valid() || !frameComplete_;
         if (animate || extraFrames > 0) {
             glfwPollEvents();
             if (extraFrames > 0) --extraFrames;
@@ -218,6 +300,7 @@ void Viewer::run() {
 
         ImGui_ImplOpenGL3_NewFrame();
         ImGui_ImplGlfw_NewFrame();
+        if (shot) scriptedInput();  // after the backend has read the real mouse
         ImGui::NewFrame();
         const double now = glfwGetTime();
         const double dt = now - last;
@@ -226,19 +309,9 @@ void Viewer::run() {
         gKeys.clear();
         advancePlayback(dt);
         pollExport();
-        if (exportRequested_ && !exportStarted && !driver_->running()) {
-            // The same path as the Export buttons: current frame + steady state.
-            ExportRequest r;
-            r.dir = opt_.exportDir;
-            r.frame = r.steady = true;
-            r.bin = st_.bin;
-            r.axis = st_.axis;
-            r.mode = st_.mode;
-            startExport(r);
-            exportStarted = true;
-        }
         updateFrame();
         updateProfile();
+        updateBinEnergy();
         drawUi();
         ImGui::Render();
 
@@ -248,9 +321,16 @@ void Viewer::run() {
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
         if (snapRequested_) saveSnapshot(fbw, fbh);
         if (shot) {
-            settleFrames_ = screenshotReady() ? settleFrames_ + 1 : 0;
-            if (settleFrames_ >= 3) {  // two full frames with the final data drawn, then read this one
-                if (!exportError_.empty()) exitCode() = kExitUserError;
+            if (!scriptError_.empty()) {
+                std::fprintf(stderr, "error: %s\n", scriptError_.c_str());
+                exitCode() = kExitUserError;
+                screenshotTaken_ = true;  // nothing to take: the error says why
+                break;
+            }
+            settleFrames_ = settled() ? settleFrames_ + 1 : 0;
+            // Two full frames with the final data drawn, then read this one.
+            if (clickIndex_ >= clicks_.size() && settleFrames_ >= 3) {
+                endFrameChecks();
                 takeScreenshot(fbw, fbh);
                 break;
             }
@@ -271,6 +351,25 @@ void Viewer::run() {
 
 namespace {
 
+// --bin and --time name a bin of the film, or are refused with the film's range (before any window).
+void checkShownTime(const ViewOptions& o, const TimeBins& tb) {
+    if (o.bin && (*o.bin < 0 || *o.bin >= tb.bins))
+        throw UserError("--bin " + std::to_string(*o.bin) + " is outside the film: its bins are 0 to " +
+                        std::to_string(tb.bins - 1) + "; pick one of them (or a time with --time in ns)");
+    if (!o.timeNs) return;
+    char range[128];
+    std::snprintf(range, sizeof range, "%.6g to %.6g ns", tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
+    if (!std::isfinite(*o.timeNs))
+        throw UserError(std::string("--time must be a time in ns within the film: ") + range);
+    const int k = tb.binOf(*o.timeNs * kC_m_per_ns);
+    if (k < 0 || k >= tb.bins) {
+        char t[32];
+        std::snprintf(t, sizeof t, "%.6g", *o.timeNs);
+        throw UserError(std::string("--time ") + t + " ns is outside the film (" + range +
+                        "); pick a time in that range (the scene's film.range sets it; `tpb info` prints it)");
+    }
+}
+
 void runView(const ViewOptions& o) {
     std::unique_ptr<Scene> scene = loadAndBuild(o.scene, o.ov);
     DriverSettings ds = DriverSettings::fromScene(*scene);
@@ -285,6 +384,9 @@ void runView(const ViewOptions& o) {
     if (o.pixel.size() == 2 && (o.pixel[0] < 0 || o.pixel[1] < 0 || o.pixel[0] >= scene->camera.width ||
                                 o.pixel[1] >= scene->camera.height))
         throw UserError("--pixel is outside the image");
+    checkShownTime(o, scene->time);
+    if (o.exposure && !std::isfinite(*o.exposure))
+        throw UserError("--exposure must be a finite number of EV (e.g. -3.5), or left out for automatic exposure");
 
     GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + scene->desc.path, !shot);
     ImGuiSession gui(window.get());
@@ -319,14 +421,23 @@ void registerView(CLI::App& app) {
         ->check(CLI::PositiveNumber);
     cmd->add_option("--export", o->exportDir,
                     "With --screenshot: once the passes are done, export the current frame and the steady "
-                    "state to this folder (the Export buttons' code path)")
+                    "state to this folder by clicking the Export buttons")
         ->needs(shot);
-    CLI::Option* t = cmd->add_option("--time", o->timeNs, "Time shown, in ns (the bin containing it)");
-    cmd->add_option("--bin", o->bin, "Time bin shown")->excludes(t);
-    cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
-    cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)");
-    cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
-    cmd->add_flag("--delta", o->delta, "Start with a delta pulse (the default)");
+    cmd->add_option("--export-folder", o->exportFolder, "The Export section's folder (default out/view)");
+    cmd->add_option("--click", o->clicks,
+                    "With --screenshot: once the passes are done, click this control before the screenshot, "
+                    "as 'Section/label' (e.g. 'View/Continuous emission', 'Export/Steady state'); repeatable, "
+                    "in order")
+        ->needs(shot)
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    CLI::Option* t = cmd->add_option(
+        "--time", o->timeNs, "Time shown, in ns, within the film (the bin containing it; default: the bin of peak energy)");
+    cmd->add_option("--bin", o->bin, "Time bin shown, 0 to bins - 1 (default: the bin of peak energy)")->excludes(t);
+    CLI::Option* unwarp = cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
+    cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)")->excludes(unwarp);
+    CLI::Option* continuous = cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
+    cmd->add_flag("--delta", o->delta, "Start with a delta pulse (the default)")->excludes(continuous);
     cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)");
     cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
     cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");

@@ -2,6 +2,7 @@
 // the selected pixel's time profile bottom right). Layout follows the window size.
 #include "view_app.h"
 
+#include <imgui_internal.h>  // ImGui::GetItemID (public from ImGui 1.88)
 #include <imgui_stdlib.h>
 
 #define GLFW_INCLUDE_NONE
@@ -28,12 +29,62 @@ void hint(const char* text) {
     ImGui::PopStyleColor();
 }
 
+void wrappedColored(const ImVec4& colour, const std::string& text) {
+    ImGui::PushStyleColor(ImGuiCol_Text, colour);
+    ImGui::TextWrapped("%s", text.c_str());
+    ImGui::PopStyleColor();
+}
+
+// What the user reads on a control: the label without its "##id" / "###id" suffix.
+// (An unlabelled control, e.g. "##prev", is named by its ID.)
+std::string visibleLabel(const char* label) {
+    const std::string s(label);
+    const size_t hash = s.find("##");
+    if (hash == 0) return s.substr(s.find_first_not_of('#'));
+    return s.substr(0, hash);
+}
+
 const char* axisName(TimeAxis a) { return a == TimeAxis::Real ? "real time" : "camera-unwarped time"; }
 const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta pulse" : "continuous emission"; }
 
 }  // namespace
 
-void Viewer::setBin(int bin) { st_.bin = std::clamp(bin, 0, scene_.time.bins - 1); }
+void Viewer::setBin(int bin) {
+    st_.bin = std::clamp(bin, 0, scene_.time.bins - 1);
+    st_.autoBin = false;  // the user chose a time: no more automatic bin
+}
+
+void Viewer::setAutoBin(int bin) { st_.bin = std::clamp(bin, 0, scene_.time.bins - 1); }
+
+bool Viewer::section(const char* label, ImGuiTreeNodeFlags flags) {
+    const bool open = ImGui::CollapsingHeader(label, flags);
+    section_ = "";
+    track(label);
+    section_ = label;
+    return open;
+}
+
+void Viewer::track(const char* label) {
+    ControlRect c;
+    c.name = section_[0] ? visibleLabel(section_) + "/" + visibleLabel(label) : visibleLabel(label);
+    c.min = ImGui::GetItemRectMin();
+    c.max = ImGui::GetItemRectMax();
+    c.id = ImGui::GetItemID();
+    c.visible = ImGui::IsItemVisible();
+    // Two widgets of one window with the same ID share their hover/click state: the second one
+    // never fires (the "Steady state" export button did nothing that way). Report each clash once.
+    if (c.id != 0)
+        for (const ControlRect& o : controls_)
+            if (o.id == c.id) {
+                const std::string clash = "'" + o.name + "' and '" + c.name + "'";
+                if (std::find(idClashes_.begin(), idClashes_.end(), clash) == idClashes_.end()) {
+                    idClashes_.push_back(clash);
+                    std::fprintf(stderr, "internal error (bug): the viewer's controls %s share an ImGui ID\n",
+                                 clash.c_str());
+                }
+            }
+    controls_.push_back(std::move(c));
+}
 
 void Viewer::handleKeys(const std::vector<int>& keys) {
     if (ImGui::GetIO().WantTextInput) return;  // typing in a field
@@ -55,6 +106,7 @@ void Viewer::advancePlayback(double dt) {
         st_.playAccum = 0.0;
         return;
     }
+    st_.autoBin = false;
     st_.playAccum += std::min(dt, 0.25) * st_.speed;
     while (st_.playAccum >= 1.0) {
         st_.playAccum -= 1.0;
@@ -75,10 +127,32 @@ void Viewer::drawUi() {
     const float left = std::floor(std::min(std::clamp(ds.x * 0.3f, 300.0f, 420.0f), ds.x * 0.5f));
     const float topH = std::floor(ds.y * 0.6f);
 
+    controls_.clear();
     ImGui::SetNextWindowPos(ImVec2(0, 0));
     ImGui::SetNextWindowSize(ImVec2(left, ds.y));
-    if (ImGui::Begin("Controls", nullptr, kPanel | ImGuiWindowFlags_AlwaysVerticalScrollbar)) drawControls();
+    if (ImGui::Begin("Controls", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) {
+        // The controls scroll; below them, always in view and always the same size, the messages
+        // (wrapped, scrolling when long), so a message never moves a control.
+        const ImGuiStyle& style = ImGui::GetStyle();
+        const float messagesH = 3.0f * ImGui::GetTextLineHeightWithSpacing() + 2.0f * style.WindowPadding.y;
+        ImGui::BeginChild("##controls", ImVec2(0, -(messagesH + style.ItemSpacing.y)), false,
+                          ImGuiWindowFlags_AlwaysVerticalScrollbar);
+        drawControls();
+        ImGui::EndChild();
+        ImGui::BeginChild("##messages", ImVec2(0, messagesH), true);
+        section_ = "Messages";
+        drawMessages();
+        controlsMinX_ = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMin().x;
+        controlsMaxX_ = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMax().x;
+        ImGui::EndChild();
+    }
     ImGui::End();
+    if (!firstRecorded_) {  // the layout the user first aims at (screenshot mode reports it)
+        firstRecorded_ = true;
+        firstControls_ = controls_;
+        firstPasses_ = driver_->completedPasses();
+        firstRunning_ = driver_->running();
+    }
 
     ImGui::SetNextWindowPos(ImVec2(left, 0));
     ImGui::SetNextWindowSize(ImVec2(ds.x - left, topH));
@@ -91,41 +165,59 @@ void Viewer::drawUi() {
     ImGui::End();
 }
 
+// Layout rule: what render progress changes (pass statistics, the render finishing, messages)
+// never changes the number of rows above a control, so a click aimed during the render lands on
+// the same control after it. Rows that come and go are reserved (shown disabled or as "-"), and
+// messages of any length go to the fixed-size, wrapped messages box below the controls (drawUi).
 void Viewer::drawControls() {
     const TimeBins& tb = scene_.time;
     ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels
     ImGui::TextWrapped("%s", scene_.desc.path.c_str());
-    ImGui::Text("%d x %d px, %d bins, %.3f - %.3f ns", scene_.camera.width, scene_.camera.height, tb.bins,
-                tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
+    ImGui::TextWrapped("%d x %d px, %d bins, %.3f - %.3f ns", scene_.camera.width, scene_.camera.height, tb.bins,
+                       tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
     drawTimeSection();
 
-    if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (section("View", ImGuiTreeNodeFlags_DefaultOpen)) {
         int show = st_.showSteady ? 1 : 0;
         ImGui::RadioButton("Time frame", &show, 0);
+        track("Time frame");
         ImGui::SameLine();
-        ImGui::RadioButton("Steady state", &show, 1);
+        ImGui::RadioButton("Steady state##view", &show, 1);  // unique ID: the Export section has one too
+        track("Steady state##view");
         st_.showSteady = show == 1;
         bool unwarp = st_.axis == TimeAxis::Unwarped;
         if (ImGui::Checkbox("Camera unwarping", &unwarp)) st_.axis = unwarp ? TimeAxis::Unwarped : TimeAxis::Real;
+        track("Camera unwarping");
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("Time since emission without the path to the camera");
         bool cont = st_.mode == EmissionMode::Continuous;
-        if (ImGui::Checkbox("Continuous emission", &cont)) st_.mode = cont ? EmissionMode::Continuous : EmissionMode::Delta;
+        if (ImGui::Checkbox("Continuous emission", &cont)) {
+            st_.mode = cont ? EmissionMode::Continuous : EmissionMode::Delta;
+            // A running sum and a pulse response differ by orders of magnitude: fit the exposure again.
+            st_.autoFrame = true;
+        }
+        track("Continuous emission");
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("Light on from the pulse instant (running sum of the delta response)");
     }
 
-    if (ImGui::CollapsingHeader("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (section("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
         float& ev = st_.showSteady ? st_.evSteady : st_.evFrame;
-        ImGui::SliderFloat("exposure (EV)", &ev, -40.0f, 40.0f, "%.2f");
+        if (ImGui::SliderFloat("exposure (EV)", &ev, -40.0f, 40.0f, "%.2f"))
+            (st_.showSteady ? st_.autoSteady : st_.autoFrame) = false;  // the user's exposure from now on
+        track("exposure (EV)");
         if (ImGui::Button("Auto exposure")) {
             (st_.showSteady ? st_.autoSteady : st_.autoFrame) = true;
             frameKey_ = FetchKey{};  // fetch again: the exposure is computed from a fresh frame
         }
+        track("Auto exposure");
         ImGui::SameLine();
         ImGui::Checkbox("sRGB", &st_.display.srgb);
+        track("sRGB");
         ImGui::SameLine();
         ImGui::Checkbox("False colour", &st_.display.falseColor);
+        track("False colour");
         if (st_.display.falseColor) {
             ImGui::SliderFloat("decades", &st_.display.decades, 1.0f, 12.0f, "%.1f");
+            track("decades");
             hint("log10 luminance over the decades below the white point: blue (dim) to red; "
                  "white = clipped, black = no energy");
         }
@@ -137,89 +229,107 @@ void Viewer::drawControls() {
 }
 
 void Viewer::drawTimeSection() {
-    if (!ImGui::CollapsingHeader("Time", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!section("Time", ImGuiTreeNodeFlags_DefaultOpen)) return;
     const TimeBins& tb = scene_.time;
     int bin = st_.bin;
     if (ImGui::SliderInt("bin", &bin, 0, tb.bins - 1)) setBin(bin);
+    track("bin");
     const double opl = binCentreOpl(st_.bin);
     ImGui::Text("t = %.4f ns  |  %.4f m of OPL", opl / kC_m_per_ns, opl);
     ImGui::TextDisabled("(bin centre, %s)", axisName(st_.axis));
     ImGui::TextDisabled("bin width %.4f ns = %.4f m", tb.binWidth / kC_m_per_ns, tb.binWidth);
     if (ImGui::ArrowButton("##prev", ImGuiDir_Left)) setBin(st_.bin - 1);
+    track("##prev");
     ImGui::SameLine();
-    if (ImGui::Button(st_.playing ? "Pause" : "Play", ImVec2(60, 0))) st_.playing = !st_.playing;
+    // "###": one ID whatever the label says (and not the Progress section's "Pause").
+    const char* play = st_.playing ? "Pause###playback" : "Play###playback";
+    if (ImGui::Button(play, ImVec2(60, 0))) st_.playing = !st_.playing;
+    track(play);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("keys: Left/Right one bin, Home/End, Space play/pause");
     ImGui::SameLine();
     if (ImGui::ArrowButton("##next", ImGuiDir_Right)) setBin(st_.bin + 1);
+    track("##next");
     ImGui::SameLine();
     ImGui::Checkbox("loop", &st_.loop);
+    track("loop");
     ImGui::SliderFloat("speed (bins/s)", &st_.speed, 0.5f, 120.0f, "%.1f", ImGuiSliderFlags_Logarithmic);
-    hint("keys: Left/Right one bin, Home/End, Space play/pause");
+    track("speed (bins/s)");
 }
 
 void Viewer::drawProgressSection() {
-    if (!ImGui::CollapsingHeader("Progress", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!section("Progress", ImGuiTreeNodeFlags_DefaultOpen)) return;
     const DriverSettings& s = driver_->settings();
     const uint64_t done = driver_->completedPasses();
     const PassStats last = driver_->lastPass();
-    const bool failed = !driver_->running() && driver_->failure();
-    const char* state = failed ? "stopped by an error" : !driver_->running() ? "finished"
+    const bool running = driver_->running();
+    const bool failed = !running && driver_->failure();
+    const char* state = failed ? "stopped by an error, see below" : !running ? "finished"
                         : driver_->paused() ? "paused" : "rendering";
     if (s.passes > 0)
         ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes), state);
     else
         ImGui::Text("pass %llu  (%s)", static_cast<unsigned long long>(done), state);
-    if (s.passes > 0) ImGui::ProgressBar(static_cast<float>(done) / static_cast<float>(s.passes), ImVec2(-1, 0));
+    if (s.passes > 0)
+        ImGui::ProgressBar(static_cast<float>(done) / static_cast<float>(s.passes), ImVec2(-1, 0));
+    else
+        ImGui::ProgressBar(0.0f, ImVec2(-1, 0), "no pass limit");
+    // Always these rows, with "-" until the first pass is in.
     if (done > 0) {
         ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
         ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
                     static_cast<long long>(last.photons));
         ImGui::Text("time per pass %.3f s", last.passSec);
-        ImGui::TextDisabled("  trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
+        ImGui::TextDisabled("trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
                             last.cameraSec);
         ImGui::Text("total time %.2f s", last.elapsedSec);
-    } else if (!failed) {
-        ImGui::TextDisabled("first pass in progress...");
-    }
-    if (failed) {
-        // The render thread caught it (core/driver.h): the finished passes stay on screen.
-        ImGui::PushTextWrapPos(0.0f);
-        ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "error: %s", driver_->failureMessage().c_str());
-        ImGui::PopTextWrapPos();
+    } else {
+        ImGui::TextDisabled(failed ? "kernel radius -" : "kernel radius -  (first pass in progress...)");
+        ImGui::TextDisabled("beams per pass -");
+        ImGui::TextDisabled("time per pass -");
+        ImGui::TextDisabled("trace -, build -, camera -");
+        ImGui::TextDisabled("total time -");
     }
     const FilmStats& fs = driver_->film().stats;
     ImGui::Text("rejected samples %lld", static_cast<long long>(fs.rejectedSamples.load()));
     const int a = static_cast<int>(st_.axis);
     const double in = fs.inside[a].load(), out = fs.outside[a].load();
     if (in + out > 0) ImGui::Text("energy outside the film %.3g %%", 100.0 * out / (in + out));
-    if (driver_->running()) {
-        if (ImGui::Button(driver_->paused() ? "Resume" : "Pause", ImVec2(80, 0))) {
-            if (driver_->paused()) driver_->resume();
-            else driver_->pause();
-        }
-        if (driver_->paused()) {
-            ImGui::SameLine();
-            ImGui::TextDisabled("(takes effect between passes)");
-        }
+    else ImGui::TextDisabled("energy outside the film -");
+    // Pause/Resume stays (disabled) when the render has finished, so the rows below keep their place.
+    const char* pause = running && driver_->paused() ? "Resume###render" : "Pause###render";
+    ImGui::BeginDisabled(!running);
+    if (ImGui::Button(pause, ImVec2(80, 0))) {
+        if (driver_->paused()) driver_->resume();
+        else driver_->pause();
     }
+    ImGui::EndDisabled();
+    track(pause);
+    if (running && ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+        ImGui::SetTooltip("takes effect between passes");
+    ImGui::SameLine();
     if (ImGui::Button("Restart", ImVec2(80, 0))) restart(driver_->settings(), "accumulation restarted");
-    if (!status_.empty()) ImGui::TextColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), "%s", status_.c_str());
+    track("Restart");
 }
 
 void Viewer::drawSettingsSection() {
-    if (!ImGui::CollapsingHeader("Render settings")) return;
+    if (!section("Render settings")) return;
     hint("a change (Enter or leaving the field) restarts the accumulation");
     bool apply = false;
     const int64_t step = 1000, stepFast = 10000;
     ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);
     apply |= ImGui::IsItemDeactivatedAfterEdit();
+    track("photons / pass");
     ImGui::InputDouble("alpha", &edit_.alpha, 0.05, 0.1, "%.3f");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
+    track("alpha");
     ImGui::InputDouble("initial radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("beam kernel radius of pass 1 (as --radius)");
+    track("initial radius (m)");
     const int64_t one = 1, ten = 10;
     ImGui::InputScalar("pass limit (0: none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
     apply |= ImGui::IsItemDeactivatedAfterEdit();
+    track("pass limit (0: none)");
     if (!apply) return;
     const DriverSettings& cur = driver_->settings();
     if (edit_.photonsPerPass < 1 || !(edit_.alpha > 0.0 && edit_.alpha <= 1.0) || !(edit_.beamRadius0 > 0.0) ||
@@ -240,9 +350,12 @@ void Viewer::drawSettingsSection() {
 }
 
 void Viewer::drawExportSection() {
-    if (!ImGui::CollapsingHeader("Export (EXR)", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!section("Export (EXR)", ImGuiTreeNodeFlags_DefaultOpen)) return;
     ImGui::InputText("folder", &st_.outDir);
-    ImGui::TextDisabled("in %s, %s", axisName(st_.axis), modeName(st_.mode));
+    track("folder");
+    // Short names: the long ones were cut off (and wrapping would move the buttons with the mode).
+    ImGui::TextDisabled("in %s time, %s", st_.axis == TimeAxis::Real ? "real" : "unwarped",
+                        st_.mode == EmissionMode::Delta ? "delta pulse" : "continuous");
     ExportRequest r;
     r.dir = st_.outDir.empty() ? "." : st_.outDir;
     r.bin = st_.bin;
@@ -255,22 +368,44 @@ void Viewer::drawExportSection() {
     ImGui::BeginDisabled(busy);
     bool go = false;
     if (ImGui::Button("Current frame")) go = r.frame = true;
+    track("Current frame");
     ImGui::SameLine();
     if (ImGui::Button("All frames")) go = r.allFrames = true;
+    track("All frames");
     ImGui::SameLine();
-    if (ImGui::Button("Steady state")) go = r.steady = true;
+    if (ImGui::Button("Steady state##export")) go = r.steady = true;  // unique ID: the View section has one too
+    track("Steady state##export");
     if (ImGui::Button("Streak (selected row)")) go = r.streak = true;
+    track("Streak (selected row)");
     ImGui::SameLine();
     if (ImGui::Button("Pixel profile (CSV)")) go = r.profile = true;
+    track("Pixel profile (CSV)");
     ImGui::EndDisabled();
     if (ImGui::Button("Window screenshot (F12)")) snapRequested_ = true;
-    if (go) startExport(r);
-    if (busy) {
+    track("Window screenshot (F12)");
+    if (go) startExport(r);  // its progress bar and Cancel button are in the messages, below
+}
+
+void Viewer::drawMessages() {
+    // The export in progress, the render's error, the last action's status, the last export.
+    if (export_.busy()) {
         ImGui::ProgressBar(export_.progress(), ImVec2(-70, 0), export_.progressLabel().c_str());
         ImGui::SameLine();
         if (ImGui::Button("Cancel")) export_.cancel();
-    } else if (!exportError_.empty()) {
-        ImGui::TextColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), "%s", exportError_.c_str());
+        track("Cancel");
+    }
+    if (!driver_->running() && driver_->failure()) {
+        // The render thread caught it (core/driver.h): the finished passes stay on screen.
+        wrappedColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "error: " + driver_->failureMessage());
+        track("error");
+    }
+    if (!status_.empty()) {
+        wrappedColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), status_);
+        track("status");
+    }
+    if (!exportError_.empty() && !export_.busy()) {
+        wrappedColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), exportError_);
+        track("export error");
     }
     for (const std::string& w : exportLog_) ImGui::TextWrapped("wrote %s", w.c_str());
 }
@@ -278,11 +413,11 @@ void Viewer::drawExportSection() {
 void Viewer::drawImagePanel() {
     const int w = scene_.camera.width, h = scene_.camera.height;
     if (st_.showSteady) {
-        ImGui::Text("Steady state (all time), %llu passes", static_cast<unsigned long long>(frameKey_.passes));
+        ImGui::TextWrapped("Steady state (all time), %llu passes", static_cast<unsigned long long>(frameKey_.passes));
     } else {
         const double opl = binCentreOpl(st_.bin);
-        ImGui::Text("bin %d: t = %.4f ns (%.4f m), %s, %s", st_.bin, opl / kC_m_per_ns, opl, axisName(st_.axis),
-                    modeName(st_.mode));
+        ImGui::TextWrapped("bin %d: t = %.4f ns (%.4f m), %s, %s", st_.bin, opl / kC_m_per_ns, opl,
+                           axisName(st_.axis), modeName(st_.mode));
     }
     const ImVec2 avail = ImGui::GetContentRegionAvail();
     float zoom = std::min(avail.x / w, avail.y / h);
@@ -323,8 +458,8 @@ void Viewer::drawImagePanel() {
 
 void Viewer::drawTimePanel() {
     const int w = scene_.camera.width, bins = scene_.time.bins;
-    ImGui::Text("Streak image of row %d (x across, time down), %s, %s", st_.selY, axisName(st_.axis),
-                modeName(st_.mode));
+    ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s", st_.selY, axisName(st_.axis),
+                       modeName(st_.mode));
     const ImVec2 avail = ImGui::GetContentRegionAvail();
     const float lineH = ImGui::GetTextLineHeightWithSpacing();
     const float plotH = std::max(60.0f, std::min(140.0f, avail.y * 0.4f));

@@ -135,6 +135,27 @@ Area parseArea(const std::string& out) {
     return a;
 }
 
+// The viewer's controls as reported with the screenshot: "<tag> x y w h Section/label" lines
+// (tag "control": the last frame, "control_first": the first frame, drawn while pass 1 rendered).
+struct Rect {
+    double x = 0, y = 0, w = 0, h = 0;
+    bool operator==(const Rect&) const = default;
+};
+
+std::map<std::string, Rect> parseControls(const std::string& out, const std::string& tag) {
+    std::map<std::string, Rect> m;
+    std::istringstream in(out);
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind(tag + " ", 0) != 0) continue;
+        Rect r;
+        int used = 0;
+        if (std::sscanf(line.c_str() + tag.size(), " %lf %lf %lf %lf %n", &r.x, &r.y, &r.w, &r.h, &used) == 4)
+            m[line.substr(tag.size() + static_cast<size_t>(used))] = r;
+    }
+    return m;
+}
+
 // What display.frag + an 8-bit framebuffer make of a linear value.
 int expected8(float v, double ev) {
     double c = std::clamp(static_cast<double>(v) * std::exp2(ev), 0.0, 1.0);
@@ -162,6 +183,30 @@ double maxRelDiff(const Exr& a, const Exr& b) {
         worst = std::max(worst, d / s);
     }
     return worst;
+}
+
+// How much of the image area is black (no light shown) or clipped to white (blown out).
+// An exposure fitted to the picture also uses the range: its brightest pixels come near white.
+struct Tones {
+    double black = 0.0, white = 0.0;  // fractions of the film's pixels
+    int bright = 0;                   // 98th percentile of the pixels' largest 8-bit channel
+};
+
+Tones tones(const Image8& shot, const Area& a) {
+    int black = 0, white = 0;
+    std::vector<int> peaks;
+    for (int y = 0; y < kFilm; ++y)
+        for (int x = 0; x < kFilm; ++x) {
+            if (std::abs(x - kFilm / 2) <= 1 && std::abs(y - kFilm / 2) <= 1) continue;  // selection marker
+            const unsigned char* p = cell(shot, a, x, y);
+            black += std::max({p[0], p[1], p[2]}) <= 8;
+            white += std::min({p[0], p[1], p[2]}) >= 250;
+            peaks.push_back(std::max({p[0], p[1], p[2]}));
+        }
+    const size_t k = peaks.size() * 98 / 100;
+    std::nth_element(peaks.begin(), peaks.begin() + static_cast<std::ptrdiff_t>(k), peaks.end());
+    const double n = static_cast<double>(peaks.size());
+    return {black / n, white / n, peaks[k]};
 }
 
 std::string frameName(int bin) {
@@ -239,13 +284,7 @@ protected:
     // continuous emission, the running sum, differs from the delta pulse response).
     static int bin() {
         if (bin_ >= 0) return bin_;
-        const fs::path ref = reference(kModes[0]);
-        std::vector<double> energy(kBins, 0.0);
-        for (int k = 0; k < kBins; ++k) {
-            const Exr f = readExrFile(ref / "frames" / frameName(k));
-            for (int y = 0; y < f.h; ++y)
-                for (int x = 0; x < f.w; ++x) energy[k] += f.lum(x, y);
-        }
+        const std::vector<double> energy = binEnergy();
         const double peak = *std::max_element(energy.begin(), energy.end());
         int first = 0;
         while (first < kBins - 1 && energy[first] <= 0.01 * peak) ++first;
@@ -266,6 +305,27 @@ protected:
         return views_[m.name];
     }
     static Image8 shot(const Mode& m) { return readPng(dir_ / ("view_" + m.name + ".png")); }
+
+    // A viewer run of its own: `tpb view scene.json <args> --screenshot <name>.png`.
+    static Proc viewRun(const std::string& name, const std::string& args) {
+        const fs::path base = dir_ / name;
+        return runXvfb(std::string(TPB_BINARY) + " view " + q(dir_ / "scene.json") + " " + args +
+                           " --window-size 1280 800 --screenshot " + q(base.string() + ".png"),
+                       base);
+    }
+    static Image8 shotOf(const std::string& name) { return readPng(dir_ / (name + ".png")); }
+
+    // Energy (luminance summed over the image) of each bin of the independent real/delta render.
+    static std::vector<double> binEnergy() {
+        const fs::path ref = reference(kModes[0]);
+        std::vector<double> energy(kBins, 0.0);
+        for (int k = 0; k < kBins; ++k) {
+            const Exr f = readExrFile(ref / "frames" / frameName(k));
+            for (int y = 0; y < f.h; ++y)
+                for (int x = 0; x < f.w; ++x) energy[k] += f.lum(x, y);
+        }
+        return energy;
+    }
 
     static inline std::string skip_;
     static inline fs::path dir_;
@@ -393,6 +453,151 @@ TEST_F(ViewerTest, ClosingDuringRenderExitsZero) {
     EXPECT_NE(r.out.find("viewer_exit=0"), std::string::npos) << r.out << r.err;
 }
 
+// The "Steady state" export button writes steady.exr. It shared its label, and so its ImGui ID, with
+// the "Steady state" view radio button drawn above it, which took the click: nothing was written.
+// The click goes through ImGui's hit test and IDs like a user's (--click).
+TEST_F(ViewerTest, SteadyStateExportButtonWritesSteadyExr) {
+    const fs::path out = dir_ / "steady_button";
+    const Proc r = viewRun("steady_button", kRenderArgs + " --after-passes 2 --export-folder " + q(out) +
+                                                " --click 'Export/Steady state'");
+    EXPECT_NE(r.out.find("click: Export (EXR)/Steady state"), std::string::npos) << r.out;
+    ASSERT_TRUE(fs::exists(out / "steady.exr")) << r.out << r.err;
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("exported: " + (out / "steady.exr").string()), std::string::npos) << r.out;
+    const Exr steady = readExrFile(out / "steady.exr");
+    const Exr steadyRef = readExrFile(reference(kModes[0]) / "steady.exr");
+    ASSERT_EQ(steady.rgb.size(), steadyRef.rgb.size());
+    EXPECT_LE(maxRelDiff(steady, steadyRef), 1e-6);
+    // That button only: no frame, streak or profile.
+    int files = 0;
+    for (const auto& e : fs::directory_iterator(out)) files += e.is_regular_file();
+    EXPECT_EQ(files, 1);
+}
+
+// Audit of the ImGui IDs: the viewer checks every control it draws against the others of the frame
+// and reports a clash on stderr (exit 1 in screenshot mode). With every optional control shown -
+// render settings open, false colour on, playback running (its button then reads "Pause", as the
+// render's Pause button does) - no two controls share an ID.
+TEST_F(ViewerTest, NoTwoControlsShareAnImGuiId) {
+    const Proc r = viewRun("ids", kRenderArgs + " --after-passes 1 --bin 3 --click 'Render settings' --click "
+                                                "'Display/False colour' --click 'Time/Play'");
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_EQ(r.err.find("share an ImGui ID"), std::string::npos) << r.err;
+    const std::map<std::string, Rect> controls = parseControls(r.out, "control");
+    for (const char* name : {"Time/Pause", "Progress/Pause", "View/Steady state", "Export (EXR)/Steady state",
+                             "Render settings/alpha", "Display/decades"})
+        EXPECT_TRUE(controls.count(name)) << name << " not drawn:\n" << r.out;
+}
+
+// The first picture shows light: without --bin the viewer opens on the bin of peak energy (not bin
+// 0, before any light arrives) with the exposure fitted to it, in both emission modes.
+TEST_F(ViewerTest, FirstPictureShowsLightInBothEmissionModes) {
+    const std::vector<double> energy = binEnergy();
+    const double peak = *std::max_element(energy.begin(), energy.end());
+    for (const Mode& m : {kModes[0], kModes[2]}) {
+        SCOPED_TRACE(m.name);
+        const Proc r = viewRun("first_" + m.name, kRenderArgs + m.flags + " --after-passes 1");
+        ASSERT_EQ(r.code, 0) << r.out << r.err;
+        const Area a = parseArea(r.out);
+        ASSERT_TRUE(a.ok) << r.out;
+        ASSERT_GE(a.bin, 0);
+        ASSERT_LT(a.bin, kBins);
+        EXPECT_GE(energy[a.bin], 0.5 * peak) << "bin " << a.bin << " holds little light";
+        const Tones t = tones(shotOf("first_" + m.name), a);
+        std::printf("%s: bin %d, %.3g EV: black %.3f, white %.3f, bright %d\n", m.name.c_str(), a.bin, a.ev, t.black,
+                    t.white, t.bright);
+        EXPECT_LT(t.black, 0.5) << "black: " << t.black << ", exposure " << a.ev << " EV, bin " << a.bin;
+        EXPECT_LT(t.white, 0.05) << "blown out: " << t.white << ", exposure " << a.ev << " EV, bin " << a.bin;
+        EXPECT_GE(t.bright, 180) << "too dark: exposure " << a.ev << " EV, bin " << a.bin;
+    }
+}
+
+// Switching delta <-> continuous fits the exposure again (a running sum is orders of magnitude
+// brighter than the pulse response: continuous was shown blown out to white, delta then black).
+TEST_F(ViewerTest, SwitchingEmissionModeRefitsTheExposure) {
+    for (const Mode& m : {kModes[0], kModes[2]}) {
+        SCOPED_TRACE("starting in " + m.name);
+        const std::string name = "switch_" + m.name;
+        const Proc r = viewRun(name, kRenderArgs + m.flags + " --after-passes 1 --bin " + std::to_string(bin()) +
+                                         " --click 'View/Continuous emission'");
+        ASSERT_EQ(r.code, 0) << r.out << r.err;
+        const Area a = parseArea(r.out);
+        ASSERT_TRUE(a.ok) << r.out;
+        EXPECT_NE(r.out.find(m.flags.empty() ? "mode continuous" : "mode delta"), std::string::npos) << r.out;
+        const Tones t = tones(shotOf(name), a);
+        std::printf("%s, then switched: %.3g EV: black %.3f, white %.3f, bright %d\n", m.name.c_str(), a.ev, t.black,
+                    t.white, t.bright);
+        EXPECT_LT(t.black, 0.5) << "black: " << t.black << ", exposure " << a.ev << " EV";
+        EXPECT_LT(t.white, 0.05) << "blown out: " << t.white << ", exposure " << a.ev << " EV";
+        EXPECT_GE(t.bright, 180) << "too dark: exposure " << a.ev << " EV";
+    }
+}
+
+// Auto exposure is fitted to the tiles already finished, during the first pass, not after it (a
+// first pass can take many seconds). The first pass here gathers for a few seconds (more photons);
+// the viewer reports each fit with the passes completed at that moment.
+TEST_F(ViewerTest, AutoExposureFitsTheTilesFinishedDuringTheFirstPass) {
+    const Proc r = viewRun("midpass", "--seed 7 --threads 2 --photons 4000 --passes 1 --after-passes 1");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    std::istringstream in(r.out);
+    std::string line;
+    int during = 0, final = 0;
+    while (std::getline(in, line)) {
+        double ev = 0;
+        size_t lit = 0;
+        unsigned long long passes = 0;
+        int complete = 0, fin = 0, bin = 0, steady = 0;
+        if (std::sscanf(line.c_str(), "auto_exposure ev %lf lit_pixels %zu passes %llu complete %d final %d bin %d steady %d",
+                        &ev, &lit, &passes, &complete, &fin, &bin, &steady) != 7)
+            continue;
+        EXPECT_GT(lit, 0u);
+        during += passes == 0;
+        final += fin;
+    }
+    EXPECT_GT(during, 0) << "no exposure fitted before the first pass ended:\n" << r.out;
+    EXPECT_EQ(final, 1) << r.out;
+}
+
+// The controls keep their place when the render finishes (and when the first pass completes): a
+// click aimed while it renders lands on the same control after. (The Pause row went away at the
+// end and the statistics rows came in after pass 1, moving the Export buttons by rows.)
+TEST_F(ViewerTest, ControlsKeepTheirPlaceWhenTheRenderFinishes) {
+    const Proc& r = view(kModes[0]);
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("layout_first passes 0 running 1"), std::string::npos) << r.out;
+    const std::map<std::string, Rect> first = parseControls(r.out, "control_first");
+    const std::map<std::string, Rect> last = parseControls(r.out, "control");
+    int exportButtons = 0;
+    for (const auto& [name, rect] : last) {
+        if (name.rfind("Export", 0) == 0) ++exportButtons;
+        if (name.rfind("Messages/", 0) == 0) continue;  // below every control, free to grow
+        const auto f = first.find(name);
+        ASSERT_NE(f, first.end()) << name << " was not there while rendering";
+        EXPECT_EQ(f->second, rect) << name << " moved from y " << f->second.y << " to y " << rect.y;
+    }
+    EXPECT_GE(exportButtons, 8);  // the section, folder, 6 buttons, Cancel
+}
+
+// A long status line wraps inside the controls panel (it was cut off at the panel's edge).
+TEST_F(ViewerTest, LongStatusLinesWrap) {
+    const fs::path out = dir_ / ("a_folder_with_a_long_name_so_that_the_status_line_is_longer_than_the_panel_"
+                                 "is_wide_" + std::string(40, 'x'));
+    const Proc r = viewRun("status", kRenderArgs + " --after-passes 1 --export-folder " + q(out) +
+                                         " --click 'Export/Window screenshot (F12)'");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_TRUE(fs::exists(out / "window_001.png")) << r.out;
+    const std::map<std::string, Rect> controls = parseControls(r.out, "control");
+    ASSERT_TRUE(controls.count("Messages/status")) << r.out;
+    const Rect st = controls.at("Messages/status");
+    double left = 0, right = 0;
+    const size_t pos = r.out.find("messages_area ");
+    ASSERT_NE(pos, std::string::npos);
+    ASSERT_EQ(std::sscanf(r.out.c_str() + pos, "messages_area %lf %lf", &left, &right), 2);
+    EXPECT_LE(st.x + st.w, right + 1.0) << "the status line runs past the panel";
+    EXPECT_GE(st.h, 3 * 13.0) << "a " << ("saved " + out.string()).size() << "-character status line on "
+                              << st.h / 13.0 << " lines";
+}
+
 // Without a display: a clear message and exit code 2 (needs no X server).
 TEST(ViewerCli, NoDisplayExitsWithCode2) {
     const fs::path dir = makeTempDir("nodisplay");
@@ -411,6 +616,35 @@ TEST(ViewerCli, NoDisplayExitsWithCode2) {
     const Proc bad2 = runShell(std::string(TPB_BINARY) + " view " + q(dir / "scene.json") + " --bin 3 --time 2",
                               dir / "bad2");
     EXPECT_EQ(bad2.code, 2) << bad2.err;
+    fs::remove_all(dir);
+}
+
+// --bin and --time outside the film are refused alike (--bin 999 was silently clamped while --time
+// 1e9 warned), naming the flag and the film's range, before a window opens (so with no display).
+TEST(ViewerCli, BinOrTimeOutsideTheFilmIsRefusedWithTheRange) {
+    const fs::path dir = makeTempDir("range");
+    std::ofstream(dir / "scene.json") << kScene;
+    struct Case {
+        std::string flags, says;
+    };
+    const std::vector<Case> cases = {{"--bin 999", "--bin 999 is outside the film: its bins are 0 to 31"},
+                                     {"--bin -1", "--bin -1 is outside the film: its bins are 0 to 31"},
+                                     {"--time 1e9", "--time 1e+09 ns is outside the film (0 to "},
+                                     {"--time -2", "--time -2 ns is outside the film (0 to "},
+                                     {"--time nan", "--time must be a time in ns within the film: 0 to "},
+                                     {"--exposure nan", "--exposure must be a finite number"},
+                                     {"--unwarp --real-time", "excludes"},
+                                     {"--continuous --delta", "excludes"}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.flags);
+        const Proc r = runShell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(TPB_BINARY) + " view " +
+                                    q(dir / "scene.json") + " " + c.flags + " --screenshot " + q(dir / "x.png"),
+                                dir / "run");
+        EXPECT_EQ(r.code, 2) << r.out << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("cannot open a window"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "x.png"));
+    }
     fs::remove_all(dir);
 }
 
