@@ -134,7 +134,6 @@ void run(RenderCmd& c) {
     Driver drv(*scene, ds);
 
     const bool tty = isatty(STDERR_FILENO) && !c.quiet;
-    setInterruptDriver(&drv);
     const double t0 = nowSec();
     drv.start([&](const PassStats& p) {
         if (c.quiet) return;
@@ -153,6 +152,9 @@ void run(RenderCmd& c) {
                          p.beamRadius, static_cast<long long>(p.beams), p.passSec);
         }
     });
+    // After start() (which clears a stop request): a signal from before is passed on here, a later
+    // one by the handler.
+    setInterruptDriver(&drv);
     drv.wait();
     setInterruptDriver(nullptr);
     if (tty) std::fprintf(stderr, "\n");
@@ -197,7 +199,8 @@ void registerRender(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand("render", "Render a scene headless: preview.exr, EXR frames per time bin, "
                                                  "steady.exr and summary.json");
     cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
-    cmd->add_option("-o,--out", c->out, "Output folder (created if needed)");
+    cmd->add_option("-o,--out", c->out, "Output folder (created if needed; locked while rendering; the outputs of "
+                                        "an earlier render in it are replaced, other files are kept)");
     c->ov.add(cmd);
     cmd->add_flag("--unwarp", c->unwarp, "Frames in camera-unwarped time (camera path excluded)");
     cmd->add_flag("--real-time", c->realTime, "Frames in real time (camera path included; the default)");

@@ -6,7 +6,9 @@
 // not listed below is an error (with the closest allowed key suggested), as is a value of the wrong
 // type or out of range. Every key is optional unless marked (required); defaults are in brackets.
 // Colors and spectra ("power", "albedo", "sigma_s", ...) are a number (grey) or an [r, g, b] array.
-// Vectors are [x, y, z] arrays; directions are normalized and must not be zero.
+// Vectors are [x, y, z] arrays; directions are normalized and must not be zero. Positions, edges,
+// sizes, radii and translations are meters within +-1e9 (kMaxSceneCoordinateM), and so are mesh
+// vertices after the shape's transform.
 // Times are optical path length (OPL) in meters: each time key exists as "<name>_m" and
 // "<name>_ns" (ns are converted with c = 0.299792458 m/ns); giving both is an error.
 //
@@ -58,7 +60,9 @@
 //   "render": {
 //     "photons_per_pass": 20000,         // integer >= 1
 //     "radius": 0.01 | "radius_relative": 0.01,  // volume kernel radius, > 0: absolute (m) or a
-//                                                // fraction of the scene diagonal [relative 0.01]
+//                                                // fraction of the scene diagonal [relative 0.01];
+//                                                // at most 0.25 of the diagonal (a wider kernel makes a
+//                                                // pass cost rays x beams), warned about above 0.05
 //     "surface_radius": 0.02 | "surface_radius_relative": 0.02,  // surface photons [relative 0.02]
 //                                        // the two radii share one convention: mixing absolute and
 //                                        // relative is an error; giving one of them sets it for both
@@ -67,7 +71,7 @@
 //     "time_budget_s": 0,                // >= 0, 0 = none
 //     "max_depth": 16,                   // integer >= 1
 //     "seed": 1,                         // integer in [0, 2^64)
-//     "threads": 0,                      // integer >= 0, 0 = all cores
+//     "threads": 0,                      // integer >= 0, 0 = all cores; above 4 x the cores: capped
 //     "emission": "delta",               // "delta" | "continuous"
 //     "unwarp": false,                   // remove the camera-to-scene travel time
 //     "time_profile": "exact",           // "exact" | "uniform"
