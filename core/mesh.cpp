@@ -149,10 +149,13 @@ void checkVertexLines(const std::string& path, const std::string& text) {
             const double v = std::strtod(token.c_str(), &stop);
             if (stop != token.c_str() + token.size())
                 objError(path, line, where + " coordinate \"" + token + "\" is not a number");
-            // strtod reads "nan" and "inf" literals; 1e999 is a number that overflows (beyond the limit).
-            const bool literal = token.find_first_of("nNiI") != std::string::npos;
-            if (std::isnan(v) || (literal && std::isinf(v)))
-                objError(path, line, where + " has a non-finite coordinate (" + token + ")");
+            // strtod reads "nan" and "inf" literals, and 1e999 overflows to inf.
+            if (!std::isfinite(v)) {
+                const bool literal = token.find_first_of("nNiI") != std::string::npos;
+                objError(path, line, where + " has a non-finite coordinate (" + token +
+                                         (literal ? "" : ", beyond the range of a double") +
+                                         "); coordinates must be finite and within +-1e9 m");
+            }
             if (!(std::fabs(v) <= kMaxSceneCoordinateM))
                 objError(path, line,
                          where + " coordinate " + token + " is beyond +-1e9 m, the limit of scene coordinates; "

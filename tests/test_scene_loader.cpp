@@ -567,13 +567,16 @@ TEST(SceneErrors, NanAndHugeMeshVerticesNameTheObjLine) {
     };
     const std::string obj = (tmp.dir / "m.obj").string();
     EXPECT_EQ(objError("v 0 0 0\nv nan nan nan\nv 0 1 0\nf 1 2 3\n"),
-              obj + ":2: vertex 2 (\"v\" line 2) has a non-finite coordinate (nan)");
+              obj + ":2: vertex 2 (\"v\" line 2) has a non-finite coordinate (nan); coordinates must be finite and "
+                    "within +-1e9 m");
     EXPECT_EQ(objError("# a comment\nv 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n"),
-              obj + ":3: vertex 2 (\"v\" line 3) has a non-finite coordinate (inf)");
+              obj + ":3: vertex 2 (\"v\" line 3) has a non-finite coordinate (inf); coordinates must be finite and "
+                    "within +-1e9 m");
     EXPECT_THAT(objError("v 1e30 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
                 HasSubstr(obj + ":1: vertex 1 (\"v\" line 1) coordinate 1e30 is beyond +-1e9 m, the limit of scene "
                                 "coordinates; check the file's units, or scale the mesh with the shape's \"transform\""));
-    EXPECT_THAT(objError("v 1e999 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), HasSubstr("coordinate 1e999 is beyond +-1e9 m"));
+    EXPECT_THAT(objError("v 1e999 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+                HasSubstr("non-finite coordinate (1e999, beyond the range of a double)"));
     EXPECT_EQ(objError("v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n"),
               obj + ":2: vertex 2 (\"v\" line 2) coordinate \"1,5\" is not a number");
     EXPECT_EQ(objError("v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), obj + ":1: vertex 1 (\"v\" line 1) has 2 coordinates, expected x y z");
