@@ -5,6 +5,7 @@
 // Also the path-tracer back end of `tpb render --method pt` (cli_converge.h).
 #include "cli_converge.h"
 
+#include "cli_interrupt.h"
 #include "commands.h"
 #include "error.h"
 #include "error_metrics.h"
@@ -15,8 +16,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
-#include <csignal>
+#include <limits>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -32,22 +34,6 @@ namespace {
 using nlohmann::json;
 namespace fs = std::filesystem;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// ---- Ctrl-C: the first stops after the current pass (what is done is written), the second quits.
-std::atomic<bool> gAbort{false};
-std::atomic<int> gInterrupts{0};
-void onSigint(int) {
-    if (gInterrupts.fetch_add(1) >= 1) _exit(130);
-    gAbort = true;
-}
-struct SigintScope {
-    SigintScope() {
-        gAbort = false;
-        gInterrupts = 0;
-        std::signal(SIGINT, onSigint);
-    }
-    ~SigintScope() { std::signal(SIGINT, SIG_DFL); }
-};
 
 // CPU seconds of the whole process (all threads).
 double cpuSec() {
@@ -144,11 +130,18 @@ json ptSummary(const Scene& scene, const PathTracerSettings& ps, const Transient
 
 }  // namespace
 
+void checkPathTracedRequest(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req) {
+    const double budget = ov.timeBudget.value_or(scene.desc.render.timeBudgetSec);
+    if (!(budget >= 0.0) || !std::isfinite(budget))
+        throw UserError("--time must be a finite number of seconds >= 0 (0 = no time budget)");
+    if (req.spp < 1) throw UserError("--spp must be >= 1");
+}
+
 void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req) {
+    checkPathTracedRequest(scene, ov, req);
     const PathTracerSettings ps = ptSettings(scene, ov, req.spp);
     const int64_t passes = ov.passes ? *ov.passes : (ov.timeBudget ? 0 : scene.desc.render.passes);
     const double budget = ov.timeBudget.value_or(scene.desc.render.timeBudgetSec);
-    if (budget < 0.0) throw UserError("--time must be >= 0");
     if (passes == 0 && budget == 0.0) std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
     TransientFilm film(scene.camera.width, scene.camera.height, scene.time);
     PathTracerStats st;
@@ -156,14 +149,13 @@ void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathT
     const bool tty = isatty(STDERR_FILENO) && !req.quiet;
     const double t0 = nowSec();
     {
-        SigintScope sigint;
         for (uint64_t pass = 1;; ++pass) {
-            if (gAbort) break;
+            if (interrupted()) break;
             if (passes > 0 && static_cast<int64_t>(pass) > passes) break;
             if (budget > 0.0 && nowSec() - t0 >= budget) break;
             const double tp = nowSec();
-            renderPathTracerPass(scene, ps, pass, film, &st, &gAbort);
-            if (gAbort) break;  // partial pass: the film stays per-tile consistent
+            renderPathTracerPass(scene, ps, pass, film, &st, &interruptFlag());
+            if (interrupted()) break;  // partial pass: the film stays per-tile consistent
             const double now = nowSec();
             passTimes.emplace_back(now - tp, now - t0);
             if (req.quiet) continue;
@@ -174,9 +166,11 @@ void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathT
                 std::fprintf(stderr, "pass %llu: %.3f s\n", static_cast<unsigned long long>(pass), now - tp);
         }
         if (tty) std::fprintf(stderr, "\n");
-        if (gInterrupts > 0 && !req.quiet)
-            std::fprintf(stderr, "interrupted: writing the %zu finished passes\n", passTimes.size());
+        if (interrupted() && !req.quiet)
+            std::fprintf(stderr, "interrupted by %s: writing the %zu finished passes\n", interruptName().c_str(),
+                         passTimes.size());
     }
+    const bool stoppedBySignal = interrupted();
     const double wall = nowSec() - t0;
     if (st.laserSamples > 0)
         std::fprintf(stderr, "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
@@ -185,14 +179,16 @@ void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathT
     const OutputReport rep = writeRenderOutputs(film, req, [&] {
         return ptSummary(scene, ps, film, req.opt, st, passTimes, wall);
     });
+    const double outside = checkEnergyInsideFilm(scene, film, req.opt.axis, ps.threads);
+    if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     const int frames = rep.framesWritten;
     if (!req.quiet)
         std::printf("path tracer: %zu passes x %d spp in %.2f s; wrote %d frames (%s, %s) to %s/frames, steady.exr, "
-                    "summary.json; %lld rejected samples\n",
+                    "summary.json; %lld rejected samples; %.2g%% of the energy outside the film\n",
                     passTimes.size(), ps.samplesPerPixel, wall, frames,
                     req.opt.axis == TimeAxis::Real ? "real time" : "unwarped",
                     req.opt.mode == EmissionMode::Delta ? "delta" : "continuous", req.out.c_str(),
-                    static_cast<long long>(film.stats.rejectedSamples.load()));
+                    static_cast<long long>(film.stats.rejectedSamples.load()), 100.0 * outside);
 }
 
 namespace {
@@ -231,7 +227,8 @@ void printReference(const std::string& path, const ReferenceInfo& i) {
 }
 
 void runReference(ReferenceCmd& c) {
-    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov);
+    InterruptScope interrupts;  // Ctrl-C and SIGTERM: the finished passes are written (marked interrupted)
+    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
     const std::string method = c.analytic ? "analytic-single-scattering" : c.method;
     ReferenceInfo want = describeScene(*scene);
     want.method = method;
@@ -245,7 +242,8 @@ void runReference(ReferenceCmd& c) {
         if (!c.ov.passes && !c.ov.timeBudget) throw UserError("a reference needs --passes N or --time SECONDS");
         job.passes = c.ov.passes.value_or(0);
         job.timeBudgetSec = c.ov.timeBudget.value_or(0.0);
-        if (job.passes < 0 || job.timeBudgetSec < 0.0) throw UserError("--passes and --time must be >= 0");
+        if (job.passes < 0 || !(job.timeBudgetSec >= 0.0) || !std::isfinite(job.timeBudgetSec))
+            throw UserError("--passes and --time must be >= 0");
         want.requestedPasses = job.passes;
         want.requestedTimeSec = job.timeBudgetSec;
         if (method == "pt") {
@@ -284,11 +282,11 @@ void runReference(ReferenceCmd& c) {
     if (c.analytic) {
         if (!c.quiet) std::fprintf(stderr, "single-scattering quadrature, %d x %d rays per pixel...\n", c.subpixels, c.subpixels);
         ref = singleScatteringReference(*scene, c.subpixels, c.ov.threads.value_or(0));
+        throwIfInterrupted("during the single-scattering quadrature");
     } else {
-        SigintScope sigint;
         double lastPrint = 0.0;
         const bool tty = isatty(STDERR_FILENO) && !c.quiet;
-        ref = renderReference(*scene, job, &gAbort, [&](int64_t passes, double elapsed) {
+        ref = renderReference(*scene, job, &interruptFlag(), [&](int64_t passes, double elapsed) {
             if (c.quiet) return;
             if (tty) {
                 std::fprintf(stderr, "\rreference: pass %lld, %.1f s ", static_cast<long long>(passes), elapsed);
@@ -298,13 +296,16 @@ void runReference(ReferenceCmd& c) {
             }
         });
         if (tty) std::fprintf(stderr, "\n");
-        if (gInterrupts > 0) std::fprintf(stderr, "interrupted: writing the %lld finished passes (marked interrupted)\n",
-                                          static_cast<long long>(ref.info.passes));
+        if (interrupted())
+            std::fprintf(stderr, "interrupted by %s: writing the %lld finished passes (marked interrupted)\n",
+                         interruptName().c_str(), static_cast<long long>(ref.info.passes));
+        if (interrupted() && ref.info.passes == 0) throwIfInterrupted("before the first pass finished");
     }
     writeReference(out, ref);
     writePngPreview(out + ".steady.png", ref.info.width, ref.info.height, ref.steady);
     std::printf("wrote ");
     printReference(out, ref.info);
+    if (interrupted()) exitCode() = exitCodeAfterInterrupt();
 }
 
 // ============================================================================================
@@ -423,15 +424,15 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
         res.rows.push_back(std::move(r));
     };
     for (uint64_t pass = 1;; ++pass) {
-        if (gAbort) break;
+        if (interrupted()) break;
         if (cx.passes > 0 && static_cast<int64_t>(pass) > cx.passes) break;
         if (byTime && elapsed >= cx.budget) break;
         const double t0 = nowSec(), c0 = cpuSec();
         if (res.driver) {
             if (!res.driver->runPass(pass)) break;
         } else {
-            renderPathTracerPass(cx.scene, ps, pass, *res.ptFilm, nullptr, &gAbort);
-            if (gAbort) break;
+            renderPathTracerPass(cx.scene, ps, pass, *res.ptFilm, nullptr, &interruptFlag());
+            if (interrupted()) break;
         }
         wall += nowSec() - t0;
         cpu += cpuSec() - c0;
@@ -584,6 +585,7 @@ void writeEqualTimeStrip(const std::string& path, const ConvergeContext& cx, con
 }
 
 void runConverge(ConvergeCmd& c) {
+    InterruptScope interrupts;  // Ctrl-C and SIGTERM: what was measured is written
     if (c.reference.empty()) throw UserError("--reference FILE is required (make one with `tpb reference`)");
     if (!c.ov.timeBudget && !c.ov.passes)
         throw UserError("converge needs a budget per method: --time SECONDS (or --passes N)");
@@ -602,7 +604,7 @@ void runConverge(ConvergeCmd& c) {
     adopt(c.ov.bins, ref.info.bins, "--bins");
     adopt(c.ov.maxDepth, ref.info.maxDepth, "--max-depth");
     if (!adopted.empty() && !c.quiet) std::printf("from the reference: %s\n", adopted.c_str());
-    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov);
+    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
     // An automatic film range is fitted by a pilot pass: take the reference's (same bins) so that
     // tiny differences of the fit do not make it incompatible.
     if (scene->desc.film.autoRange && scene->time.bins == ref.info.bins) {
@@ -627,23 +629,37 @@ void runConverge(ConvergeCmd& c) {
         std::printf("masking %lld pixels within %.3g px of the point/spot lights' images\n", static_cast<long long>(n),
                     c.maskLights);
     }
-    ensureWritableDir(c.out);
+    // Every method's settings are checked before the folder is touched.
+    if (c.method != "pt") {
+        DriverSettings ds = DriverSettings::fromScene(*scene);
+        c.ov.applyToSettings(ds);
+    }
+    OutputFiles files;
+    files.files = {"convergence.csv", "convergence.json", "convergence.gp"};
+    if (c.perFrame) files.files.push_back("convergence_frames.csv");
+    if (c.frames > 0) files.files.insert(files.files.end(), {"equal_time.png", "equal_time.csv"});
+    if (!c.noPlot)
+        files.files.insert(files.files.end(), {"convergence.svg", "convergence.png", "convergence_l1.svg",
+                                               "convergence_l1.png"});
+    const OutputFolder folder(c.out, "converge", files);
     std::vector<std::string> methods = c.method == "both" ? std::vector<std::string>{"beams", "pt"}
                                                           : std::vector<std::string>{c.method};
     std::vector<MethodResult> results;
     {
-        SigintScope sigint;
         for (const std::string& m : methods) {
-            if (gAbort) break;
+            if (interrupted()) break;
             if (!c.quiet)
                 std::printf("-- %s: %s\n", methodLabel(m).c_str(),
                             cx.budget > 0 ? fmt("%g s of rendering", cx.budget).c_str()
                                           : (std::to_string(cx.passes) + " passes").c_str());
             results.push_back(runMethod(cx, m));
         }
-        if (gInterrupts > 0) std::fprintf(stderr, "interrupted: writing what was measured\n");
+        if (interrupted()) std::fprintf(stderr, "interrupted by %s: writing what was measured\n", interruptName().c_str());
     }
-    if (results.empty() || results.front().rows.empty()) throw UserError("no pass completed: nothing to write");
+    if (results.empty() || results.front().rows.empty()) {
+        throwIfInterrupted("before the first pass finished");
+        throw UserError("no pass completed: nothing to write");
+    }
 
     // ---- files
     writeCsv(c.out + "/convergence.csv", results);
@@ -801,6 +817,7 @@ void runConverge(ConvergeCmd& c) {
     std::printf("wrote %s/convergence.csv, convergence.json, convergence.gp%s%s%s\n", c.out.c_str(),
                 plotted ? ", convergence{,_l1}.svg, convergence{,_l1}.png" : "", c.perFrame ? ", convergence_frames.csv" : "",
                 stripK.empty() ? "" : ", equal_time.png, equal_time.csv");
+    if (interrupted() && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
 }
 
 }  // namespace
@@ -815,10 +832,11 @@ void registerConverge(CLI::App& app) {
         cmd->add_option("-o,--out", c->out, "Reference file (default: ref/<scene>-<method>-<W>x<H>x<bins>-d<depth>.tpbref)");
         cmd->add_option("--method", c->method, "Renderer: pt (unbiased path tracer) | beams")
             ->check(CLI::IsMember({"pt", "beams"}));
-        cmd->add_option("--spp", c->spp, "Path tracer: camera paths per pixel per pass")->check(CLI::PositiveNumber);
+        cmd->add_option("--spp", c->spp, "Path tracer: camera paths per pixel per pass")
+            ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
         cmd->add_flag("--analytic-single-scattering", c->analytic,
                       "Quadrature of single scattering (one point light in an infinite medium, no shapes)");
-        cmd->add_option("--subpixels", c->subpixels, "Quadrature: N x N rays per pixel")->check(CLI::PositiveNumber);
+        cmd->add_option("--subpixels", c->subpixels, "Quadrature: N x N rays per pixel")->transform(flags::integer(1, 64, "N x N rays per pixel"));
         cmd->add_flag("--force", c->force, "Re-render even if the file exists with the same settings");
         cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
         c->ov.add(cmd);
@@ -842,24 +860,29 @@ void registerConverge(CLI::App& app) {
         cmd->add_option("--axis", c->axis, "Time axis of the volume error: real | unwarped")
             ->check(CLI::IsMember({"real", "unwarped"}));
         cmd->add_option("--checkpoints", c->checkpoints, "Geometric checkpoints from --first-checkpoint to the budget")
-            ->check(CLI::Range(1, 100000));
+            ->transform(flags::integer(1, 100000, "checkpoints per method"));
         cmd->add_option("--first-checkpoint", c->firstCheckpoint, "First geometric checkpoint, s")
-            ->check(CLI::PositiveNumber);
+            ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), true, "seconds"));
         cmd->add_option("--at", c->at, "Extra checkpoint times, s (reported by interpolation too), e.g. 10,60,300")
-            ->delimiter(',');
+            ->delimiter(',')
+            ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), true, "seconds"));
         cmd->add_option("--every-pass", c->everyPass, "Also record each of the first N passes")
-            ->check(CLI::NonNegativeNumber);
+            ->transform(flags::integer(0, INT_MAX, "passes"));
         cmd->add_flag("--per-frame", c->perFrame, "Also write the error of every frame at every checkpoint "
                                                   "(convergence_frames.csv)");
         cmd->add_option("--frames", c->frames, "Write equal_time.png: K frames per method (rows), same exposure")
-            ->check(CLI::NonNegativeNumber);
-        cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of equal_time.png, EV");
+            ->transform(flags::integer(0, 4096, "frames per row; 0 = no equal_time.png"));
+        cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of equal_time.png, EV")
+            ->check(flags::number(-64.0, 64.0, false, "EV"));
         cmd->add_flag("--strip-reference", c->stripReference, "Add the reference as the last row of equal_time.png");
-        cmd->add_option("--spp", c->spp, "Path tracer: camera paths per pixel per pass")->check(CLI::PositiveNumber);
+        cmd->add_option("--spp", c->spp, "Path tracer: camera paths per pixel per pass")
+            ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
         cmd->add_option("--mask-lights", c->maskLights,
                         "Leave out pixels within R pixels of a point/spot light's image from the errors")
-            ->check(CLI::NonNegativeNumber);
-        cmd->add_option("--targets", c->targets, "Errors for the time-to-reach report")->delimiter(',');
+            ->check(flags::number(0.0, 1e6, false, "pixels"));
+        cmd->add_option("--targets", c->targets, "Errors for the time-to-reach report")
+            ->delimiter(',')
+            ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), true, "relative errors"));
         cmd->add_flag("--no-plot", c->noPlot, "Do not run gnuplot (convergence.gp is still written)");
         cmd->add_flag("-q,--quiet", c->quiet, "Only the final report");
         c->ov.add(cmd);

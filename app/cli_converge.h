@@ -13,9 +13,14 @@ struct PathTracedRenderRequest : RenderOutputs {
     int spp = 1;  // camera paths per pixel per pass
 };
 
+// Checks what renderPathTraced will check, before anything is written (UserError).
+void checkPathTracedRequest(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req);
+
 // Renders with the unbiased path tracer (core/path_tracer.h): passes = --passes (or the scene's),
 // each `spp` paths per pixel, until --time if given; writes steady.exr/.png, frames/, strip.png and
-// summary.json ("method": "pt") into req.out. First Ctrl-C: stop and write; second: quit.
+// summary.json ("method": "pt") into req.out. The first Ctrl-C or SIGTERM abandons the pass in
+// progress and writes the finished ones; a second quits (cli_interrupt.h). The caller holds an
+// InterruptScope and has claimed req.out (OutputFolder).
 void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req);
 
 }  // namespace tpb::app

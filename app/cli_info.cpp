@@ -1,5 +1,6 @@
 // `tpb info`: what a scene contains, which stages will run and why, and the memory they need.
 #include "cli_common.h"
+#include "cli_interrupt.h"
 #include "commands.h"
 
 #include <cstdio>
@@ -28,6 +29,7 @@ const char* lightName(LightType t) {
 }
 
 void run(const std::string& path, const RenderOverrides& ov) {
+    InterruptScope interrupts;  // the pilot of an automatic range polls Ctrl-C/SIGTERM
     std::unique_ptr<Scene> s = loadAndBuild(path, ov);
     DriverSettings ds = DriverSettings::fromScene(*s);
     ov.applyToSettings(ds);

@@ -1,6 +1,7 @@
 // `tpb render`: headless progressive render to EXR frames + steady state + JSON summary.
 #include "cli_common.h"
 #include "cli_converge.h"
+#include "cli_interrupt.h"
 #include "commands.h"
 #include "error.h"
 #include "film_export.h"
@@ -9,22 +10,13 @@
 
 #include <nlohmann/json.hpp>
 
-#include <csignal>
+#include <climits>
 #include <cstdio>
 #include <unistd.h>
 
 namespace tpb::app {
 
 namespace {
-
-std::atomic<Driver*> gDriver{nullptr};
-std::atomic<int> gInterrupts{0};
-
-void onSigint(int) {
-    // First Ctrl-C: finish the current pass and write what has been accumulated. Second: quit now.
-    if (gInterrupts.fetch_add(1) >= 1) _exit(130);
-    if (Driver* d = gDriver.load()) d->requestStop();
-}
 
 struct RenderCmd {
     std::string scene, out = "out";
@@ -80,16 +72,20 @@ nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOp
     return j;
 }
 
-void run(RenderCmd& c) {
-    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov);
-    ensureWritableDir(c.out);
+// Flags that contradict each other; checked before anything is loaded or written.
+void checkFlagConflicts(const RenderCmd& c) {
+    if (c.unwarp && c.realTime)
+        throw UserError("--unwarp and --real-time contradict each other: give one of them (frames are in real time "
+                        "unless --unwarp or the scene's render.unwarp asks for unwarped time)");
+    if (c.continuous && c.delta)
+        throw UserError("--continuous and --delta contradict each other: give one of them (frames are for a delta "
+                        "pulse unless --continuous or the scene's render.emission asks for continuous emission)");
+}
 
-    // Geometry/camera check before any photon is traced.
-    const std::vector<float> preview = renderPreview(*scene, c.ov.threads.value_or(0));
-    writeExr(c.out + "/preview.exr", scene->camera.width, scene->camera.height, preview);
-    writePngPreview(c.out + "/preview.png", scene->camera.width, scene->camera.height, preview);
-    if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
-    if (c.previewOnly) return;
+void run(RenderCmd& c) {
+    InterruptScope interrupts;  // Ctrl-C and SIGTERM, from the start (the pilot polls them too)
+    checkFlagConflicts(c);      // (each flag's range was checked when the command line was parsed)
+    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
 
     ExportOptions opt;
     opt.axis = (scene->desc.render.unwarp || c.unwarp) && !c.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
@@ -104,22 +100,40 @@ void run(RenderCmd& c) {
     outputs.quiet = c.quiet;
     outputs.strip = c.strip;
     outputs.stripEv = c.stripEv;
-    warnIfOutputsMayNotFit(*scene, outputs);
+    outputs.spp = c.spp;
+
+    // Every setting is resolved and checked before the first file is written (no preview.exr is left
+    // behind by a bad --alpha or by photons that would not fit in memory).
+    DriverSettings ds = DriverSettings::fromScene(*scene);
+    c.ov.applyToSettings(ds);
+    if (c.method == "pt") checkPathTracedRequest(*scene, c.ov, outputs);
+
+    // The folder is this render's from here on: locked, the previous render's outputs removed.
+    const OutputFolder folder(c.out, "render", renderOutputFiles(outputs, scene->time.bins));
+    if (!c.quiet && !folder.removed().empty())
+        std::printf("removed %zu files of an earlier render in %s (listed in its manifest)\n", folder.removed().size(),
+                    c.out.c_str());
+
+    // Geometry/camera check before any photon is traced.
+    const std::vector<float> preview = renderPreview(*scene, ds.threads);
+    const double tw = nowSec();
+    writeExr(c.out + "/preview.exr", scene->camera.width, scene->camera.height, preview);
+    const double previewExrSec = nowSec() - tw;
+    writePngPreview(c.out + "/preview.png", scene->camera.width, scene->camera.height, preview);
+    if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
+    if (c.previewOnly) return;
+    reportPlannedOutputs(*scene, outputs, previewExrSec);
+
     if (c.method == "pt") {  // same outputs, rendered by the path tracer (cli_converge.cpp)
-        outputs.spp = c.spp;
         renderPathTraced(*scene, c.ov, outputs);
         return;
     }
 
-    DriverSettings ds = DriverSettings::fromScene(*scene);
-    c.ov.applyToSettings(ds);
     if (ds.passes == 0 && ds.timeBudgetSec == 0.0)
         std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
     Driver drv(*scene, ds);
 
     const bool tty = isatty(STDERR_FILENO) && !c.quiet;
-    gDriver = &drv;
-    std::signal(SIGINT, onSigint);
     const double t0 = nowSec();
     drv.start([&](const PassStats& p) {
         if (c.quiet) return;
@@ -138,9 +152,11 @@ void run(RenderCmd& c) {
                          p.beamRadius, static_cast<long long>(p.beams), p.passSec);
         }
     });
+    // After start() (which clears a stop request): a signal from before is passed on here, a later
+    // one by the handler.
+    setInterruptDriver(&drv);
     drv.wait();
-    gDriver = nullptr;
-    std::signal(SIGINT, SIG_DFL);
+    setInterruptDriver(nullptr);
     if (tty) std::fprintf(stderr, "\n");
     const double wall = nowSec() - t0;
     if (drv.failure()) {
@@ -156,19 +172,23 @@ void run(RenderCmd& c) {
             exitCode() = 1;
         }
     }
-    if (gInterrupts > 0 && !c.quiet) std::fprintf(stderr, "interrupted: writing the %llu finished passes\n",
-                                                  static_cast<unsigned long long>(drv.completedPasses()));
+    const bool stoppedBySignal = interrupted();
+    if (stoppedBySignal && !c.quiet)
+        std::fprintf(stderr, "interrupted by %s: writing the %llu finished passes\n", interruptName().c_str(),
+                     static_cast<unsigned long long>(drv.completedPasses()));
 
     const OutputReport rep =
         writeRenderOutputs(drv.film(), outputs, [&] { return summaryJson(*scene, drv, opt, wall); });
+    const double outside = checkEnergyInsideFilm(*scene, drv.film(), opt.axis, ds.threads);
+    if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     const int frames = rep.framesWritten;
     if (!c.quiet) {
         const FilmStats& fs = drv.film().stats;
         std::printf("%llu passes in %.2f s; wrote %d frames (%s, %s) to %s/frames, steady.exr, summary.json; "
-                    "%lld rejected samples\n",
+                    "%lld rejected samples; %.2g%% of the energy outside the film\n",
                     static_cast<unsigned long long>(drv.completedPasses()), wall, frames,
                     opt.axis == TimeAxis::Real ? "real time" : "unwarped", opt.mode == EmissionMode::Delta ? "delta" : "continuous",
-                    c.out.c_str(), static_cast<long long>(fs.rejectedSamples.load()));
+                    c.out.c_str(), static_cast<long long>(fs.rejectedSamples.load()), 100.0 * outside);
     }
 }
 
@@ -179,20 +199,25 @@ void registerRender(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand("render", "Render a scene headless: preview.exr, EXR frames per time bin, "
                                                  "steady.exr and summary.json");
     cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
-    cmd->add_option("-o,--out", c->out, "Output folder (created if needed)");
+    cmd->add_option("-o,--out", c->out, "Output folder (created if needed; locked while rendering; the outputs of "
+                                        "an earlier render in it are replaced, other files are kept)");
     c->ov.add(cmd);
     cmd->add_flag("--unwarp", c->unwarp, "Frames in camera-unwarped time (camera path excluded)");
     cmd->add_flag("--real-time", c->realTime, "Frames in real time (camera path included; the default)");
     cmd->add_flag("--continuous", c->continuous, "Frames for continuous emission (running integral of the pulse response)");
     cmd->add_flag("--delta", c->delta, "Frames for a delta pulse (the default)");
     cmd->add_flag("--half", c->half, "Write half-float EXR frames");
-    cmd->add_option("--frame-step", c->frameStep, "Write every K-th frame")->check(CLI::PositiveNumber);
+    cmd->add_option("--frame-step", c->frameStep, "Write every K-th frame")
+        ->transform(flags::integer(1, INT_MAX, "1 = every frame"));
     cmd->add_flag("--no-frames", c->noFrames, "Do not write per-bin frames");
-    cmd->add_option("--strip", c->strip, "Frames in strip.png (PNG overview of the time axis; 0 = none)");
-    cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of strip.png in EV (it is auto-exposed first)");
+    cmd->add_option("--strip", c->strip, "Frames in strip.png (PNG overview of the time axis; 0 = none)")
+        ->transform(flags::integer(0, 4096, "frames side by side; 0 = no strip.png"));
+    cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of strip.png in EV (it is auto-exposed first)")
+        ->check(flags::number(-64.0, 64.0, false, "EV"));
     cmd->add_option("--method", c->method, "Renderer: beams (progressive photon beams) | pt (unbiased path tracer)")
         ->check(CLI::IsMember({"beams", "pt"}));
-    cmd->add_option("--spp", c->spp, "--method pt: camera paths per pixel per pass")->check(CLI::PositiveNumber);
+    cmd->add_option("--spp", c->spp, "--method pt: camera paths per pixel per pass")
+        ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
     cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
     cmd->callback([c] { run(*c); });

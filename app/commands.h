@@ -10,8 +10,10 @@ void registerBench(CLI::App& app);
 void registerConverge(CLI::App& app);  // app/cli_converge.cpp: converge and reference
 void registerView(CLI::App& app);  // app/view_*.cpp (only when built with the viewer)
 
-// Exit codes: 0 success, 1 internal failure, 2 user error (bad scene, bad flag, unwritable output),
-// 130 interrupted before anything could be written.
+// Exit codes: 0 success, 1 internal failure, 2 user error (bad scene, bad flag, unwritable or locked
+// output, an all-black film), 128 + the signal (130 Ctrl-C, 143 SIGTERM) when interrupted before
+// anything could be written or by a second signal, 143 after a first SIGTERM whose finished work was
+// written (cli_interrupt.h).
 inline constexpr int kExitUserError = 2;
 
 }  // namespace tpb::app

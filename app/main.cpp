@@ -1,4 +1,5 @@
 // tpb: Transient Photon Beams. `tpb --help` lists the subcommands; `tpb <cmd> --help` each one's flags.
+#include "cli_interrupt.h"
 #include "commands.h"
 #include "error.h"
 
@@ -17,8 +18,18 @@ int main(int argc, char** argv) {
 #endif
     try {
         app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e) == 0 ? 0 : tpb::app::kExitUserError;
+        // A bad flag (its range was checked while parsing, app/cli_common.h flags::): nothing ran.
+        if (e.get_exit_code() == 0) return app.exit(e);
+        std::fprintf(stderr, "error: %s\nRun with --help for the flags and their ranges.\n", e.what());
+        return tpb::app::kExitUserError;
+    } catch (const tpb::app::Interrupted& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return e.exitCode;
     } catch (const tpb::UserError& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return tpb::app::kExitUserError;

@@ -35,20 +35,26 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
         return;
     }
     if (isBlack(L)) return;
-    const OutsideFilm outReal = splatTime(time, L, kappa, s0, s1, aReal, bReal,
-                                          [&](int k, const Color& c) { acc.add(TimeAxis::Real, k, c); });
-    const OutsideFilm outUnw = splatTime(time, L, kappa, s0, s1, aUnw, bUnw,
-                                         [&](int k, const Color& c) { acc.add(TimeAxis::Unwarped, k, c); });
+    // What lands in the bins is summed as it lands (exactly zero when nothing does, which the
+    // all-black-film check relies on), what falls outside comes back split by side.
+    Color binned[2] = {Color(0.0), Color(0.0)};
+    const OutsideFilm outReal = splatTime(time, L, kappa, s0, s1, aReal, bReal, [&](int k, const Color& c) {
+        acc.add(TimeAxis::Real, k, c);
+        binned[0] += c;
+    });
+    const OutsideFilm outUnw = splatTime(time, L, kappa, s0, s1, aUnw, bUnw, [&](int k, const Color& c) {
+        acc.add(TimeAxis::Unwarped, k, c);
+        binned[1] += c;
+    });
     acc.addSteady(L);
     acc.addOutside(TimeAxis::Real, outReal);
     acc.addOutside(TimeAxis::Unwarped, outUnw);
-    const double lum = luminance(L);
     const OutsideFilm* outs[2] = {&outReal, &outUnw};
     for (int a = 0; a < 2; ++a) {
-        const double before = luminance(outs[a]->before), outside = before + luminance(outs[a]->after);
+        const double before = luminance(outs[a]->before);
         tally.before[a] += before;
-        tally.outside[a] += outside;
-        tally.inside[a] += std::max(lum - outside, 0.0);
+        tally.outside[a] += before + luminance(outs[a]->after);
+        tally.inside[a] += luminance(binned[a]);
     }
 }
 

@@ -83,6 +83,11 @@ public:
 
     JsonValue parseDocument() {
         if (s_.compare(0, 3, "\xEF\xBB\xBF") == 0) pos_ = 3;  // UTF-8 byte order mark
+        if (const char* encoding = wideEncoding())
+            fail(1, std::string("the file is ") + encoding +
+                        " text, but scene files must be UTF-8; convert it (e.g. iconv -f " +
+                        (std::string(encoding).rfind("UTF-32", 0) == 0 ? "UTF-32" : "UTF-16") +
+                        " -t UTF-8 in.json > out.json) or save it as UTF-8 in the editor");
         skipWhitespace();
         if (atEnd()) fail(line_, "the file is empty: expected a JSON value");
         JsonValue v = parseValue(0);
@@ -97,6 +102,23 @@ private:
     const std::string& file_;
     size_t pos_ = 0;
     int line_ = 1;
+
+    // Editors on Windows often save "Unicode" text as UTF-16 (or, rarely, UTF-32), with or without
+    // a byte order mark. JSON text here is UTF-8, and such a file would otherwise be reported as an
+    // "unexpected byte 0xFF" or 0x00 that says nothing about the fix. A BOM, or a NUL in the first
+    // two bytes (a scene starts with an ASCII character, "{" or whitespace), identifies them.
+    const char* wideEncoding() const {
+        const auto at = [&](size_t i) { return i < s_.size() ? static_cast<unsigned char>(s_[i]) : 0x100u; };
+        if (at(0) == 0xFF && at(1) == 0xFE && at(2) == 0 && at(3) == 0) return "UTF-32 (little-endian)";
+        if (at(0) == 0 && at(1) == 0 && at(2) == 0xFE && at(3) == 0xFF) return "UTF-32 (big-endian)";
+        if (at(0) == 0xFF && at(1) == 0xFE) return "UTF-16 (little-endian)";
+        if (at(0) == 0xFE && at(1) == 0xFF) return "UTF-16 (big-endian)";
+        if (s_.size() >= 4 && at(0) != 0 && at(1) == 0 && at(2) == 0 && at(3) == 0) return "UTF-32 (little-endian)";
+        if (s_.size() >= 4 && at(0) == 0 && at(1) == 0 && at(2) == 0 && at(3) != 0) return "UTF-32 (big-endian)";
+        if (s_.size() >= 2 && at(0) != 0 && at(1) == 0) return "UTF-16 (little-endian)";
+        if (s_.size() >= 2 && at(0) == 0 && at(1) != 0) return "UTF-16 (big-endian)";
+        return nullptr;
+    }
 
     [[noreturn]] void fail(int line, const std::string& message) const {
         throw UserError(file_, line, "", message);

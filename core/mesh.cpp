@@ -9,15 +9,19 @@
 #endif
 #include "mesh.h"
 #include "error.h"
+#include "scene_desc.h"
 
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +30,8 @@
 #endif
 
 namespace tpb {
+
+static_assert(kMaxSceneCoordinateM == 1e9, "the messages below say 1e9 m");
 
 Bounds3 TriangleMesh::bounds() const {
     // Over the referenced vertices only: unused vertices do not make the mesh bigger.
@@ -38,7 +44,16 @@ Bounds3 TriangleMesh::bounds() const {
 }
 
 void TriangleMesh::transform(const Mat4& objectToWorld) {
-    for (Vec3& p : positions) p = Vec3(objectToWorld * glm::dvec4(p, 1.0));
+    for (size_t i = 0; i < positions.size(); ++i) {
+        Vec3& p = positions[i];
+        p = Vec3(objectToWorld * glm::dvec4(p, 1.0));
+        if (!(std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) <= kMaxSceneCoordinateM)) {
+            char at[96];
+            std::snprintf(at, sizeof at, "(%.3g, %.3g, %.3g)", p.x, p.y, p.z);
+            throw UserError(std::string("the shape's \"transform\" moves a vertex of the mesh to ") + at +
+                            ", beyond +-1e9 m (the limit of scene coordinates); use a smaller scale or translation");
+        }
+    }
 
     const glm::dmat3 linear(objectToWorld);
     const double det = glm::determinant(linear);
@@ -103,6 +118,52 @@ bool isDegenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
     throw UserError(path, line, std::string(), message);
 }
 
+// tinyobj reads a coordinate it cannot parse ("nan", "inf", "1,5", garbage) as 0 and a missing one
+// as 0, so a broken vertex silently moves to the origin (and a triangle of such vertices was then
+// reported as "degenerate"). Check the first three coordinates of every "v" line first: numbers,
+// finite as doubles and within the scene's coordinate limit, with the line they are on.
+void checkVertexLines(const std::string& path, const std::string& text) {
+    int line = 0, vertex = 0;
+    size_t pos = 0;
+    while (pos < text.size()) {
+        ++line;
+        size_t end = text.find('\n', pos);
+        if (end == std::string::npos) end = text.size();
+        const char* p = text.data() + pos;
+        const char* const e = text.data() + end;
+        pos = end + 1;
+        while (p < e && (*p == ' ' || *p == '\t')) ++p;
+        if (e - p < 2 || p[0] != 'v' || (p[1] != ' ' && p[1] != '\t')) continue;
+        ++vertex;
+        p += 2;
+        for (int k = 0; k < 3; ++k) {
+            while (p < e && (*p == ' ' || *p == '\t' || *p == '\r')) ++p;
+            const char* t = p;
+            while (p < e && *p != ' ' && *p != '\t' && *p != '\r') ++p;
+            const std::string token(t, p);
+            const std::string where = "vertex " + std::to_string(vertex) + " (\"v\" line " + std::to_string(line) + ")";
+            if (token.empty())
+                objError(path, line, where + " has " + std::to_string(k) + " coordinates, expected x y z");
+            char* stop = nullptr;
+            errno = 0;
+            const double v = std::strtod(token.c_str(), &stop);
+            if (stop != token.c_str() + token.size())
+                objError(path, line, where + " coordinate \"" + token + "\" is not a number");
+            // strtod reads "nan" and "inf" literals, and 1e999 overflows to inf.
+            if (!std::isfinite(v)) {
+                const bool literal = token.find_first_of("nNiI") != std::string::npos;
+                objError(path, line, where + " has a non-finite coordinate (" + token +
+                                         (literal ? "" : ", beyond the range of a double") +
+                                         "); coordinates must be finite and within +-1e9 m");
+            }
+            if (!(std::fabs(v) <= kMaxSceneCoordinateM))
+                objError(path, line,
+                         where + " coordinate " + token + " is beyond +-1e9 m, the limit of scene coordinates; "
+                                 "check the file's units, or scale the mesh with the shape's \"transform\"");
+        }
+    }
+}
+
 }  // namespace
 
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
@@ -114,9 +175,14 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
         objError(path, 0, "OBJ file not found");
     if (fs::is_directory(path, ec))
         objError(path, 0, "is a folder, expected an OBJ file");
-    std::ifstream in(path, std::ios::binary);
-    if (!in)
+    std::ifstream file(path, std::ios::binary);
+    if (!file)
         objError(path, 0, std::string("cannot open OBJ file: ") + std::strerror(errno));
+    std::ostringstream text;
+    text << file.rdbuf();
+    if (file.bad()) objError(path, 0, "read error while loading the OBJ file");
+    checkVertexLines(path, text.str());
+    std::istringstream in(text.str());
 
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;

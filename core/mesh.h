@@ -12,12 +12,15 @@ struct TriangleMesh {
     std::vector<Vec3> normals;             // per vertex, may be empty (then flat shading)
     std::vector<glm::uvec3> triangles;     // vertex indices
     Bounds3 bounds() const;
-    void transform(const Mat4& objectToWorld);  // positions and normals (inverse transpose)
+    // Positions and normals (inverse transpose). Throws UserError (no file:line: the caller adds
+    // the shape's) when a vertex lands beyond +-kMaxSceneCoordinateM (scene_desc.h).
+    void transform(const Mat4& objectToWorld);
     void flip();                                // reverse winding and normals
 };
 
 // Loads a Wavefront OBJ file (triangulating polygons). Throws UserError naming the file on a
-// missing, unreadable or corrupt file, or a mesh without triangles. Degenerate (zero-area)
+// missing, unreadable or corrupt file (also a vertex coordinate that is not a finite number or lies
+// beyond +-kMaxSceneCoordinateM, with its line), or a mesh without triangles. Degenerate (zero-area)
 // triangles are dropped and counted in `droppedDegenerate` if non-null.
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate = nullptr);
 

@@ -113,7 +113,12 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
                 } catch (const UserError& e) {  // name the scene's key too: "scene.json:8: shapes[0].file: x.obj:4: ..."
                     throw UserError(d.where(key + ".file") + key + ".file: " + e.what());
                 }
-                m.transform(sd.transform);
+                try {
+                    m.transform(sd.transform);
+                } catch (const UserError& e) {  // a vertex beyond the coordinate limit
+                    const std::string k = d.locs.count(key + ".transform") ? key + ".transform" : key + ".file";
+                    throw UserError(d.where(k) + k + ": " + sd.meshPath + ": " + e.what());
+                }
                 if (sd.flipNormals) m.flip();
                 s->geometry.addMesh(m, id);
                 break;

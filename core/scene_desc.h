@@ -10,6 +10,21 @@
 
 namespace tpb {
 
+// Largest coordinate (m) a scene may use: positions, corners, edges, sizes and radii in the scene
+// file, and mesh vertices after their transform, must lie within +-kMaxSceneCoordinateM. Far beyond
+// any scene tpb is meant for (a million km), and small enough that no length, squared length or
+// optical path length between two points of the scene can overflow (1e308 would: a camera there
+// used to be reported as "up parallel to the viewing direction").
+inline constexpr double kMaxSceneCoordinateM = 1e9;
+
+// Kernel radii against the scene's bounding diagonal. The cost of a pass grows with the radius
+// (every camera ray gathers the beams within it: at a radius of the order of the diagonal every ray
+// meets every beam, rays x beams, and the automatic-range pilot alone took minutes); typical radii
+// are 0.1% - 2% of the diagonal. Larger than kMaxRadiusFraction is refused, larger than
+// kSlowRadiusFraction warned about (render.radius(_relative), surface_radius(_relative), --radius).
+inline constexpr double kMaxRadiusFraction = 0.25;
+inline constexpr double kSlowRadiusFraction = 0.05;
+
 struct SourceLoc {
     std::string file;
     int line = 0;

@@ -6,7 +6,9 @@
 // not listed below is an error (with the closest allowed key suggested), as is a value of the wrong
 // type or out of range. Every key is optional unless marked (required); defaults are in brackets.
 // Colors and spectra ("power", "albedo", "sigma_s", ...) are a number (grey) or an [r, g, b] array.
-// Vectors are [x, y, z] arrays; directions are normalized and must not be zero.
+// Vectors are [x, y, z] arrays; directions are normalized and must not be zero. Positions, edges,
+// sizes, radii and translations are meters within +-1e9 (kMaxSceneCoordinateM), and so are mesh
+// vertices after the shape's transform.
 // Times are optical path length (OPL) in meters: each time key exists as "<name>_m" and
 // "<name>_ns" (ns are converted with c = 0.299792458 m/ns); giving both is an error.
 //
@@ -58,7 +60,9 @@
 //   "render": {
 //     "photons_per_pass": 20000,         // integer >= 1
 //     "radius": 0.01 | "radius_relative": 0.01,  // volume kernel radius, > 0: absolute (m) or a
-//                                                // fraction of the scene diagonal [relative 0.01]
+//                                                // fraction of the scene diagonal [relative 0.01];
+//                                                // at most 0.25 of the diagonal (a wider kernel makes a
+//                                                // pass cost rays x beams), warned about above 0.05
 //     "surface_radius": 0.02 | "surface_radius_relative": 0.02,  // surface photons [relative 0.02]
 //                                        // the two radii share one convention: mixing absolute and
 //                                        // relative is an error; giving one of them sets it for both
@@ -67,7 +71,7 @@
 //     "time_budget_s": 0,                // >= 0, 0 = none
 //     "max_depth": 16,                   // integer >= 1
 //     "seed": 1,                         // integer in [0, 2^64)
-//     "threads": 0,                      // integer >= 0, 0 = all cores
+//     "threads": 0,                      // integer >= 0, 0 = all cores; above 4 x the cores: capped
 //     "emission": "delta",               // "delta" | "continuous"
 //     "unwarp": false,                   // remove the camera-to-scene travel time
 //     "time_profile": "exact",           // "exact" | "uniform"
@@ -105,6 +109,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <thread>
 #include <unistd.h>
 
 namespace tpb {
@@ -151,6 +156,20 @@ std::string suggestion(std::string_view word, const std::vector<std::string>& ca
     const size_t longest = best ? std::max(word.size(), best->size()) : 0;
     if (!best || bestD > 2 || 2 * bestD >= longest) return "";
     return " (did you mean \"" + *best + "\"?)";
+}
+
+// 1e+09 -> "1e9", 0.25 -> "0.25": numbers in messages, without printf's padding.
+std::string shortNumber(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    std::string s = buf;
+    const size_t e = s.find("e+");
+    if (e != std::string::npos) {
+        size_t digits = e + 2;
+        while (digits + 1 < s.size() && s[digits] == '0') ++digits;
+        s = s.substr(0, e + 1) + s.substr(digits);
+    }
+    return s;
 }
 
 bool isPlainInteger(const std::string& lit) {
@@ -202,6 +221,12 @@ public:
         if (ok) return;
         const JsonValue* v = obj_.find(key);
         fail(key, std::string(key) + " " + rule + (v ? " (got " + v->brief() + ")" : ""));
+    }
+    // A warning about `key`, "file:line: key: message" (at this object's line when not written).
+    void warnAbout(std::string_view key, const std::string& message) const {
+        const JsonMember* m = obj_.findMember(key);
+        ctx_.desc.warnings.push_back(ctx_.file + ":" + std::to_string(m ? m->value.line : obj_.line) + ": " +
+                                     pathOf(key) + ": " + message);
     }
     [[noreturn]] void wrongType(std::string_view key, const std::string& expected) const {
         const JsonValue* v = obj_.find(key);
@@ -264,13 +289,37 @@ public:
     }
     Vec3 vec3(std::string_view key, const Vec3& def) { return vec3(key).value_or(def); }
 
-    // A non-zero vector, normalized.
+    // A position, edge or extent in meters: every coordinate within +-kMaxSceneCoordinateM.
+    std::optional<Vec3> point(std::string_view key) {
+        std::optional<Vec3> p = vec3(key);
+        if (p) checkCoordinates(key, {p->x, p->y, p->z});
+        return p;
+    }
+    Vec3 point(std::string_view key, const Vec3& def) { return point(key).value_or(def); }
+    // A length in meters (a radius): at most kMaxSceneCoordinateM.
+    double length(std::string_view key, double def) {
+        const double v = number(key, def);
+        checkCoordinates(key, {v});
+        return v;
+    }
+    void checkCoordinates(std::string_view key, std::initializer_list<double> values) const {
+        for (double v : values)
+            if (!(std::fabs(v) <= kMaxSceneCoordinateM)) {
+                const JsonValue* j = obj_.find(key);
+                fail(key, std::string(key) + " is too far out: scene coordinates and sizes must be within +-" +
+                              shortNumber(kMaxSceneCoordinateM) + " m" + (j ? " (got " + j->brief() + ")" : "") +
+                              "; check the units (meters) and the exponent");
+            }
+    }
+
+    // A non-zero vector, normalized. Scaled by its largest component first, so that a huge but
+    // finite vector ([1e308, 1e308, 0]) is a direction and not an overflow to a "zero vector".
     std::optional<Vec3> direction(std::string_view key) {
         std::optional<Vec3> d = vec3(key);
         if (!d) return d;
-        const double len = glm::length(*d);
-        check(len > 0.0 && std::isfinite(len), key, "must not be a zero vector");
-        return *d / len;
+        const double largest = std::max({std::fabs(d->x), std::fabs(d->y), std::fabs(d->z)});
+        check(largest > 0.0, key, "must not be a zero vector");
+        return glm::normalize(*d / largest);
     }
 
     // An integral number in [lo, hi].
@@ -369,8 +418,8 @@ bool nonNegative(const Color& c) { return c.x >= 0 && c.y >= 0 && c.z >= 0; }
 
 void readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
     Bag b(ctx, obj, "camera", "the camera");
-    cam.position = b.vec3("position", cam.position);
-    cam.lookAt = b.vec3("look_at", cam.lookAt);
+    cam.position = b.point("position", cam.position);
+    cam.lookAt = b.point("look_at", cam.lookAt);
     if (auto up = b.direction("up")) cam.up = *up;
     if (auto fov = b.number("fov")) {
         cam.fovYDeg = *fov;
@@ -495,7 +544,7 @@ int readReference(Bag& b, std::string_view key, const std::map<std::string, int>
 // T * R * S, or a row-major matrix.
 Mat4 readTransform(Context& ctx, const JsonValue& obj, const std::string& path) {
     Bag b(ctx, obj, path, "a transform");
-    const std::optional<Vec3> translate = b.vec3("translate");
+    const std::optional<Vec3> translate = b.point("translate");
     Vec3 scale(1.0);
     if (const JsonValue* s = b.get("scale")) {
         if (!s->isNumber() && !(s->isArray() && s->items.size() == 3 && s->items[0].isNumber() &&
@@ -504,6 +553,7 @@ Mat4 readTransform(Context& ctx, const JsonValue& obj, const std::string& path) 
         scale = s->isNumber() ? Vec3(s->number) : Vec3(s->items[0].number, s->items[1].number, s->items[2].number);
         b.check(scale.x > 0 && scale.y > 0 && scale.z > 0, "scale",
                 "must be > 0 in every axis (mirroring is not supported; use flip_normals)");
+        b.checkCoordinates("scale", {scale.x, scale.y, scale.z});
     }
     Mat4 rotation(1.0);
     if (const JsonValue* r = b.get("rotate")) {
@@ -534,6 +584,7 @@ Mat4 readTransform(Context& ctx, const JsonValue& obj, const std::string& path) 
         bool ok = m->isArray() && m->items.size() == 16;
         for (size_t i = 0; ok && i < 16; ++i) ok = m->items[i].isNumber();
         if (!ok) b.wrongType("matrix", "an array of 16 numbers (row-major)");
+        for (size_t i = 0; i < 16; ++i) b.checkCoordinates("matrix", {m->items[i].number});
         Mat4 M(1.0);
         for (int r = 0; r < 4; ++r)
             for (int c = 0; c < 4; ++c) M[c][r] = m->items[r * 4 + c].number;  // glm is column-major
@@ -547,6 +598,37 @@ Mat4 readTransform(Context& ctx, const JsonValue& obj, const std::string& path) 
     }
     const Mat4 T = glm::translate(Mat4(1.0), translate.value_or(Vec3(0.0)));
     return T * rotation * glm::scale(Mat4(1.0), scale);
+}
+
+// The mesh file must be a readable regular file. A folder is the likeliest near miss (the mesh's
+// folder instead of the file in it): say so, and name the OBJ files it holds.
+void checkMeshPath(const Bag& b, const std::string& written, const std::string& resolved) {
+    namespace fs = std::filesystem;
+    const std::string resolvedNote =
+        fs::path(written).is_relative() ? " (\"" + written + "\" resolved against the scene's folder)" : "";
+    std::error_code ec;
+    const fs::file_status st = fs::status(resolved, ec);
+    if (fs::is_regular_file(st)) return;
+    if (fs::is_directory(st)) {
+        std::vector<std::string> objs;
+        for (const fs::directory_entry& e : fs::directory_iterator(resolved, ec)) {
+            std::string ext = e.path().extension().string();
+            std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+            if (ext == ".obj") objs.push_back((fs::path(written) / e.path().filename()).generic_string());
+        }
+        std::sort(objs.begin(), objs.end());
+        std::string hint = "; \"file\" must name the OBJ file itself";
+        if (!objs.empty()) {
+            hint += ", e.g. \"" + objs.front() + "\"";
+            if (objs.size() > 1) hint += " (the folder holds " + std::to_string(objs.size()) + " .obj files)";
+        } else {
+            hint += " (the folder holds no .obj file)";
+        }
+        b.fail("file", "mesh file " + resolved + " is a folder, not a file" + resolvedNote + hint);
+    }
+    if (fs::exists(st))
+        b.fail("file", "mesh file " + resolved + " is not a regular file (a device, socket or pipe)" + resolvedNote);
+    b.fail("file", "mesh file not found: " + resolved + resolvedNote);
 }
 
 struct Names {
@@ -573,38 +655,43 @@ void readShape(Context& ctx, const JsonValue& obj, const std::string& path, cons
             std::filesystem::path p(f.text);
             if (p.is_relative()) p = std::filesystem::path(ctx.desc.dir) / p;
             s.meshPath = p.lexically_normal().string();
-            std::error_code ec;
-            if (!std::filesystem::is_regular_file(s.meshPath, ec))
-                b.fail("file", "mesh file not found: " + s.meshPath +
-                                   (std::filesystem::path(f.text).is_relative()
-                                        ? " (\"" + f.text + "\" resolved against the scene's folder)"
-                                        : ""));
+            checkMeshPath(b, f.text, s.meshPath);
             break;
         }
         case ShapeType::Sphere:
             b.setWhat("a sphere");
-            s.center = b.vec3("center", s.center);
-            s.radius = b.number("radius", s.radius);
+            s.center = b.point("center", s.center);
+            s.radius = b.length("radius", s.radius);
             b.check(s.radius > 0.0, "radius", "must be > 0");
             break;
         case ShapeType::Quad:
             b.setWhat("a quad");
-            s.corner = b.vec3("corner", s.corner);
-            s.edgeU = b.vec3("edge_u", s.edgeU);
-            s.edgeV = b.vec3("edge_v", s.edgeV);
+            s.corner = b.point("corner", s.corner);
+            s.edgeU = b.point("edge_u", s.edgeU);
+            s.edgeV = b.point("edge_v", s.edgeV);
             if (glm::length(glm::cross(s.edgeU, s.edgeV)) == 0.0)
                 b.fail(b.has("edge_v") ? "edge_v" : "edge_u", "edge_u and edge_v must be non-zero and not parallel");
             break;
         case ShapeType::Box:
             b.setWhat("a box");
-            s.boxMin = b.vec3("min", s.boxMin);
-            s.boxMax = b.vec3("max", s.boxMax);
+            s.boxMin = b.point("min", s.boxMin);
+            s.boxMax = b.point("max", s.boxMax);
             if (!(s.boxMin.x < s.boxMax.x && s.boxMin.y < s.boxMax.y && s.boxMin.z < s.boxMax.z))
                 b.fail(b.has("max") ? "max" : "min", "min must be < max in every axis");
             break;
     }
     if (s.type == ShapeType::Mesh || s.type == ShapeType::Box)
         if (const JsonValue* t = objectAt(b, "transform")) s.transform = readTransform(ctx, *t, b.pathOf("transform"));
+    if (s.type == ShapeType::Box)  // (a mesh's vertices are checked after loading, core/mesh.h)
+        for (int i = 0; i < 8; ++i) {
+            const Vec3 corner((i & 1) ? s.boxMax.x : s.boxMin.x, (i & 2) ? s.boxMax.y : s.boxMin.y,
+                              (i & 4) ? s.boxMax.z : s.boxMin.z);
+            const Vec3 world(s.transform * glm::dvec4(corner, 1.0));
+            if (!(std::max({std::fabs(world.x), std::fabs(world.y), std::fabs(world.z)}) <= kMaxSceneCoordinateM))
+                b.fail(b.has("transform") ? "transform" : "max",
+                       "the transformed box reaches beyond +-" + shortNumber(kMaxSceneCoordinateM) +
+                           " m, the limit of scene coordinates; use a smaller scale or translation");
+        }
     if (s.type != ShapeType::Sphere) s.flipNormals = b.boolean("flip_normals").value_or(false);
     b.finish();
 }
@@ -632,11 +719,11 @@ void readLight(Context& ctx, const JsonValue& obj, const std::string& path, Ligh
     switch (l.type) {
         case LightType::Point:
             b.setWhat("a point light");
-            l.position = b.vec3("position", l.position);
+            l.position = b.point("position", l.position);
             break;
         case LightType::Spot: {
             b.setWhat("a spot light");
-            l.position = b.vec3("position", l.position);
+            l.position = b.point("position", l.position);
             l.direction = b.direction("direction").value_or(l.direction);
             l.spotCutoffDeg = b.number("cutoff_deg", l.spotCutoffDeg);
             b.check(l.spotCutoffDeg > 0.0 && l.spotCutoffDeg <= 180.0, "cutoff_deg", "must be in (0, 180]");
@@ -648,17 +735,17 @@ void readLight(Context& ctx, const JsonValue& obj, const std::string& path, Ligh
         }
         case LightType::AreaQuad:
             b.setWhat("an area light");
-            l.corner = b.vec3("corner", l.corner);
-            l.edgeU = b.vec3("edge_u", l.edgeU);
-            l.edgeV = b.vec3("edge_v", l.edgeV);
+            l.corner = b.point("corner", l.corner);
+            l.edgeU = b.point("edge_u", l.edgeU);
+            l.edgeV = b.point("edge_v", l.edgeV);
             if (glm::length(glm::cross(l.edgeU, l.edgeV)) == 0.0)
                 b.fail(b.has("edge_v") ? "edge_v" : "edge_u", "edge_u and edge_v must be non-zero and not parallel");
             break;
         case LightType::Laser:
             b.setWhat("a laser");
-            l.position = b.vec3("position", l.position);
+            l.position = b.point("position", l.position);
             l.direction = b.direction("direction").value_or(l.direction);
-            l.laserRadius = b.number("radius", l.laserRadius);
+            l.laserRadius = b.length("radius", l.laserRadius);
             b.check(l.laserRadius >= 0.0, "radius", "must be >= 0");
             break;
     }
@@ -689,6 +776,21 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     if (auto v = sAbs ? sAbs : sRel) r.surfaceRadius = *v;
     b.check(r.radius > 0.0, abs ? "radius" : "radius_relative", "must be > 0");
     b.check(r.surfaceRadius > 0.0, sAbs ? "surface_radius" : "surface_radius_relative", "must be > 0");
+    if (abs) b.checkCoordinates("radius", {r.radius});
+    if (sAbs) b.checkCoordinates("surface_radius", {r.surfaceRadius});
+    // Relative radii are checked here; absolute ones once the scene's diagonal is known (the CLI).
+    for (const auto& [key, value] : {std::pair<const char*, double>{"radius_relative", rel.value_or(0.0)},
+                                     std::pair<const char*, double>{"surface_radius_relative", sRel.value_or(0.0)}}) {
+        if (value > kMaxRadiusFraction)
+            b.fail(key, std::string(key) + " " + shortNumber(value) + " is too large: allowed (0, " +
+                            shortNumber(kMaxRadiusFraction) + "] (a fraction of the scene's diagonal). A kernel that "
+                            "wide makes every camera ray gather every beam or photon, so a pass costs rays x beams "
+                            "(minutes, with no better image); typical values are 0.001 to 0.02");
+        if (value > kSlowRadiusFraction)
+            b.warnAbout(key, std::string(key) + " " + shortNumber(value) + " is large (above " +
+                                 shortNumber(kSlowRadiusFraction) + " of the scene's diagonal): passes get much "
+                                 "slower as the kernel grows; typical values are 0.001 to 0.02");
+    }
 
     r.alpha = b.number("alpha", r.alpha);
     b.check(r.alpha > 0.0 && r.alpha <= 1.0, "alpha", "must be in (0, 1]");
@@ -711,6 +813,14 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
         r.seed = seed;
     }
     r.threads = static_cast<int>(b.integer("threads", 0, INT_MAX).value_or(r.threads));
+    if (r.threads > maxUsefulThreads()) {
+        b.warnAbout("threads", "threads " + std::to_string(r.threads) + " is more than " +
+                                   std::to_string(kThreadsPerCoreCap) + " x the " +
+                                   std::to_string(maxUsefulThreads() / kThreadsPerCoreCap) +
+                                   " cores of this machine: using " + std::to_string(maxUsefulThreads()) +
+                                   " (0 = all cores)");
+        r.threads = maxUsefulThreads();
+    }
     r.emission = b.choice<EmissionMode>("emission", {{"delta", EmissionMode::Delta}, {"continuous", EmissionMode::Continuous}},
                                         "emission")
                      .value_or(r.emission);
@@ -831,6 +941,11 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
     if (desc.render.passes == 0 && desc.render.timeBudgetSec == 0.0)
         warn(desc, "render.passes", "render.passes is 0 and render.time_budget_s is 0: the render only stops when interrupted");
     return desc;
+}
+
+int maxUsefulThreads() {
+    const unsigned cores = std::thread::hardware_concurrency();
+    return kThreadsPerCoreCap * static_cast<int>(std::max(1u, cores));
 }
 
 SceneDesc loadScene(const std::string& path) {

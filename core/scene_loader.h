@@ -13,4 +13,10 @@ SceneDesc loadScene(const std::string& path);
 SceneDesc loadSceneFromString(const std::string& text, const std::string& virtualPath);
 // The loader refuses films and photon counts above the memory budget (memory_budget.h).
 
+// Worker threads beyond this are pointless (the workers never wait on I/O: more threads than cores
+// only add memory and contention; 1000 threads on 2 cores ran a thread per tile): 4 x the cores
+// std::thread reports. render.threads and --threads above it are capped, with a warning.
+inline constexpr int kThreadsPerCoreCap = 4;
+int maxUsefulThreads();
+
 }  // namespace tpb

@@ -12,7 +12,7 @@
 
 namespace tpb {
 
-TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads) {
+TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int threads, const PilotControl& control) {
     TimeRangeFit fit;
     double t0, t1;
     autoTimeRange(scene, t0, t1);
@@ -20,7 +20,12 @@ TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads) {
     fit.heuristicEnd = t1;
     fit.startOpl = t0;
     fit.endOpl = t1;
-    if (!scene.desc.film.autoRange) return fit;
+    const auto aborted = [&] { return control.abort && control.abort->load(); };
+    const auto progress = [&](double f) {
+        if (control.progress) control.progress(f);
+    };
+    // Rough shares of the pilot's time, for the progress report: photons, then camera rows.
+    constexpr double kPhotonShare = 0.2;
 
     // Histogram over a window 4x wider than the heuristic one.
     TimeBins wide{t0, 4.0 * (t1 - t0) / 4096.0, 4096};
@@ -35,13 +40,21 @@ TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads) {
     pt.beamLength = scene.desc.render.beamLength;
     pt.threads = threads;
     pt.maxMapBytes = maxFilmBytes();
-    const PhotonMap map = tracePhotons(scene, pt);
+    progress(0.0);
+    const PhotonMap map = tracePhotons(scene, pt, control.abort);
+    if (aborted()) {
+        fit.interrupted = true;
+        return fit;
+    }
+    progress(kPhotonShare);
     const double diag = std::max(scene.bounds.diagonal(), 1e-6);
     CameraPassSettings cs;
     cs.seed = pt.seed;
     cs.pass = 0;
-    cs.beamRadius = std::max(scene.beamRadius0, 0.01 * diag);  // generous kernels: a low-noise pilot
-    cs.surfaceRadius = std::max(scene.surfaceRadius0, 0.02 * diag);
+    // Generous kernels (a low-noise pilot), never wider than kPilotMaxRadiusFraction of the diagonal:
+    // the render's own radius may be huge, and the pilot only needs the arrival times.
+    cs.beamRadius = std::min(std::max(scene.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
+    cs.surfaceRadius = std::min(std::max(scene.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
     cs.maxDepth = scene.desc.render.maxDepth;
     std::unique_ptr<BeamAccel> accel;
     if (scene.stages.beams && !map.beams.empty()) {
@@ -53,19 +66,25 @@ TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads) {
         grid = std::make_unique<PhotonGrid>();
         grid->build(map.photons, cs.surfaceRadius);
     }
+    if (aborted()) {
+        fit.interrupted = true;
+        return fit;
+    }
     // Every 8th pixel in each direction (at least an 8x8 grid).
     const int W = scene.camera.width, H = scene.camera.height;
     const int sx = std::max(1, W / 32), sy = std::max(1, H / 32);
     const int rows = (H + sy - 1) / sy;
     std::vector<double> hist(wide.bins, 0.0);
     std::mutex m;
-    parallelFor(rows, threads, [&](int64_t r, int) {
+    std::atomic<int> rowsDone{0};
+    parallelFor(rows, threads, [&](int64_t r, int worker) {
         CameraPassScratch scratch;
         scratch.acc.reset(wide.bins);
         CameraPassStats stats;
         std::vector<double> local(wide.bins, 0.0);
         const int y = static_cast<int>(r) * sy;
         for (int x = 0; x < W; x += sx) {
+            if (aborted()) return;  // (a row of a huge film is long too)
             renderPixel(scene, map, accel.get(), grid.get(), cs, wide, x, y, scratch, stats);
             for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
                 for (int k = scratch.acc.lo(a); k <= scratch.acc.hi(a); ++k) {
@@ -74,9 +93,18 @@ TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads) {
                 }
             scratch.acc.clearTouched();
         }
-        std::lock_guard<std::mutex> g(m);
-        for (int k = 0; k < wide.bins; ++k) hist[k] += local[k];
-    });
+        {
+            std::lock_guard<std::mutex> g(m);
+            for (int k = 0; k < wide.bins; ++k) hist[k] += local[k];
+        }
+        const int done = rowsDone.fetch_add(1) + 1;
+        if (worker == 0) progress(kPhotonShare + (1.0 - kPhotonShare) * done / rows);
+    }, control.abort);
+    if (aborted()) {
+        fit.interrupted = true;
+        return fit;
+    }
+    progress(1.0);
     double total = 0.0;
     for (double v : hist) total += v;
     if (!(total > 0.0)) return fit;
@@ -93,8 +121,22 @@ TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads) {
     fit.startOpl = std::max(t0, lo - pad);
     fit.endOpl = hi + pad;
     fit.fromPilot = true;
-    scene.time.startOpl = fit.startOpl;
-    scene.time.binWidth = (fit.endOpl - fit.startOpl) / scene.time.bins;
+    return fit;
+}
+
+TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads, const PilotControl& control) {
+    if (!scene.desc.film.autoRange) {
+        TimeRangeFit fit;
+        autoTimeRange(scene, fit.startOpl, fit.endOpl);
+        fit.heuristicStart = fit.startOpl;
+        fit.heuristicEnd = fit.endOpl;
+        return fit;
+    }
+    const TimeRangeFit fit = measureArrivalRange(scene, pilotPhotons, threads, control);
+    if (fit.fromPilot) {
+        scene.time.startOpl = fit.startOpl;
+        scene.time.binWidth = (fit.endOpl - fit.startOpl) / scene.time.bins;
+    }
     return fit;
 }
 

@@ -3,11 +3,15 @@
 // end with exit code 2 and a message "file:line: key: what is wrong" (never a crash, a signal or
 // "internal error"). Ctrl-C during a render finishes the pass and writes the results atomically.
 #include "image_io.h"
+#include "scene.h"
 #include "scene_loader.h"
+#include "time_range.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
@@ -47,9 +51,16 @@ std::string slurp(const fs::path& p) {
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
+// The tpb under test: TPB_BINARY, or $TPB_TEST_BINARY (to run these tests against another build,
+// e.g. to see a new test fail on an older tpb).
+const char* tpbBinary() {
+    const char* e = std::getenv("TPB_TEST_BINARY");
+    return e && *e ? e : TPB_BINARY;
+}
+
 // Starts TPB_BINARY with `args` (stdout, stderr to files in `dir`), extra "NAME=value" environment.
 pid_t spawnTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env) {
-    std::vector<std::string> argv{TPB_BINARY};
+    std::vector<std::string> argv{tpbBinary()};
     argv.insert(argv.end(), args.begin(), args.end());
     std::vector<char*> cargv;
     for (std::string& a : argv) cargv.push_back(a.data());
@@ -316,7 +327,7 @@ TEST_F(CliErrors, MissingAndCorruptMeshes) {
     expectUserError(render(f), f.string() + ":8", "shapes[0].file", "not found");
     fs::create_directories(dir_ / "folder.obj");
     write("scene.json", meshScene("folder.obj"));
-    expectUserError(render(f), f.string() + ":8", "shapes[0].file", "not found");
+    expectUserError(render(f), f.string() + ":8", "shapes[0].file", "is a folder, not a file");
     // Corrupt files: the error names the scene's file:line and key, then the OBJ (and its line when
     // tinyobj reports one).
     const struct { const char* name; std::string text; } corrupt[] = {
@@ -462,7 +473,7 @@ TEST_F(CliErrors, DiskFullDuringExportKeepsCompleteFiles) {
         "set -u; m=\"$1\"; mkdir -p \"$m\" && mount -t tmpfs -o size=96k tmpfs \"$m\" || exit 99; "
         "\"$2\" render \"$3\" -o \"$m/out\" --width 24 --height 24; echo $? > \"$4/code.txt\"; "
         "cp -r \"$m/out\" \"$4/copy\"; df -k \"$m\" | tail -1 > \"$4/df.txt\"";
-    const std::string cmd = "unshare -m -r sh -c '" + script + "' sh '" + (dir_ / "mnt").string() + "' '" + TPB_BINARY +
+    const std::string cmd = "unshare -m -r sh -c '" + script + "' sh '" + (dir_ / "mnt").string() + "' '" + tpbBinary() +
                             "' '" + scene.string() + "' '" + dir_.string() + "' >'" + (dir_ / "stdout.txt").string() +
                             "' 2>'" + (dir_ / "stderr.txt").string() + "'";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir_ / "stderr.txt");
@@ -534,4 +545,463 @@ TEST_F(CliErrors, PassThatOutgrowsMemoryStopsTheRenderCleanly) {
     tpb::readExr((dir_ / "out" / "steady.exr").string(), w, h, rgb);
     EXPECT_EQ(w, 8);
     for (float v : rgb) EXPECT_EQ(v, 0.0f);
+}
+
+// ================================================================================================
+// Issue 12, items 6-12: hangs, lost work, stale files, messages.
+// ================================================================================================
+
+namespace {
+
+// The camera inside the lit box (the energy that reaches it does not depend on light leaking out).
+std::string insideScene(const std::string& film = "{\"bins\": 8}", const std::string& render =
+                            "{\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}") {
+    return "{\"version\": 1,\n"
+           " \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"fov\": 60, \"resolution\": [16, 16]},\n"
+           " \"film\": " + film + ",\n"
+           " \"media\": {\"fog\": {\"sigma_s\": 0.5, \"sigma_a\": 0.05}}, \"global_medium\": \"fog\",\n"
+           " \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},\n"
+           " \"shapes\": [{\"type\": \"box\", \"min\": [-1, 0, -1], \"max\": [1, 1, 1], \"material\": \"white\", "
+           "\"flip_normals\": true}],\n"
+           " \"lights\": [{\"type\": \"point\", \"position\": [0, 0.8, 0], \"power\": 5}],\n"
+           " \"render\": " + render + "}\n";
+}
+
+// Polls `file` until it contains `text` (true) or the process has ended or `timeoutSec` passed.
+bool waitForText(const fs::path& file, const std::string& text, pid_t pid, double timeoutSec) {
+    const double t0 = now();
+    while (now() - t0 < timeoutSec) {
+        if (slurp(file).find(text) != std::string::npos) return true;
+        if (waitpid(pid, nullptr, WNOHANG) == pid) return false;  // (reaped: the caller must not wait again)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+}
+
+int countFrames(const fs::path& dir) {
+    int n = 0;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) n += e.path().filename().string().rfind("frame_", 0) == 0;
+    return n;
+}
+
+}  // namespace
+
+// Item 7: `--passes -3` and `--time nan` rendered forever. Every flag is checked like the scene file
+// (range, finiteness), by every command, with the flag's name and range, before anything happens.
+TEST_F(CliErrors, PassesAndTimeFlagsAreCheckedForRangeAndFiniteness) {
+    const fs::path scene = write("scene.json", insideScene());
+    const std::string out = (dir_ / "out").string();
+    const struct { std::vector<std::string> args; const char* text; } cases[] = {
+        {{"render", scene.string(), "-o", out, "--passes", "-3"},
+         "error: --passes: must be an integer >= 0 (0 = no pass limit: until --time or Ctrl-C); got -3"},
+        {{"render", scene.string(), "-o", out, "--time", "nan"},
+         "error: --time: must be a finite number >= 0 (seconds; 0 = no time budget); got nan"},
+        {{"render", scene.string(), "-o", out, "--time", "inf"}, "error: --time: must be a finite number >= 0"},
+        {{"render", scene.string(), "-o", out, "--method", "pt", "--passes", "-3"}, "error: --passes: must be"},
+        {{"info", scene.string(), "--passes", "-3"}, "error: --passes: must be an integer >= 0"},
+        {{"bench", scene.string(), "--time", "nan"}, "error: --time: must be a finite number >= 0"},
+        {{"reference", scene.string(), "-o", out + "/r.tpbref", "--time", "nan"}, "error: --time: must be a finite"},
+        {{"converge", scene.string(), "--reference", out + "/r.tpbref", "-o", out, "--time", "nan"},
+         "error: --time: must be a finite"},
+        {{"converge", scene.string(), "--reference", out + "/r.tpbref", "-o", out, "--time", "1", "--at", "nan"},
+         "error: --at: must be a finite number > 0 (seconds); got nan"},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.args[0] + " " + c.args.back());
+        const Proc p = runTpb(c.args, dir_, {}, 20.0);
+        EXPECT_FALSE(p.timedOut);
+        EXPECT_EQ(p.code, 2) << p.err;
+        EXPECT_EQ(p.err.rfind(c.text, 0), 0u) << p.err;
+        EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written";
+    }
+    if (runTpb({"view", "--help"}, dir_).code == 0) {  // built with the viewer: its flags too (no window opens)
+        const Proc v = runTpb({"view", scene.string(), "--passes", "-3"}, dir_, {}, 20.0);
+        EXPECT_EQ(v.code, 2) << v.err;
+        EXPECT_EQ(v.err.rfind("error: --passes: must be an integer >= 0", 0), 0u) << v.err;
+    }
+}
+
+// Item 10: errors found after start-up (--alpha 0, --photons 0, --time -1, and those that need the
+// scene: a kernel radius larger than the scene, a photon map beyond the memory limit) left
+// preview.exr/png behind. Everything is checked before the first file is written.
+TEST_F(CliErrors, FlagErrorsLeaveNoFileBehind) {
+    const fs::path scene = write("scene.json", insideScene());
+    const struct { std::vector<std::string> flags; const char* text; } cases[] = {
+        {{"--alpha", "0"}, "error: --alpha: must be a number in (0, 1] (1 = no shrinking); got 0"},
+        {{"--photons", "0"}, "error: --photons: must be an integer >= 1 (photons per pass); got 0"},
+        {{"--time", "-1"}, "error: --time: must be a finite number >= 0"},
+        {{"--radius", "5"}, "error: --radius 5 m is 167% of the scene's diagonal (3 m); allowed up to 25% (0.75 m)"},
+        {{"--photons", "1000000000000"}, "error: --photons 1000000000000 needs about"},
+        {{"--method", "pt", "--spp", "0"}, "error: --spp: must be an integer in [1, 1048576]"},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.flags[0] + " " + c.flags[1]);
+        const Proc p = render(scene, c.flags);
+        EXPECT_EQ(p.code, 2) << p.err;
+        EXPECT_EQ(p.err.rfind(c.text, 0), 0u) << p.err;
+        EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written, not even preview.exr";
+    }
+}
+
+// Item 12: --frame-step 0 and --spp 0 said "not in range 0.000000 to 1797...(309 digits)".
+TEST_F(CliErrors, FrameStepZeroSaysTheRangeInAFewWords) {
+    const fs::path scene = write("scene.json", insideScene());
+    for (const auto& [flag, text] :
+         {std::pair<std::string, std::string>{"--frame-step",
+                                              "error: --frame-step: must be an integer in [1, 2147483647] (1 = every "
+                                              "frame); got 0\n"},
+          {"--spp", "error: --spp: must be an integer in [1, 1048576] (camera paths per pixel per pass); got 0\n"}}) {
+        const Proc p = render(scene, {"--method", "pt", flag, "0"});
+        EXPECT_EQ(p.code, 2) << p.err;
+        EXPECT_EQ(p.err.rfind(text, 0), 0u) << p.err;
+        EXPECT_LT(p.err.size(), 200u) << p.err;
+        EXPECT_EQ(p.err.find("17976931348623157"), std::string::npos) << p.err;
+    }
+}
+
+// Item 12: --seed -1 wrapped to 2^64 - 1.
+TEST_F(CliErrors, NegativeSeedIsRefusedNotWrapped) {
+    const fs::path scene = write("scene.json", insideScene());
+    const Proc p = render(scene, {"--seed", "-1"});
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(p.err.rfind("error: --seed: must be an integer in [0, 18446744073709551615] (2^64 - 1); got -1", 0), 0u)
+        << p.err;
+    const Proc q = render(scene, {"-q", "--seed", "18446744073709551615"});  // the largest seed is fine
+    ASSERT_EQ(q.code, 0) << q.err;
+    const nlohmann::json summary = nlohmann::json::parse(slurp(dir_ / "out" / "summary.json"));
+    EXPECT_EQ(summary["settings"]["seed"].get<uint64_t>(), 18446744073709551615ull);
+}
+
+// Item 12: --unwarp --real-time and --continuous --delta were both accepted (the default won).
+TEST_F(CliErrors, ContradictoryFlagsAreRefused) {
+    const fs::path scene = write("scene.json", insideScene());
+    Proc p = render(scene, {"--unwarp", "--real-time"});
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(p.err.rfind("error: --unwarp and --real-time contradict each other: give one of them", 0), 0u) << p.err;
+    p = render(scene, {"--continuous", "--delta"});
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(p.err.rfind("error: --continuous and --delta contradict each other: give one of them", 0), 0u) << p.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// Item 12: --threads 1000 ran a thread per tile on 2 cores. Capped at 4 x the cores, with a warning.
+TEST_F(CliErrors, ThreadsFarAboveTheCoresAreCapped) {
+    const fs::path scene = write("scene.json", insideScene());
+    const int cap = 4 * static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+    const Proc p = render(scene, {"-q", "--threads", "1000"});
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_NE(p.err.find("warning: --threads 1000 is more than 4 x the "), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("using " + std::to_string(cap) + " (more threads than cores only add"), std::string::npos)
+        << p.err;
+    const nlohmann::json summary = nlohmann::json::parse(slurp(dir_ / "out" / "summary.json"));
+    EXPECT_EQ(summary["settings"]["threads"].get<int>(), cap);
+    const Proc q = render(scene, {"--threads", "-2"});
+    EXPECT_EQ(q.code, 2) << q.err;
+    EXPECT_EQ(q.err.rfind("error: --threads: must be an integer in [0, 2147483647] (0 = all cores", 0), 0u) << q.err;
+}
+
+// Item 12: `bench --bins-list 0` blamed --bins; `bench --bench-passes 0` exited 0 with a table of zeros.
+TEST_F(CliErrors, BenchBinsListZeroNamesBinsList) {
+    const fs::path scene = write("scene.json", insideScene());
+    const Proc p = runTpb({"bench", scene.string(), "--bins-list", "8,0"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(p.err.rfind("error: --bins-list: must be an integer in [1, 2147483647] (each a number of time bins, "
+                          "e.g. 1,256,1024); got 0",
+                          0),
+              0u)
+        << p.err;
+    EXPECT_EQ(p.out.find("ratio"), std::string::npos) << p.out;  // nothing was measured
+}
+
+TEST_F(CliErrors, BenchPassesZeroIsRefused) {
+    const fs::path scene = write("scene.json", insideScene());
+    const Proc p = runTpb({"bench", scene.string(), "--bins-list", "8", "--bench-passes", "0"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(p.err.rfind("error: --bench-passes: must be an integer in [1, 100000] (passes measured per bin count); "
+                          "got 0",
+                          0),
+              0u)
+        << p.err;
+    EXPECT_EQ(p.out.find("ratio"), std::string::npos) << p.out;
+}
+
+// Item 12: a 1024x1024x512 film gave no hint of the 17 minutes its frames take to write. Before the
+// render: the number of frames, their size and the write time estimated from preview.exr.
+TEST_F(CliErrors, ExportSizeAndTimeAreEstimatedBeforeRendering) {
+    const fs::path scene = write("scene.json", insideScene());
+    const std::vector<std::string> args{"render", scene.string(), "-o", (dir_ / "out").string(), "--frame-step", "2"};
+    const Proc p = runTpb(args, dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    const size_t at = p.out.find("frames: 4 EXR files of 16x16 (float), up to 12.0 KiB uncompressed; writing them "
+                                 "will take ");
+    EXPECT_NE(at, std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("after the render (estimated from preview.exr: ", at), std::string::npos) << p.out;
+    EXPECT_LT(at, p.out.find("passes in")) << "printed before the render's report";
+}
+
+// Item 12: a mesh path that is a folder said "not found" (CliErrors.MissingAndCorruptMeshes); NaN
+// vertices said "degenerate" (or rendered, moved to the origin); huge ones had no scene file:line:key.
+TEST_F(CliErrors, BadMeshVerticesNameTheSceneKeyAndTheObjLine) {
+    const fs::path f = dir_ / "scene.json";
+    const auto meshScene = [&](const std::string& file, const std::string& extra = "") {
+        return sceneWith(8, "  \"shapes\": [{\"type\": \"mesh\", \"file\": \"" + file + "\", \"material\": \"white\"" +
+                                extra + "}],");
+    };
+    write("nan.obj", "v nan nan nan\nv nan 0 0\nv 0 nan 0\nf 1 2 3\n");
+    write("scene.json", meshScene("nan.obj"));
+    expectUserError(render(f), f.string() + ":8", "shapes[0].file",
+                    "nan.obj:1: vertex 1 (\"v\" line 1) has a non-finite coordinate (nan)");
+    write("huge.obj", "v 0 0 0\nv 1e30 0 0\nv 0 1 0\nf 1 2 3\n");
+    write("scene.json", meshScene("huge.obj"));
+    expectUserError(render(f), f.string() + ":8", "shapes[0].file",
+                    "huge.obj:2: vertex 2 (\"v\" line 2) coordinate 1e30 is beyond +-1e9 m");
+    write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write("scene.json", meshScene("tri.obj", ", \"transform\": {\"scale\": 1e9, \"translate\": [1e9, 0, 0]}"));
+    expectUserError(render(f), f.string() + ":8", "shapes[0].transform",
+                    "moves a vertex of the mesh to (2e+09, 0, 0), beyond +-1e9 m");
+}
+
+// Item 12: camera.position 1e308 was reported as "camera.up ... parallel".
+TEST_F(CliErrors, HugeCameraPositionNamesThePosition) {
+    const fs::path f = write("scene.json", sceneWith(3, "  \"camera\": {\"position\": [1e308, 0.5, 3], \"look_at\": [0, 0.5, 0]},"));
+    expectUserError(render(f), f.string() + ":3", "camera.position",
+                    "position is too far out: scene coordinates and sizes must be within +-1e9 m");
+}
+
+// Item 12: a UTF-16 scene file said "unexpected byte 0xFF".
+TEST_F(CliErrors, Utf16SceneFileSaysToConvertIt) {
+    std::string utf16 = "\xFF\xFE";
+    for (char c : sceneWith(0, "")) utf16 += std::string{c, '\0'};
+    const fs::path f = write("scene.json", utf16);
+    expectUserError(render(f), f.string() + ":1", "",
+                    "the file is UTF-16 (little-endian) text, but scene files must be UTF-8; convert it (e.g. iconv");
+}
+
+// Item 8: SIGTERM (timeout, a job scheduler) killed the render and lost every finished pass. It is
+// handled like the first Ctrl-C: the pass in progress finishes, everything is written, and the exit
+// code (143 = 128 + SIGTERM) says the run was cut short. Also with the path tracer.
+TEST_F(CliErrors, SigtermWritesTheFinishedPassesAndExitsNonZero) {
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 20000, "
+                                                                            "\"passes\": 100000, \"seed\": 1}"));
+    for (const std::string method : {"beams", "pt"}) {
+        SCOPED_TRACE(method);
+        const fs::path out = dir_ / ("out_" + method);
+        const double t0 = now();
+        const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2", "--method", method},
+                                   dir_, {});
+        ASSERT_GT(pid, 0);
+        ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "pass 1:", pid, 60.0)) << slurp(dir_ / "stderr.txt");
+        kill(pid, SIGTERM);
+        const Proc p = waitTpb(pid, dir_, t0, 120.0);
+        EXPECT_FALSE(p.timedOut);
+        EXPECT_EQ(p.signal, 0) << "killed by the signal: the finished passes are lost\n" << p.err;
+        EXPECT_EQ(p.code, 143) << p.err;
+        EXPECT_NE(p.err.find("interrupted by SIGTERM: writing the "), std::string::npos) << p.err;
+        ASSERT_TRUE(fs::exists(out / "summary.json")) << p.err;
+        const nlohmann::json summary = nlohmann::json::parse(slurp(out / "summary.json"));
+        EXPECT_GE(summary["passes"].get<int>(), 1);
+        EXPECT_EQ(summary["outputs"]["frames_written"].get<int>(), 8);
+        EXPECT_EQ(countFrames(out / "frames"), 8);
+    }
+}
+
+// Item 8: SIGTERM in `tpb reference` and `tpb converge`: the finished passes are written too.
+TEST_F(CliErrors, SigtermInReferenceAndConvergeWritesWhatWasDone) {
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 20000, "
+                                                                            "\"passes\": 100000, \"seed\": 1}"));
+    const fs::path ref = dir_ / "ref.tpbref";
+    double t0 = now();
+    pid_t pid = spawnTpb({"reference", scene.string(), "-o", ref.string(), "--time", "300", "--threads", "2"}, dir_, {});
+    ASSERT_GT(pid, 0);
+    ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "reference: pass 1", pid, 60.0)) << slurp(dir_ / "stderr.txt");
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    kill(pid, SIGTERM);
+    Proc p = waitTpb(pid, dir_, t0, 120.0);
+    EXPECT_EQ(p.signal, 0) << p.err;
+    EXPECT_EQ(p.code, 143) << p.err;
+    EXPECT_NE(p.err.find("interrupted by SIGTERM: writing the "), std::string::npos) << p.err;
+    ASSERT_TRUE(fs::exists(ref)) << p.err;
+    EXPECT_NE(p.out.find("(interrupted)"), std::string::npos) << p.out;
+
+    const fs::path out = dir_ / "conv";
+    t0 = now();
+    pid = spawnTpb({"converge", scene.string(), "--reference", ref.string(), "-o", out.string(), "--time", "300",
+                    "--no-plot", "--threads", "2"},
+                   dir_, {});
+    ASSERT_GT(pid, 0);
+    ASSERT_TRUE(waitForText(dir_ / "stdout.txt", "passes  volume", pid, 60.0)) << slurp(dir_ / "stderr.txt");
+    kill(pid, SIGTERM);
+    p = waitTpb(pid, dir_, t0, 120.0);
+    EXPECT_EQ(p.signal, 0) << p.err;
+    EXPECT_EQ(p.code, 143) << p.err;
+    EXPECT_NE(p.err.find("interrupted by SIGTERM: writing what was measured"), std::string::npos) << p.err;
+    EXPECT_TRUE(fs::exists(out / "convergence.csv")) << p.err;
+    EXPECT_TRUE(fs::exists(out / "convergence.json")) << p.err;
+}
+
+// Item 6: the automatic-range pilot ignored Ctrl-C (and, with a huge radius, ran for minutes with no
+// output). It reports its progress and a signal stops it; nothing is written.
+TEST_F(CliErrors, CtrlCStopsThePilotPass) {
+    // A pilot that takes seconds: an albedo-0.9 box full of dense fog, deep paths, a wide kernel.
+    const fs::path scene = write("scene.json", R"({"version": 1,
+      "camera": {"position": [0, 0.5, 0.9], "look_at": [0, 0.5, 0], "resolution": [64, 64]},
+      "film": {"bins": 8},
+      "media": {"fog": {"sigma_s": 3}}, "global_medium": "fog",
+      "materials": {"white": {"type": "diffuse", "albedo": 0.9}},
+      "shapes": [{"type": "box", "min": [-1, 0, -1], "max": [1, 1, 1], "material": "white", "flip_normals": true}],
+      "lights": [{"type": "point", "position": [0, 0.8, 0], "power": 5}],
+      "render": {"photons_per_pass": 2000, "passes": 2, "seed": 1, "max_depth": 400, "radius_relative": 0.2}})");
+    const double t0 = now();
+    const pid_t pid = spawnTpb({"render", scene.string(), "-o", (dir_ / "out").string(), "--threads", "2"}, dir_, {});
+    ASSERT_GT(pid, 0);
+    // Not on a terminal, the pilot's first progress line comes after 1 s. If the first pass starts
+    // (or the render ends) first, this machine ran the pilot in under a second: nothing to interrupt.
+    const std::string progress = "fitting the film's time range (pilot pass): ";
+    bool seen = false, passed = false;
+    while (now() - t0 < 30.0 && !seen && !passed) {
+        const std::string err = slurp(dir_ / "stderr.txt");
+        seen = err.find(progress) != std::string::npos;
+        passed = err.find("pass 1:") != std::string::npos || waitpid(pid, nullptr, WNOHANG) == pid;
+        if (!seen && !passed) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (!seen) {
+        kill(pid, SIGKILL);
+        waitpid(pid, nullptr, 0);
+        if (passed) GTEST_SKIP() << "the pilot took less than 1 s on this machine:\n" << slurp(dir_ / "stderr.txt");
+        FAIL() << "30 s of pilot without a progress line:\n" << slurp(dir_ / "stderr.txt");
+    }
+    kill(pid, SIGINT);
+    const double tInt = now();
+    const Proc p = waitTpb(pid, dir_, t0, 120.0);
+    EXPECT_EQ(p.signal, 0) << p.err;
+    EXPECT_EQ(p.code, 130) << p.err;
+    EXPECT_LT(p.seconds - (tInt - t0), 20.0);
+    EXPECT_NE(p.err.find("interrupted by Ctrl-C (SIGINT) while fitting the film's time range (pilot pass); nothing "
+                         "was written"),
+              std::string::npos)
+        << p.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+// Item 6, at its root: the pilot polls the abort flag and reports its progress.
+TEST_F(CliErrors, PilotPollsTheAbortFlagAndReportsProgress) {
+    const std::unique_ptr<tpb::Scene> scene = tpb::Scene::build(tpb::loadSceneFromString(insideScene(), "scene.json"));
+    std::atomic<bool> abort{true};
+    tpb::PilotControl pc;
+    pc.abort = &abort;
+    tpb::TimeRangeFit fit = tpb::measureArrivalRange(*scene, 4000, 2, pc);
+    EXPECT_TRUE(fit.interrupted);
+    EXPECT_FALSE(fit.fromPilot);
+    abort = false;
+    std::vector<double> progress;
+    pc.progress = [&](double f) { progress.push_back(f); };
+    fit = tpb::measureArrivalRange(*scene, 4000, 2, pc);
+    EXPECT_FALSE(fit.interrupted);
+    EXPECT_TRUE(fit.fromPilot);
+    ASSERT_GE(progress.size(), 3u);
+    EXPECT_EQ(progress.front(), 0.0);
+    EXPECT_EQ(progress.back(), 1.0);
+    EXPECT_TRUE(std::is_sorted(progress.begin(), progress.end()));
+}
+
+// Item 9: a render into a folder that held an earlier render left the old frames beside the new ones
+// (32 frames on disk, summary.json said 16). The earlier render's outputs, and only those, are
+// removed first: files the user put there stay.
+TEST_F(CliErrors, StaleOutputsOfAnEarlierRenderAreRemoved) {
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 16}"));
+    const fs::path out = dir_ / "out";
+    const std::vector<std::string> base{"render", scene.string(), "-o", out.string(), "-q"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> a = base;
+        a.insert(a.end(), extra.begin(), extra.end());
+        return a;
+    };
+    ASSERT_EQ(runTpb(base, dir_).code, 0);
+    ASSERT_EQ(countFrames(out / "frames"), 16);
+    write("out/notes.txt", "mine");
+    write("out/frames/frame_notes.txt", "mine too");
+    write("out/frames/frame_00100.exr.keep", "mine too");
+    // Half the bins: 8 frames, not 8 new + 8 old.
+    Proc p = runTpb(with({"--bins", "8"}), dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(countFrames(out / "frames"), 8 + 2);  // + the two files of the user named frame_*
+    EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["outputs"]["frames_written"].get<int>(), 8);
+    EXPECT_EQ(slurp(out / "notes.txt"), "mine");
+    EXPECT_EQ(slurp(out / "frames" / "frame_notes.txt"), "mine too");
+    // No frames and no strip: the earlier render's frames and strip go too.
+    p = runTpb(with({"--no-frames", "--strip", "0"}), dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(countFrames(out / "frames"), 2);
+    EXPECT_FALSE(fs::exists(out / "strip.png"));
+    EXPECT_TRUE(fs::exists(out / "steady.exr"));
+    // A folder written by a tpb without manifests: its summary.json says what it wrote.
+    ASSERT_EQ(runTpb(base, dir_).code, 0);
+    fs::remove(out / ".tpb-manifest.json");
+    p = runTpb(with({"--bins", "4"}), dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(countFrames(out / "frames"), 4 + 2);
+    EXPECT_EQ(slurp(out / "notes.txt"), "mine");
+}
+
+// Item 9: two renders into one folder mixed their files. The second is refused while the first
+// runs (a lock the kernel releases when the process ends, also when it is killed).
+TEST_F(CliErrors, SecondConcurrentRenderIntoTheSameFolderIsRefused) {
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 20000, "
+                                                                            "\"passes\": 100000, \"seed\": 1}"));
+    const fs::path out = dir_ / "out";
+    const fs::path firstDir = dir_ / "first";
+    fs::create_directories(firstDir);
+    const double t0 = now();
+    const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2"}, firstDir, {});
+    ASSERT_GT(pid, 0);
+    ASSERT_TRUE(waitForText(firstDir / "stderr.txt", "pass 1:", pid, 60.0)) << slurp(firstDir / "stderr.txt");
+    const Proc second = runTpb({"render", scene.string(), "-o", out.string(), "--passes", "1"}, dir_);
+    EXPECT_EQ(second.code, 2) << second.err;
+    EXPECT_EQ(second.err.rfind("error: " + out.string() + ": another tpb run (tpb render, pid " + std::to_string(pid) +
+                                   ") is writing into this folder; two runs in one folder would mix their files: wait "
+                                   "for it to end, or give this one another folder with -o",
+                               0),
+              0u)
+        << second.err;
+    // Killed outright (no cleanup at all): the lock goes with the process.
+    kill(pid, SIGKILL);
+    const Proc first = waitTpb(pid, firstDir, t0, 60.0);
+    EXPECT_EQ(first.signal, SIGKILL);
+    const Proc third = runTpb({"render", scene.string(), "-o", out.string(), "--passes", "1", "-q"}, dir_);
+    EXPECT_EQ(third.code, 0) << third.err;
+}
+
+// Item 11: with all the energy outside the film's time range (every frame black) nothing was said.
+// Now an error (exit 2) naming the film key and the range that would cover the measured arrivals.
+TEST_F(CliErrors, AllBlackFilmIsAnErrorThatSaysHowToFixTheRange) {
+    const fs::path f = write("scene.json", insideScene("{\"bins\": 8,\n \"start_m\": 100, \"bin_width_m\": 0.5}"));
+    for (const std::string method : {"beams", "pt"}) {
+        SCOPED_TRACE(method);
+        const Proc p = render(f, {"-q", "--method", method});
+        EXPECT_EQ(p.code, 2) << p.err;
+        const std::string head = "error: " + f.string() + ":4: film.start_m: every frame is black: all the energy that "
+                                 "reached the camera arrived outside the film's time range, 100 to 104 m OPL";
+        EXPECT_NE(p.err.find(head), std::string::npos) << p.err;
+        EXPECT_NE(p.err.find("a pilot pass measured arrivals from "), std::string::npos) << p.err;
+        EXPECT_NE(p.err.find(": set \"film\": {\"start_m\": "), std::string::npos) << p.err;
+        EXPECT_NE(p.err.find("or \"range\": \"auto\""), std::string::npos) << p.err;
+        EXPECT_TRUE(fs::exists(dir_ / "out" / "summary.json"));
+    }
+}
+
+// Item 11: above a few percent outside the film: a warning; below: the render's last line.
+TEST_F(CliErrors, EnergyOutsideTheFilmIsReported) {
+    const fs::path f = write("scene.json", insideScene("{\"bins\": 8,\n \"start_m\": 0, \"bin_width_m\": 0.25}"));
+    const Proc p = render(f, {});
+    EXPECT_EQ(p.code, 0) << p.err;
+    EXPECT_NE(p.err.find("warning: " + f.string() + ":4: film.start_m: "), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("% of the energy that reached the camera arrived outside the film's time range, 0 to 2 m OPL"),
+              std::string::npos)
+        << p.err;
+    const fs::path g = write("auto.json", insideScene());
+    const Proc q = render(g, {});
+    EXPECT_EQ(q.code, 0) << q.err;
+    EXPECT_EQ(q.err.find("warning"), std::string::npos) << q.err;
+    EXPECT_NE(q.out.find("% of the energy outside the film\n"), std::string::npos) << q.out;
 }

@@ -2,7 +2,10 @@
 // checking that the message names the file, the line and the key.
 #include "error.h"
 #include "json.h"
+#include "mesh.h"
 #include "scene_loader.h"
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -507,6 +510,128 @@ TEST(SceneErrors, BadTransform) {
     expectError(box("{\"rotate\": {\"axis\": [0, 1, 0], \"angel_deg\": 3}}"), 2, "shapes[0].transform.rotate.angel_deg",
                 "did you mean \"angle_deg\"");
     expectError(box("{\"translte\": [0, 1, 0]}"), 2, "shapes[0].transform.translte", "did you mean \"translate\"");
+}
+
+// ---- issue 12, item 12: messages that misled ------------------------------------------------------
+
+// camera.position 1e308 was reported as "camera.up: up must not be parallel to the viewing direction"
+// (the view vector overflowed). Now: the key that is out of range, the limit and the fix.
+TEST(SceneErrors, HugeCameraPositionNamesThePositionNotUp) {
+    expectError("{\"version\": 1,\n\"camera\": {\"position\": [1e308, 0.5, 3]}}", 2, "camera.position",
+                "position is too far out: scene coordinates and sizes must be within +-1e9 m (got [1e308, 0.5, 3]); "
+                "check the units (meters)");
+    expectError("{\"version\": 1,\n\"camera\": {\"look_at\": [0, -2e9, 0]}}", 2, "camera.look_at", "within +-1e9 m");
+    // Other positions and sizes follow the same rule, with their keys.
+    expectError("{\"version\": 1,\n\"shapes\": [{\"type\": \"sphere\", \"radius\": 1e300}]}", 2, "shapes[0].radius",
+                "within +-1e9 m");
+    expectError("{\"version\": 1,\n\"lights\": [{\"type\": \"point\", \"position\": [0, 0, -1e10]}]}", 2,
+                "lights[0].position", "within +-1e9 m");
+    expectError("{\"version\": 1, \"shapes\": [{\"type\": \"box\",\n\"transform\": {\"translate\": [1e20, 0, 0]}}]}", 2,
+                "shapes[0].transform.translate", "within +-1e9 m");
+    expectError("{\"version\": 1, \"shapes\": [{\"type\": \"box\", \"max\": [1, 1, 1],\n\"transform\": {\"scale\": 1e9, "
+                "\"translate\": [1e9, 0, 0]}}]}",
+                2, "shapes[0].transform", "the transformed box reaches beyond +-1e9 m");
+    // A huge but finite direction is a direction, not an overflow to a "zero vector".
+    const SceneDesc d = loadSceneFromString("{\"version\": 1, \"camera\": {\"up\": [1e308, 1e308, 0]}}", "scene.json");
+    expectNear(d.camera.up, glm::normalize(Vec3(1, 1, 0)));
+}
+
+// A mesh "file" that is a folder was reported as "not found". Now: it is a folder, and the OBJ
+// files in it.
+TEST(SceneErrors, MeshPathThatIsAFolder) {
+    TempDir tmp;
+    fs::create_directories(tmp.dir / "bunny");
+    std::ofstream(tmp.dir / "bunny" / "bunny.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    const std::string text = "{\"version\": 1, \"shapes\": [\n{\"type\": \"mesh\",\n\"file\": \"bunny\"}]}";
+    expectError(text, 3, "shapes[0].file",
+                "mesh file " + (tmp.dir / "bunny").string() + " is a folder, not a file (\"bunny\" resolved against the "
+                "scene's folder); \"file\" must name the OBJ file itself, e.g. \"bunny/bunny.obj\"",
+                tmp.scene());
+    fs::create_directories(tmp.dir / "empty");
+    expectError("{\"version\": 1, \"shapes\": [{\"type\": \"mesh\",\n\"file\": \"empty\"}]}", 2, "shapes[0].file",
+                "(the folder holds no .obj file)", tmp.scene());
+}
+
+// NaN vertices were read as 0 by tinyobj (a triangle of them was then "degenerate"); huge ones
+// were "non-finite" or, after the float conversion, had no file:line. Now the OBJ line and the fix.
+TEST(SceneErrors, NanAndHugeMeshVerticesNameTheObjLine) {
+    TempDir tmp;
+    const auto objError = [&](const std::string& text) -> std::string {
+        std::ofstream(tmp.dir / "m.obj") << text;
+        try {
+            loadObj((tmp.dir / "m.obj").string());
+        } catch (const UserError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    const std::string obj = (tmp.dir / "m.obj").string();
+    EXPECT_EQ(objError("v 0 0 0\nv nan nan nan\nv 0 1 0\nf 1 2 3\n"),
+              obj + ":2: vertex 2 (\"v\" line 2) has a non-finite coordinate (nan); coordinates must be finite and "
+                    "within +-1e9 m");
+    EXPECT_EQ(objError("# a comment\nv 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n"),
+              obj + ":3: vertex 2 (\"v\" line 3) has a non-finite coordinate (inf); coordinates must be finite and "
+                    "within +-1e9 m");
+    EXPECT_THAT(objError("v 1e30 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+                HasSubstr(obj + ":1: vertex 1 (\"v\" line 1) coordinate 1e30 is beyond +-1e9 m, the limit of scene "
+                                "coordinates; check the file's units, or scale the mesh with the shape's \"transform\""));
+    EXPECT_THAT(objError("v 1e999 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+                HasSubstr("non-finite coordinate (1e999, beyond the range of a double)"));
+    EXPECT_EQ(objError("v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n"),
+              obj + ":2: vertex 2 (\"v\" line 2) coordinate \"1,5\" is not a number");
+    EXPECT_EQ(objError("v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), obj + ":1: vertex 1 (\"v\" line 1) has 2 coordinates, expected x y z");
+    // Vertex colours after x y z, normals ("vn") and texture coordinates ("vt") are not vertices.
+    EXPECT_EQ(objError("v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn nan 0 1\nvt 0.5 0.5\nf 1 2 3\n"), "");
+    // A transform that moves a vertex beyond the limit.
+    TriangleMesh m = loadObj(obj);
+    try {
+        m.transform(glm::scale(Mat4(1.0), Vec3(1e10)));
+        ADD_FAILURE() << "no error";
+    } catch (const UserError& e) {
+        EXPECT_THAT(std::string(e.what()), HasSubstr("moves a vertex of the mesh to (1e+10, 0, 0), beyond +-1e9 m"));
+    }
+}
+
+// A UTF-16 scene (Notepad's "Unicode") was "unexpected byte 0xFF: expected a value".
+TEST(SceneErrors, Utf16SceneFileSaysToConvertIt) {
+    const std::string ascii = "{\"version\": 1}";
+    std::string le = "\xFF\xFE", be = "\xFE\xFF", leNoBom;
+    for (char c : ascii) {
+        le += std::string{c, '\0'};
+        leNoBom += std::string{c, '\0'};
+        be += std::string{'\0', c};
+    }
+    const std::string fix = "scene files must be UTF-8; convert it (e.g. iconv -f UTF-16 -t UTF-8 in.json > out.json)";
+    expectError(le, 1, "", "the file is UTF-16 (little-endian) text, but " + fix);
+    expectError(leNoBom, 1, "", "the file is UTF-16 (little-endian) text");
+    expectError(be, 1, "", "the file is UTF-16 (big-endian) text");
+    expectError(std::string("\xFF\xFE\0\0{\0\0\0", 8), 1, "", "the file is UTF-32 (little-endian) text");
+    // UTF-8 with a byte order mark is fine.
+    EXPECT_NO_THROW(loadSceneFromString("\xEF\xBB\xBF" + ascii, "scene.json"));
+}
+
+// radius_relative >= 1 hung the automatic-range pilot (every beam in every camera ray's kernel).
+// Now refused with the key, the allowed range and why; large but allowed radii are warned about.
+TEST(SceneErrors, KernelRadiusThatMakesPassesQuadratic) {
+    expectError("{\"version\": 1,\n\"render\": {\"radius_relative\": 1}}", 2, "render.radius_relative",
+                "radius_relative 1 is too large: allowed (0, 0.25] (a fraction of the scene's diagonal). A kernel that "
+                "wide makes every camera ray gather every beam or photon, so a pass costs rays x beams");
+    expectError("{\"version\": 1,\n\"render\": {\"surface_radius_relative\": 0.5}}", 2,
+                "render.surface_radius_relative", "allowed (0, 0.25]");
+    const SceneDesc d = loadSceneFromString("{\"version\": 1,\n\"render\": {\"radius_relative\": 0.1}}", "scene.json");
+    ASSERT_EQ(d.warnings.size(), 2u);  // and "the scene has no lights"
+    EXPECT_THAT(d.warnings[0], HasSubstr("scene.json:2: render.radius_relative: radius_relative 0.1 is large (above "
+                                         "0.05 of the scene's diagonal): passes get much slower"));
+    EXPECT_EQ(loadSceneFromString("{\"version\": 1, \"render\": {\"radius_relative\": 0.05}}", "s.json").warnings.size(), 1u);
+}
+
+// render.threads far above the cores ran a thread per tile: capped with a warning naming the key.
+TEST(SceneErrors, ThreadsAboveTheCoresAreCapped) {
+    const SceneDesc d = loadSceneFromString("{\"version\": 1,\n\"render\": {\"threads\": 100000}}", "scene.json");
+    EXPECT_EQ(d.render.threads, maxUsefulThreads());
+    ASSERT_EQ(d.warnings.size(), 2u);  // and "the scene has no lights"
+    EXPECT_THAT(d.warnings[0], HasSubstr("scene.json:2: render.threads: threads 100000 is more than 4 x the "));
+    EXPECT_THAT(d.warnings[0], HasSubstr("using " + std::to_string(maxUsefulThreads()) + " (0 = all cores)"));
 }
 
 // ---- JSON parser -----------------------------------------------------------------------------------
