@@ -320,7 +320,44 @@ nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t pass
     j["frames"] = {{"axis", opt.axis == TimeAxis::Real ? "real" : "unwarped"},
                    {"emission", opt.mode == EmissionMode::Delta ? "delta" : "continuous"},
                    {"step", opt.step}};
+    const FilmStats& fs = film.stats;
+    nlohmann::json energy = {{"rejected_samples", fs.rejectedSamples.load()},
+                             {"overflowed_pixel_sums", fs.overflowedPixels.load()}};
+    for (int a = 0; a < 2; ++a) {
+        // Luminance shares; continuous frames include `before` (a step response), the last
+        // continuous frame is the steady image minus `after`.
+        const double in = fs.inside[a].load(), out = fs.outside[a].load(), before = fs.before[a].load();
+        const double total = in + out;
+        energy[a == 0 ? "real" : "unwarped"] = {{"before_film_fraction", total > 0 ? before / total : 0.0},
+                                                {"inside_film_fraction", total > 0 ? in / total : 0.0},
+                                                {"after_film_fraction", total > 0 ? (out - before) / total : 0.0}};
+    }
+    j["film_energy"] = energy;
     return j;
+}
+
+int64_t replaceNonFiniteNumbers(nlohmann::json& j) {
+    int64_t n = 0;
+    if (j.is_number_float() && !std::isfinite(j.get<double>())) {
+        const double v = j.get<double>();
+        j = std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf";
+        return 1;
+    }
+    if (j.is_structured())
+        for (auto& e : j) n += replaceNonFiniteNumbers(e);
+    return n;
+}
+
+int64_t warnFilmOverflow(const Scene& scene, const TransientFilm& film) {
+    const int64_t n = film.stats.overflowedPixels.load();
+    if (n > 0)
+        std::fprintf(stderr,
+                     "warning: %s: %lld pixel sums would have overflowed the film's 32-bit floats (max 3.4e38) and "
+                     "were dropped from those passes (the film holds no Inf, but those pixels are too dark): lower "
+                     "the lights' power (transport is linear: scaling every light by s scales the film by s)\n",
+                     keyWhere(scene.desc, scene.desc.lights.empty() ? "lights" : "lights[0].power").c_str(),
+                     static_cast<long long>(n));
+    return n;
 }
 
 // ---- the output folder ----------------------------------------------------------------------------
@@ -558,6 +595,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
     if (!r.noFrames) rep.framesExpected = exportFrameCount(film.bins(), r.opt);
     const auto writeSummary = [&](bool final) {
         nlohmann::json j = summary();
+        replaceNonFiniteNumbers(j);
         nlohmann::json o = {{"frames_expected", rep.framesExpected}, {"files", rep.kept}};
         if (final) o["frames_written"] = rep.framesWritten;
         else o["frames_written"] = nullptr;  // being written: the final summary replaces this one

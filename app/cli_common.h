@@ -61,9 +61,18 @@ std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrid
 
 // The film's time axis as written in summary.json and reference headers.
 nlohmann::json filmJson(const Scene& scene);
-// Fields every summary.json starts with (scene, method, passes, wall time, resolution, film, frames).
+// Fields every summary.json starts with (scene, method, passes, wall time, resolution, film, frames,
+// film_energy: the shares of the energy before / inside / after the film per axis, rejected
+// samples and overflowed pixel sums).
 nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t passes, double wallSec,
                              const TransientFilm& film, const ExportOptions& opt);
+
+// Replaces every non-finite number in `j` by the string "inf", "-inf" or "nan" (JSON has no such
+// numbers and nlohmann would write null, which reads as "unknown"); returns how many it replaced.
+int64_t replaceNonFiniteNumbers(nlohmann::json& j);
+// Warns on stderr when the film dropped pixel sums that would have overflowed its floats
+// (FilmStats::overflowedPixels), naming the fix; returns that count.
+int64_t warnFilmOverflow(const Scene& scene, const TransientFilm& film);
 
 // ---- the output folder ------------------------------------------------------------------------
 // A folder one tpb run writes into (render, converge). The constructor creates it if needed, takes

@@ -179,6 +179,7 @@ void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathT
     const OutputReport rep = writeRenderOutputs(film, req, [&] {
         return ptSummary(scene, ps, film, req.opt, st, passTimes, wall);
     });
+    warnFilmOverflow(scene, film);
     const double outside = checkEnergyInsideFilm(scene, film, req.opt.axis, ps.threads);
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     const int frames = rep.framesWritten;
