@@ -66,6 +66,7 @@ bool Driver::runPass(uint64_t pass) {
     ps.photons = map.emitted;
     ps.beams = static_cast<int64_t>(map.beams.size());
     ps.surfacePhotons = static_cast<int64_t>(map.photons.size());
+    ps.regionOverflows = map.regionOverflows;
     const double t1 = nowSec();
 
     // 2. Acceleration structures.

@@ -46,6 +46,7 @@ struct PassStats {
     uint64_t pass = 0;  // 1-based
     double beamRadius = 0.0, surfaceRadius = 0.0;
     int64_t photons = 0, beams = 0, beamPieces = 0, surfacePhotons = 0;
+    int64_t regionOverflows = 0;  // photons ended by a full region stack (camera paths: camera.regionOverflows)
     CameraPassStats camera;
     double photonSec = 0.0, buildSec = 0.0, cameraSec = 0.0, passSec = 0.0;
     double elapsedSec = 0.0;  // since start()

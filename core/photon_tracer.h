@@ -41,6 +41,7 @@ struct PhotonMap {
     std::vector<SurfacePhoton> photons;
     int64_t emitted = 0;
     int64_t rejected = 0;  // non-finite photon weights discarded
+    int64_t regionOverflows = 0;  // photons ended because their region stack was full (RegionStack)
 };
 
 struct PhotonTraceSettings {
