@@ -13,6 +13,37 @@ namespace tpb {
 namespace {
 
 
+// The free-space point a surface photon arrived through (Scene::bounceOrigin for its landing).
+Vec3 photonAnchor(const Scene& scene, const SurfacePhoton& ph) {
+    return ph.position + scene.rayEps * (ph.normal - ph.dirIn);
+}
+
+// Shapes whose bounds come within r of the camera segment [0, sMax]: only they can stand between
+// a point of the segment and a beam point within r of it (the beam visibility test in gatherBeams).
+void nearShapes(const Scene& scene, const Ray& ray, double sMax, double r, std::vector<int>& out) {
+    out.clear();
+    Bounds3 seg;
+    seg.expand(ray.o);
+    seg.expand(ray.at(sMax));  // an unbounded segment gives infinite bounds: every shape is near
+    const Vec3 pad(r + 8.0 * scene.rayEps);
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        const Bounds3& b = scene.shapes[i].bounds;
+        const bool apart = glm::any(glm::lessThan(b.hi + pad, seg.lo)) || glm::any(glm::greaterThan(b.lo - pad, seg.hi));
+        if (!apart || !std::isfinite(sMax)) out.push_back(static_cast<int>(i));
+    }
+}
+
+// Whether one of the `near` shapes' bounds meets the segment from a to b (else nothing blocks it).
+bool mayBlock(const Scene& scene, const std::vector<int>& near, const Vec3& a, const Vec3& b) {
+    const Vec3 pad(8.0 * scene.rayEps);
+    const Vec3 lo = glm::min(a, b) - pad, hi = glm::max(a, b) + pad;
+    for (int i : near) {
+        const Bounds3& sb = scene.shapes[i].bounds;
+        if (!(glm::any(glm::lessThan(sb.hi, lo)) || glm::any(glm::greaterThan(sb.lo, hi)))) return true;
+    }
+    return false;
+}
+
 struct PathState {
     Vec3 beta{1.0};
     double oplCam = 0.0;
@@ -27,6 +58,7 @@ void gatherBeams(const Scene& scene, const PhotonMap& map, const BeamAccel& acce
     const double eta = region.ior;
     scratch.hits.clear();
     accel.query(ray.o, ray.d, sMax, regionId, scratch.hits);
+    if (!scratch.hits.empty()) nearShapes(scene, ray, sMax, s.beamRadius, scratch.nearShapes);
     // tau_b: attenuation along the beam inside the kernel (photon_tracer.h).
     const Color tauB = s.beamLength == BeamLength::Long ? m.sigma_t : m.sigma_t - Color(m.samplingSigma());
     const double invArea = 1.0 / (kPi * s.beamRadius * s.beamRadius);  // 1 / Omega_R(r^2)
@@ -34,6 +66,13 @@ void gatherBeams(const Scene& scene, const PhotonMap& map, const BeamAccel& acce
         const Beam& b = map.beams[h.beam];
         const RayBeamOverlap& o = h.overlap;
         const double c = o.cosRB;
+        // The kernel blurs the beam by r in every direction, also through a wall: a beam inside a
+        // closed box would light the fog just outside it. Keep the estimate only when the beam
+        // point nearest the middle of the overlap sees that point of the camera segment.
+        const double sMid = 0.5 * (o.sMinus + o.sPlus);
+        const double sbMid = std::clamp(o.sb0 + c * sMid, 0.0, b.length);
+        const Vec3 xr = ray.at(sMid), xb = b.origin + sbMid * b.dir;
+        if (mayBlock(scene, scratch.nearShapes, xr, xb) && !scene.segmentClear(xr, xb)) continue;
         // Eq. 8: L_b = sigma_s rho(theta) Phi_b / (pi r^2) * int T(s_r) T_b(s_b(s_r)) ds_r
         const Color integral(transmittanceIntegral(m.sigma_t.x, tauB.x, o), transmittanceIntegral(m.sigma_t.y, tauB.y, o),
                              transmittanceIntegral(m.sigma_t.z, tauB.z, o));
@@ -55,6 +94,7 @@ CameraPassStats& CameraPassStats::operator+=(const CameraPassStats& o) {
     cameraRays += o.cameraRays;
     beamEstimates += o.beamEstimates;
     photonEstimates += o.photonEstimates;
+    regionOverflows += o.regionOverflows;
     return *this;
 }
 
@@ -103,8 +143,14 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
             if (grid) {
                 const Color fr = mat.albedo * kInvPi;
                 const double invArea = 1.0 / (kPi * s.surfaceRadius * s.surfaceRadius);
+                const Vec3 anchor = scene.bounceOrigin(ray, *hit, ng);
                 grid->forEachNear(hit->p, [&](const SurfacePhoton& ph) {
-                    if (glm::dot(ph.normal, ng) <= 0.0) return;  // other side of a thin surface
+                    // Only photons that landed on this side of this surface: not the other side of
+                    // a thin wall, not the inside of a closed box seen from outside (at its edges
+                    // the faces are perpendicular only up to float rounding), not a surface across
+                    // a gap narrower than the radius (a ceiling above a closed box).
+                    if (glm::dot(ph.normal, ng) <= 0.0) return;
+                    if (!scene.surfacePointsSeeEachOther(anchor, ng, photonAnchor(scene, ph), ph.normal)) return;
                     const Color L = path.beta * fr * ph.power * invArea;
                     ++stats.photonEstimates;
                     splatInstant(time, scratch.acc, stats, L, path.oplCam + ph.opl, ph.opl);
@@ -114,11 +160,14 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
         }
         if (mat.type == MaterialType::Mirror) {
             path.beta *= mat.specular;
-            ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
+            ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
             continue;
         }
         // Dielectric or null boundary: follow reflection or refraction, chosen by Fresnel.
-        ray = scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+        const std::optional<Ray> next =
+            scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+        if (!next) { ++stats.regionOverflows; break; }
+        ray = *next;
         if (mat.type == MaterialType::Null && ++nullCrossings <= 64) --depth;
         if (mat.type == MaterialType::Dielectric) path.beta *= mat.specular;
     }

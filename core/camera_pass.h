@@ -25,6 +25,7 @@ struct CameraPassStats : FilmTally {
     int64_t cameraRays = 0;
     int64_t beamEstimates = 0;
     int64_t photonEstimates = 0;
+    int64_t regionOverflows = 0;  // camera paths ended because their region stack was full (RegionStack)
     CameraPassStats& operator+=(const CameraPassStats& o);
 };
 
@@ -32,6 +33,7 @@ struct CameraPassStats : FilmTally {
 struct CameraPassScratch {
     PixelAccumulator acc;
     std::vector<BeamHit> hits;
+    std::vector<int> nearShapes;  // shapes near the current camera segment (beam visibility)
 };
 
 // Renders the pixels of `tile` into the film (the film's TileWriter locks that tile).

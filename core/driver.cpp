@@ -69,6 +69,7 @@ bool Driver::runPass(uint64_t pass) {
     ps.surfacePhotons = static_cast<int64_t>(map.photons.size());
     ps.emittedFlux = map.emittedFlux;
     ps.cutFlux = map.cutFlux;
+    ps.regionOverflows = map.regionOverflows;
     const double t1 = nowSec();
 
     // 2. Acceleration structures.

@@ -50,6 +50,7 @@ struct PassStats {
     // Flux the photons started with, and the part still carried at the end of long beams cut in an
     // unbounded medium (missing from the steady image only: see photon_tracer.cpp, openBeamLength).
     Color emittedFlux{0.0}, cutFlux{0.0};
+    int64_t regionOverflows = 0;  // photons ended by a full region stack (camera paths: camera.regionOverflows)
     CameraPassStats camera;
     double photonSec = 0.0, buildSec = 0.0, cameraSec = 0.0, passSec = 0.0;
     double elapsedSec = 0.0;  // since start()

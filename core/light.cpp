@@ -38,7 +38,15 @@ Light Light::fromDesc(const LightDesc& d) {
     return l;
 }
 
-EmissionSample Light::sampleEmission(Rng& rng) const {
+Vec3 Light::offsetAreaPoint(double u, double v, double offset) const {
+    const Vec3 p = corner + u * edgeU + v * edgeV;
+    const Vec3 toCentre = corner + 0.5 * (edgeU + edgeV) - p;
+    const double lenToCentre = glm::length(toCentre);
+    const double inwards = lenToCentre > 0.0 ? std::min(offset, lenToCentre) / lenToCentre : 0.0;
+    return p + offset * normal + inwards * toCentre;
+}
+
+EmissionSample Light::sampleEmission(Rng& rng, double offset) const {
     EmissionSample e;
     const double u1 = rng.uniform(), u2 = rng.uniform();
     switch (type) {
@@ -57,9 +65,8 @@ EmissionSample Light::sampleEmission(Rng& rng) const {
         case LightType::AreaQuad: {
             // Uniform position, cosine direction: exactly the Lambertian emission, weight = Phi.
             const double u3 = rng.uniform(), u4 = rng.uniform();
-            const Vec3 p = corner + u1 * edgeU + u2 * edgeV;
             const Vec3 d = glm::normalize(toWorld(sampleCosineHemisphere(u3, u4), normal));
-            e.ray = {p + 1e-7 * normal, d};
+            e.ray = {offsetAreaPoint(u1, u2, offset), d};
             e.power = power;
             break;
         }

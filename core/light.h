@@ -1,5 +1,6 @@
 // Light sources and photon emission. Power is radiant flux (W, RGB); emitOpl the pulse instant as
-// optical path length (m). All lights are assumed to sit in the global (outside) region.
+// optical path length (m). The region a photon starts in is the scene's business (Scene::
+// emissionRegions: where the emitting point lies, found from the light's LightPlacement).
 #pragma once
 #include "math.h"
 #include "rng.h"
@@ -23,7 +24,13 @@ struct Light {
     double laserRadius = 0.0;
 
     static Light fromDesc(const LightDesc& d);
-    EmissionSample sampleEmission(Rng& rng) const;
+    // An area light's photon starts `offset` (Scene::rayEps) in front of its quad and up to
+    // `offset` in from its edges: off the quad, off a wall the quad lies on, and off a side wall
+    // at its edge (a light filling the ceiling of a closed box must not emit through the walls).
+    EmissionSample sampleEmission(Rng& rng, double offset) const;
+    // The point of an area light at (u, v) in [0, 1]^2 moved `offset` in front of the quad and up
+    // to `offset` in from its edges: where its photons start, and where shadow rays end.
+    Vec3 offsetAreaPoint(double u, double v, double offset) const;
     // Spot profile f(cos) in [0, 1]: 1 inside the falloff cone, smooth to 0 at the cutoff.
     double spotProfile(double cosTheta) const;
     // Radiance leaving the front side of an area light (W / (m^2 sr)).

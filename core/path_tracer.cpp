@@ -20,7 +20,6 @@ namespace tpb {
 
 namespace {
 
-constexpr double kAreaShrink = 1e-5;   // shadow rays to an area light stop this fraction short
 constexpr int kMaxShadowCrossings = 64;
 constexpr int kRussianRouletteDepth = 3;
 
@@ -42,16 +41,15 @@ void splat(PathContext& ctx, const Color& L, double tReal, double tUnw) {
 // Shadow ray from `from` (in the region on top of `stack`) to `to`. Null boundaries are crossed
 // (push on entering, pop on leaving), any other surface blocks. On success returns the product of
 // the regions' transmittances and the OPL of the connection.
-bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stack, bool toSurface, Color& tr,
-                 double& opl) {
+bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stack, Color& tr, double& opl,
+                 PathTracerStats& stats) {
     tr = Color(1.0);
     opl = 0.0;
-    const double shrink = toSurface ? kAreaShrink * glm::length(to - from) : 0.0;
     for (int i = 0; i < kMaxShadowCrossings; ++i) {
         const Vec3 v = to - from;
         const double dist = glm::length(v);
-        if (!(dist > shrink)) return true;
-        const Ray ray{from, v / dist, 0.0, dist - shrink};
+        if (!(dist > 0.0)) return true;
+        const Ray ray{from, v / dist, 0.0, dist};
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
         const double seg = hit ? hit->t : dist;
         const Region& region = scene.regions[stack.top()];
@@ -63,7 +61,11 @@ bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stac
         if (scene.materials[shape.material].type != MaterialType::Null) return false;
         const bool front = glm::dot(ray.d, hit->ng) < 0.0;
         const Vec3 ng = front ? hit->ng : -hit->ng;
-        if (front) stack.push(shape.interiorRegion); else stack.pop();
+        if (front) {
+            if (!stack.push(shape.interiorRegion)) { ++stats.regionOverflows; return false; }
+        } else {
+            stack.pop();
+        }
         from = hit->p - scene.rayEps * ng;
     }
     return false;
@@ -97,7 +99,10 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
             break;
         }
         case LightType::AreaQuad: {
-            y = light.corner + u1 * light.edgeU + u2 * light.edgeV;  // pdf 1 / area
+            // pdf 1 / area. The shadow ray ends where the light's photons start (rayEps in front of
+            // the quad and in from its edges): a light filling a closed box's ceiling is then out
+            // of reach from outside, also through the box's edges.
+            y = light.offsetAreaPoint(u1, u2, scene.rayEps);
             const Vec3 v = y - x;
             const double d2 = glm::dot(v, v);
             if (!(d2 > 0.0)) return;
@@ -117,7 +122,7 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
     ++ctx.stats.shadowRays;
     Color tr;
     double oplShadow;
-    if (!traceShadow(scene, x + offset, y, regions, light.type == LightType::AreaQuad, tr, oplShadow)) return;
+    if (!traceShadow(scene, x + offset, y, regions, tr, oplShadow, ctx.stats)) return;
     const Color L = beta * f * Li * tr / pick;
     splat(ctx, L, light.emitOpl + oplShadow + oplCam, light.emitOpl + oplShadow + oplUnw);
 }
@@ -300,7 +305,11 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
         if (mat.type == MaterialType::Null) {
             // Index-matched boundary (as in the beam core): no bending, no reflection, no depth.
             ray = {hit->p - scene.rayEps * ng, ray.d};
-            if (front) regions.push(shape.interiorRegion); else regions.pop();
+            if (front) {
+                if (!regions.push(shape.interiorRegion)) { ++ctx.stats.regionOverflows; return; }
+            } else {
+                regions.pop();
+            }
             continue;
         }
 
@@ -308,7 +317,8 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
         if (mat.type == MaterialType::Diffuse) {
             nonSpecular = true;
             const Color fr = mat.albedo * kInvPi;
-            nextEvent(ctx, rng, hit->p, scene.rayEps * ng, regions, beta, oplCam, oplUnw, nullptr, 0.0, [&](const Vec3& w) {
+            const Vec3 origin = scene.bounceOrigin(ray, *hit, ng);
+            nextEvent(ctx, rng, hit->p, origin - hit->p, regions, beta, oplCam, oplUnw, nullptr, 0.0, [&](const Vec3& w) {
                 if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
                 return fr * std::max(0.0, glm::dot(w, ns));
             });
@@ -317,16 +327,19 @@ void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng)
             const Vec3 wo = glm::normalize(toWorld(sampleCosineHemisphere(v1, v2), ns));
             if (glm::dot(wo, ng) <= 0.0) return;
             beta *= mat.albedo;  // f cos / pdf
-            ray = {hit->p + scene.rayEps * ng, wo};
+            ray = {origin, wo};
             emitterVisible = false;
         } else if (mat.type == MaterialType::Mirror) {
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
             beta *= mat.specular;
-            ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
+            ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
             emitterVisible = true;
         } else {  // dielectric: reflection or refraction chosen by Fresnel
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
-            ray = scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+            const std::optional<Ray> next =
+                scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+            if (!next) { ++ctx.stats.regionOverflows; return; }
+            ray = *next;
             beta *= mat.specular;
             emitterVisible = true;
         }
@@ -345,6 +358,7 @@ PathTracerStats& PathTracerStats::operator+=(const PathTracerStats& o) {
     laserSamples += o.laserSamples;
     equiangularSamples += o.equiangularSamples;
     depthLimited += o.depthLimited;
+    regionOverflows += o.regionOverflows;
     return *this;
 }
 

@@ -77,6 +77,7 @@ struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or 
     int64_t laserSamples = 0;    // NEE picked a laser (cannot be connected; contributes nothing)
     int64_t equiangularSamples = 0;  // equiangular points placed towards point/spot lights
     int64_t depthLimited = 0;    // paths stopped by maxDepth (not by escape, absorption or RR)
+    int64_t regionOverflows = 0;  // paths (or shadow rays) ended because their region stack was full (RegionStack)
     PathTracerStats& operator+=(const PathTracerStats& o);
 };
 

@@ -47,14 +47,18 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
     const int li = scene.pickLight(rng.uniform(), lightPdf);
     if (li < 0 || lightPdf <= 0.0) return;
     const Light& light = scene.lights[li];
-    EmissionSample em = light.sampleEmission(rng);
+    EmissionSample em = light.sampleEmission(rng, scene.rayEps);
     Color power = em.power / (lightPdf * static_cast<double>(s.photons));
     const double power0 = maxComponent(power);
     if (!(power0 > 0.0)) return;
     out.emittedFlux += power;
     Ray ray = em.ray;
+    // The photon starts in the region where it leaves the light: a light inside a fog container
+    // or a closed box emits into it (an area light may straddle a boundary: per point).
+    const std::optional<RegionStack> startRegions = scene.emissionRegions(li, ray.o);
+    if (!startRegions) { ++out.regionOverflows; return; }
+    RegionStack regions = *startRegions;
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
-    RegionStack regions = scene.lightRegions[li];
     int nullCrossings = 0;  // index-matched boundaries are not events: they do not use up depth
     const size_t beams0 = out.beams.size(), photons0 = out.photons.size();
 
@@ -127,16 +131,19 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
                 newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), ns));
                 if (glm::dot(newDir, ng) <= 0.0) return;
                 power *= mat.albedo;
-                ray = {hit->p + scene.rayEps * ng, newDir};
+                ray = {scene.bounceOrigin(ray, *hit, ng), newDir};
                 break;
             }
             case MaterialType::Mirror:
                 power *= mat.specular;
-                ray = {hit->p + scene.rayEps * ng, glm::normalize(reflect(ray.d, ns))};
+                ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
                 break;
             case MaterialType::Dielectric:
             case MaterialType::Null: {
-                ray = scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+                const std::optional<Ray> next =
+                    scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+                if (!next) { ++out.regionOverflows; return; }
+                ray = *next;
                 if (mat.type == MaterialType::Null && ++nullCrossings <= 64) { --depth; continue; }
                 if (mat.type == MaterialType::Dielectric) power *= mat.specular;
                 break;
@@ -183,6 +190,7 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s, const s
         all.rejected += p.rejected;
         all.emittedFlux += p.emittedFlux;
         all.cutFlux += p.cutFlux;
+        all.regionOverflows += p.regionOverflows;
     }
     return all;
 }

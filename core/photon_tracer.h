@@ -43,6 +43,7 @@ struct PhotonMap {
     int64_t rejected = 0;      // non-finite photon weights discarded
     Color emittedFlux{0.0};    // W: the flux the pass's photons started with (estimates the lights' power)
     Color cutFlux{0.0};        // W: flux still carried at the end of long beams cut in an unbounded medium
+    int64_t regionOverflows = 0;   // photons ended because their region stack was full (RegionStack)
 };
 
 struct PhotonTraceSettings {

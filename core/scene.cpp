@@ -55,6 +55,60 @@ bool reachesDiffuse(const Scene& s, Ray ray, int depth) {
     return false;
 }
 
+struct SurfaceProbe {
+    int shape;
+    Vec3 p, n;  // a point of the surface and its unit normal there
+};
+
+// Refuses dielectric/null shapes nested deeper than a RegionStack holds, naming the chain. A
+// point just inside each shape's surface finds the shapes around it (the deepest point of a
+// properly nested scene lies inside its innermost shape).
+void checkNesting(const Scene& s, const std::vector<SurfaceProbe>& probes) {
+    for (const SurfaceProbe& pr : probes) {
+        const std::vector<int> around = s.shapesAround(pr.p - 4.0 * s.rayEps * pr.n);
+        if (static_cast<int>(around.size()) < RegionStack::kCapacity) continue;
+        std::string chain;
+        for (int sh : around) chain += (chain.empty() ? "\"" : " > \"") + s.shapes[sh].name + "\"";
+        const std::string key = "shapes[" + std::to_string(pr.shape) + "]";
+        throw UserError(s.desc.where(key) + key + ": \"" + s.shapes[pr.shape].name + "\" is the innermost of " +
+                        std::to_string(around.size()) + " nested dielectric/null shapes (outermost first: " + chain +
+                        "); at most " + std::to_string(RegionStack::kCapacity - 1) +
+                        " can nest (the region stack holds the outside and " + std::to_string(RegionStack::kCapacity - 1) +
+                        " shapes); take shapes out of the nesting or merge nested shells into one shape");
+    }
+}
+
+// The region stack where a light's photons start and whether it holds over all of the light:
+// true unless a dielectric/null shape's bounds come near the points it emits from (a surface
+// that changes the region must pass through those bounds).
+LightPlacement placeLight(const Scene& s, const Light& l) {
+    LightPlacement pl;
+    Bounds3 footprint;
+    pl.anchor = l.position;
+    footprint.expand(l.position);
+    if (l.type == LightType::AreaQuad) {
+        const Vec3 lift = s.rayEps * l.normal;  // photons start rayEps in front of the quad
+        // Not the centre: scenes put boundaries through round coordinates (a light centred on a
+        // container's face), and a stack found at a point on a surface would be a coin toss.
+        pl.anchor = l.corner + 0.6180339887 * l.edgeU + 0.4142135624 * l.edgeV + lift;
+        footprint = Bounds3{};
+        for (const Vec3& c : {l.corner, l.corner + l.edgeU, l.corner + l.edgeV, l.corner + l.edgeU + l.edgeV})
+            footprint.expand(c + lift);
+    } else if (l.type == LightType::Laser && l.laserRadius > 0.0) {
+        footprint.expand(l.position - Vec3(l.laserRadius));
+        footprint.expand(l.position + Vec3(l.laserRadius));
+    }
+    pl.regions = s.regionsAt(pl.anchor);
+    const double pad = 8.0 * s.rayEps;
+    for (const ShapeInfo& sh : s.shapes) {
+        if (sh.interiorRegion <= 0 || !sh.bounds.valid()) continue;
+        const bool apart = glm::any(glm::lessThan(sh.bounds.hi + pad, footprint.lo)) ||
+                           glm::any(glm::greaterThan(sh.bounds.lo - pad, footprint.hi));
+        if (!apart) pl.uniform = false;
+    }
+    return pl;
+}
+
 }  // namespace
 
 bool Scene::cameraSeesDiffuse() const {
@@ -88,6 +142,9 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
         shapes.push_back(q);
     }
 
+    // A point on each dielectric/null shape's surface and its normal (the interior lies against
+    // it), to measure how deep the shapes nest (checkNesting).
+    std::vector<SurfaceProbe> probes;
     for (size_t i = 0; i < shapes.size(); ++i) {
         const ShapeDesc& sd = shapes[i];
         const std::string key = "shapes[" + std::to_string(i) + "]";
@@ -105,6 +162,16 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
             info.interiorRegion = static_cast<int>(s->regions.size() - 1);
         }
         const int id = static_cast<int>(i);
+        const auto addMesh = [&](const TriangleMesh& m) {
+            s->geometry.addMesh(m, id);
+            for (const Vec3& v : m.positions) info.bounds.expand(v);
+            if (isInterface && !m.triangles.empty()) {
+                const glm::uvec3 t = m.triangles[0];
+                const Vec3 a = m.positions[t.x], b = m.positions[t.y], c = m.positions[t.z];
+                const Vec3 n = glm::cross(b - a, c - a);
+                if (glm::length(n) > 0.0) probes.push_back({id, (a + b + c) / 3.0, glm::normalize(n)});
+            }
+        };
         switch (sd.type) {
             case ShapeType::Mesh: {
                 TriangleMesh m;
@@ -120,21 +187,26 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
                     throw UserError(d.where(k) + k + ": " + sd.meshPath + ": " + e.what());
                 }
                 if (sd.flipNormals) m.flip();
-                s->geometry.addMesh(m, id);
+                addMesh(m);
                 break;
             }
-            case ShapeType::Sphere: s->geometry.addSphere(sd.center, sd.radius, id); break;
+            case ShapeType::Sphere:
+                s->geometry.addSphere(sd.center, sd.radius, id);
+                info.bounds.expand(sd.center - Vec3(sd.radius));
+                info.bounds.expand(sd.center + Vec3(sd.radius));
+                if (isInterface) probes.push_back({id, sd.center + Vec3(0.0, sd.radius, 0.0), Vec3(0.0, 1.0, 0.0)});
+                break;
             case ShapeType::Quad: {
                 TriangleMesh m = makeQuad(sd.corner, sd.edgeU, sd.edgeV);
                 if (sd.flipNormals) m.flip();
-                s->geometry.addMesh(m, id);
+                addMesh(m);
                 break;
             }
             case ShapeType::Box: {
                 TriangleMesh m = makeBox(sd.boxMin, sd.boxMax);
                 m.transform(sd.transform);
                 if (sd.flipNormals) m.flip();
-                s->geometry.addMesh(m, id);
+                addMesh(m);
                 break;
             }
         }
@@ -178,9 +250,9 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
     }
 
     // Where the camera and the lights sit (inside glass or a medium container, or outside).
+    checkNesting(*s, probes);
     s->cameraRegions = s->regionsAt(s->camera.position);
-    for (const Light& l : s->lights)
-        s->lightRegions.push_back(l.type == LightType::AreaQuad ? RegionStack{} : s->regionsAt(l.position));
+    for (const Light& l : s->lights) s->lightPlacement.push_back(placeLight(*s, l));
 
     // Stages this scene needs.
     Stages& st = s->stages;
@@ -210,31 +282,64 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
     return s;
 }
 
-Ray Scene::followInterface(const ShapeInfo& shape, const Material& mat, const SurfaceHit& hit, const Vec3& d,
-                           bool front, const Vec3& ng, const Vec3& ns, RegionStack& regions, double u) const {
+std::optional<Ray> Scene::followInterface(const ShapeInfo& shape, const Material& mat, const SurfaceHit& hit,
+                                          const Vec3& d, bool front, const Vec3& ng, const Vec3& ns,
+                                          RegionStack& regions, double u) const {
     double etaI, etaT;
     interfaceEtas(shape, front, regions, etaI, etaT);
     if (mat.type == MaterialType::Null) etaT = etaI;  // index-matched: never bends, never reflects
     const double F = fresnelDielectric(-glm::dot(d, ns), etaI, etaT);
-    // The continued ray starts on the surface and skips it with tmin (the distance along the ray to
-    // rayEps off the surface), so free flights, transmittance and OPL count from the surface itself.
-    // (Moving the origin by rayEps would skip that much medium - 100 mean free paths at 1e6 /m -
-    // and that much optical path at every crossing.) Grazing directions keep the moved origin.
-    const auto leave = [&](const Vec3& w, double side) -> Ray {
-        const double cosW = side * glm::dot(w, ng);
-        if (!(cosW > 1e-2)) return {hit.p + side * rayEps * ng, w};
-        Ray r{hit.p, w};
-        r.tmin = rayEps / cosW;
-        return r;
-    };
+    // The continued ray starts on the surface and skips it with tmin (leaveSurface): moving the
+    // origin by rayEps would skip that much medium - 100 mean free paths at 1e6 /m - and that much
+    // optical path at every crossing.
     Vec3 refr;
-    if (u < F || !refract(d, ns, etaI / etaT, refr)) return leave(glm::normalize(reflect(d, ns)), 1.0);
-    if (front) regions.push(shape.interiorRegion);
-    else regions.pop();
-    return leave(refr, -1.0);
+    if (u < F || !refract(d, ns, etaI / etaT, refr)) return leaveSurface(hit.p, glm::normalize(reflect(d, ns)), ng);
+    if (front) {
+        if (!regions.push(shape.interiorRegion)) return std::nullopt;
+    } else {
+        regions.pop();
+    }
+    return leaveSurface(hit.p, refr, -ng);
 }
 
-RegionStack Scene::regionsAt(const Vec3& p) const {
+Ray Scene::leaveSurface(const Vec3& p, const Vec3& w, const Vec3& n) const {
+    const double cosW = glm::dot(w, n);
+    if (!(cosW > 1e-2)) return {p + rayEps * n, w};
+    Ray r{p, w};
+    r.tmin = rayEps / cosW;
+    return r;
+}
+
+Vec3 Scene::bounceOrigin(const Ray& ray, const SurfaceHit& hit, const Vec3& ng) const {
+    const double back = std::min(rayEps, 0.5 * (hit.t - std::max(ray.tmin, 0.0)));
+    return hit.p + rayEps * ng - std::max(back, 0.0) * ray.d;
+}
+
+bool Scene::segmentClear(const Vec3& a, const Vec3& b) const {
+    const Vec3 v = b - a;
+    const double len = glm::length(v);
+    if (!(len > 0.0)) return true;
+    return !geometry.occluded({a, v / len, 0.0, len});
+}
+
+bool Scene::surfacePointsSeeEachOther(const Vec3& a, const Vec3& na, const Vec3& b, const Vec3& nb) const {
+    const Vec3 v = b - a;
+    Vec3 up = na + nb;
+    const double upLen = glm::length(up);
+    if (!(upLen > 0.0)) return false;
+    up /= upLen;
+    // Heights along `up`, from the chord's midpoint, of the planes through a and b normal to na
+    // and nb (the tangent planes lifted to the anchors); positive on a convex surface.
+    const double ha = -0.5 * glm::dot(v, na) / glm::dot(up, na);
+    const double hb = 0.5 * glm::dot(v, nb) / glm::dot(up, nb);
+    const double h = std::max(ha, hb);
+    // Anchors are at least rayEps off their surfaces: a dip of less than that does not reach them.
+    if (!(h > rayEps)) return segmentClear(a, b);
+    const Vec3 apex = a + 0.5 * v + h * up;
+    return segmentClear(a, apex) && segmentClear(apex, b);
+}
+
+std::vector<int> Scene::shapesAround(const Vec3& p) const {
     // Walk outwards along a fixed, non-axis-aligned direction; record the shapes we leave.
     std::vector<int> leaving;
     std::map<int, int> entered;  // shapes entered further out along the ray (and not left yet)
@@ -247,14 +352,45 @@ RegionStack Scene::regionsAt(const Vec3& p) const {
         if (sh.interiorRegion > 0) {
             int& n = entered[hit->shape];
             if (!exiting) ++n;
-            else if (n > 0) --n;                           // left a shape entered on the way
-            else leaving.push_back(sh.interiorRegion);     // left a shape that holds p
+            else if (n > 0) --n;                          // left a shape entered on the way
+            else leaving.push_back(hit->shape);           // left a shape that holds p
         }
         ray = {hit->p + ray.d * rayEps * 4.0, ray.d};
     }
-    // Innermost shape left first: push from the outermost.
+    std::reverse(leaving.begin(), leaving.end());  // innermost was left first
+    return leaving;
+}
+
+RegionStack Scene::regionsAt(const Vec3& p) const {
     RegionStack st;
-    for (auto it = leaving.rbegin(); it != leaving.rend(); ++it) st.push(*it);
+    for (int sh : shapesAround(p))
+        if (!st.push(shapes[sh].interiorRegion)) break;  // deeper than build() allows: keep the outermost
+    return st;
+}
+
+bool Scene::walkRegions(RegionStack& stack, const Vec3& from, const Vec3& to) const {
+    const Vec3 v = to - from;
+    const double len = glm::length(v);
+    if (!(len > 0.0)) return true;
+    Ray ray{from, v / len, 0.0, len};
+    for (int guard = 0; guard < 256; ++guard) {
+        const auto hit = geometry.intersect(ray);
+        if (!hit) break;
+        const ShapeInfo& sh = shapes[hit->shape];
+        if (sh.interiorRegion > 0) {
+            if (glm::dot(ray.d, hit->ng) > 0.0) stack.pop();
+            else if (!stack.push(sh.interiorRegion)) return false;
+        }
+        ray.tmin = hit->t + 4.0 * rayEps;
+    }
+    return true;
+}
+
+std::optional<RegionStack> Scene::emissionRegions(int li, const Vec3& start) const {
+    const LightPlacement& pl = lightPlacement[li];
+    if (pl.uniform) return pl.regions;
+    RegionStack st = pl.regions;
+    if (!walkRegions(st, pl.anchor, start)) return std::nullopt;
     return st;
 }
 

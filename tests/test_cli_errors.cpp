@@ -166,10 +166,11 @@ protected:
 };
 
 // A valid scene, one key per line, so that each test can break line N and expect "scene.json:N".
+// The camera sits inside the closed box with the light (from outside the box would be black).
 const char* kLines[] = {
     "{",                                                                                        // 1
     "  \"version\": 1,",                                                                        // 2
-    "  \"camera\": {\"position\": [0, 0.5, 3], \"look_at\": [0, 0.5, 0], \"resolution\": [16, 16]},",  // 3
+    "  \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"resolution\": [16, 16]},",  // 3
     "  \"film\": {\"bins\": 8},",                                                               // 4
     "  \"media\": {\"fog\": {\"sigma_s\": 0.5, \"sigma_a\": 0.05}},",                           // 5
     "  \"global_medium\": \"fog\",",                                                            // 6

@@ -905,7 +905,7 @@ TEST(StabilityIor, TotalInternalReflectionKeepsLightInside) {
           "lights": [{"type": "laser", "position": [0, -0.5, 0], "direction": )" +
                                  vec(Vec3(std::sin(a), std::cos(a), 0.0)) + R"(, "power": 1}]})";
         auto sc = sceneFrom(json);
-        EXPECT_EQ(sc->lightRegions[0].top(), 1);  // the laser sits inside the glass
+        EXPECT_EQ(sc->lightPlacement[0].regions.top(), 1);  // the laser sits inside the glass
         PhotonTraceSettings pt;
         pt.photons = 20000;
         pt.maxDepth = 2;  // glass -> top face -> gap (-> null boundary, no depth) -> fog
@@ -1144,9 +1144,9 @@ TEST(StabilityDegenerate, LightInsideAGlassSphere) {
       "lights": [{"type": "point", "position": [0, 0, 0], "power": 10, "emit_time_m": 1.0}],
       "render": {"photons_per_pass": 4000, "radius": 0.03, "max_depth": 6, "seed": 5}})";
     auto sc = sceneFrom(json);
-    ASSERT_EQ(sc->lightRegions.size(), 1u);
-    EXPECT_EQ(sc->lightRegions[0].size, 2);
-    EXPECT_EQ(sc->lightRegions[0].top(), 1);
+    ASSERT_EQ(sc->lightPlacement.size(), 1u);
+    EXPECT_EQ(sc->lightPlacement[0].regions.size, 2);
+    EXPECT_EQ(sc->lightPlacement[0].regions.top(), 1);
     EXPECT_EQ(sc->cameraRegions.top(), 0);
     PhotonTraceSettings pt;
     pt.photons = 20000;
@@ -1229,7 +1229,7 @@ TEST(StabilityDegenerate, CameraInsideAMediumBox) {
       "lights": [{"type": "point", "position": [0, 0, 0], "power": 10}]})";
     auto sc = sceneFrom(json);
     EXPECT_EQ(sc->cameraRegions.top(), 1);
-    EXPECT_EQ(sc->lightRegions[0].top(), 1);
+    EXPECT_EQ(sc->lightPlacement[0].regions.top(), 1);
     PassRunner run(*sc);
     run.photons = 4000;
     run.radius = 0.06;
