@@ -120,6 +120,7 @@ json ptSummary(const Scene& scene, const PathTracerSettings& ps, const Transient
     j["totals"] = {{"camera_paths", st.cameraPaths}, {"contributions", st.contributions},
                    {"shadow_rays", st.shadowRays}, {"laser_samples", st.laserSamples},
                    {"depth_limited", st.depthLimited}, {"render_seconds", renderSec},
+                   {"region_stack_overflows", st.regionOverflows},
                    {"paths_per_second", renderSec > 0 ? st.cameraPaths / renderSec : 0.0},
                    {"rejected_samples", fs.rejectedSamples.load()},
                    {"energy_outside_film_fraction_real", in0 + out0 > 0 ? out0 / (in0 + out0) : 0.0},

@@ -47,6 +47,7 @@ nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOp
     int64_t beams = 0, estimates = 0, photonEst = 0;
     double passSec = 0.0;
     Color emittedFlux(0.0), cutFlux(0.0);
+    int64_t regionOverflows = 0;
     for (const PassStats& p : hist) {
         per.push_back({{"pass", p.pass}, {"beam_radius_m", p.beamRadius}, {"surface_radius_m", p.surfaceRadius},
                        {"beams", p.beams}, {"beam_pieces", p.beamPieces}, {"surface_photons", p.surfacePhotons},
@@ -59,6 +60,7 @@ nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOp
         passSec += p.passSec;
         emittedFlux += p.emittedFlux;
         cutFlux += p.cutFlux;
+        regionOverflows += p.regionOverflows + p.camera.regionOverflows;
     }
     j["per_pass"] = per;
     const FilmStats& fs = drv.film().stats;
@@ -73,6 +75,7 @@ nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOp
                    {"energy_outside_film_fraction_unwarped", in1 + out1 > 0 ? out1 / (in1 + out1) : 0.0},
                    // Long beams in an unbounded medium end past the film's end; the flux they still
                    // carry there is missing from the steady image only (photon_tracer.cpp).
+                   {"region_stack_overflows", regionOverflows},
                    {"beam_flux_cut_fraction", luminance(emittedFlux) > 0 ? luminance(cutFlux) / luminance(emittedFlux) : 0.0},
                    {"peak_rss_bytes", peakRssBytes()}};
     return j;
@@ -186,6 +189,14 @@ void run(RenderCmd& c) {
     const OutputReport rep =
         writeRenderOutputs(drv.film(), outputs, [&] { return summaryJson(*scene, drv, opt, wall); });
     warnFilmOverflow(*scene, drv.film());
+    int64_t regionOverflows = 0;
+    for (const PassStats& p : drv.history()) regionOverflows += p.regionOverflows + p.camera.regionOverflows;
+    if (regionOverflows > 0)
+        std::fprintf(stderr,
+                     "warning: %lld paths were ended because they entered more than 7 nested dielectric/null shapes "
+                     "(open or overlapping shapes crossed again and again); close those shapes or make them not "
+                     "overlap\n",
+                     static_cast<long long>(regionOverflows));
     const double outside = checkEnergyInsideFilm(*scene, drv.film(), opt.axis, ds.threads);
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     const int frames = rep.framesWritten;
