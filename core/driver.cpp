@@ -141,7 +141,7 @@ void Driver::start(std::function<void(const PassStats&)> onPass) {
 void Driver::loop(std::function<void(const PassStats&)> onPass) {
     const double t0 = nowSec();
     for (uint64_t pass = completed_ + 1;; ++pass) {
-        if (!gate_.waitUntilOpen() || stopRequested_ || abort_) break;
+        if (!gate_.waitUntilOpen(&stopRequested_) || stopRequested_ || abort_) break;
         if (settings_.passes > 0 && static_cast<int64_t>(pass) > settings_.passes) break;
         if (settings_.timeBudgetSec > 0.0 && nowSec() - t0 >= settings_.timeBudgetSec) break;
         try {

@@ -78,11 +78,9 @@ public:
     std::exception_ptr failure() const;
     std::string failureMessage() const;
     bool paused() const { return gate_.paused(); }
-    // Stops the background run after the pass in progress (wakes it if paused).
-    void requestStop() {
-        stopRequested_ = true;
-        gate_.stop();
-    }
+    // Stops the background run after the pass in progress (a paused run sees it within 20 ms).
+    // Only stores an atomic: safe to call from a signal handler (the CLI's Ctrl-C/SIGTERM).
+    void requestStop() { stopRequested_ = true; }
 
     const TransientFilm& film() const { return *film_; }
     TransientFilm& film() { return *film_; }

@@ -5,6 +5,8 @@
 // lost wakeup: the waiter sleeps on with the gate open (a resumed render that stays paused).
 // `beforeSleep` is a test hook, called under the lock right after the predicate said "wait".
 #pragma once
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <mutex>
@@ -25,14 +27,18 @@ public:
         std::lock_guard<std::mutex> g(mutex_);
         return stopped_;
     }
-    // Blocks while paused; returns false when stopped (at once if already stopped).
-    bool waitUntilOpen(const std::function<void()>& beforeSleep = {}) {
+    // Blocks while paused; returns false when stopped (at once if already stopped). `alsoStop` is a
+    // flag that may be set without the lock, e.g. from a signal handler (which must not take a
+    // mutex): while one is given, the wait wakes every 20 ms to look at it.
+    bool waitUntilOpen(const std::atomic<bool>* alsoStop = nullptr, const std::function<void()>& beforeSleep = {}) {
         std::unique_lock<std::mutex> lk(mutex_);
-        while (paused_ && !stopped_) {
+        const auto stop = [&] { return stopped_ || (alsoStop && alsoStop->load()); };
+        while (paused_ && !stop()) {
             if (beforeSleep) beforeSleep();
-            cv_.wait(lk);
+            if (alsoStop) cv_.wait_for(lk, std::chrono::milliseconds(20));
+            else cv_.wait(lk);
         }
-        return !stopped_;
+        return !stop();
     }
 
 private:

@@ -443,7 +443,18 @@ TEST_F(CliErrors, CtrlCFinishesThePassAndWritesTheResults) {
     }
     ASSERT_TRUE(started);
     kill(pid2, SIGINT);
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    // Two signals sent before the process takes the first merge into one (standard signals do not
+    // queue): wait until the first is no longer pending (/proc ShdPnd/SigPnd), then send the second.
+    const auto sigintPending = [&] {
+        std::ifstream st("/proc/" + std::to_string(pid2) + "/status");
+        std::string line;
+        bool pending = false;
+        while (std::getline(st, line))
+            if (line.rfind("ShdPnd:", 0) == 0 || line.rfind("SigPnd:", 0) == 0)
+                pending = pending || (std::stoull(line.substr(7), nullptr, 16) >> (SIGINT - 1)) & 1u;
+        return pending;
+    };
+    for (int i = 0; i < 5000 && sigintPending(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     kill(pid2, SIGINT);
     const Proc q = waitTpb(pid2, dir_, t1, 60.0);
     EXPECT_EQ(q.signal, 0);

@@ -23,7 +23,7 @@ TEST(PauseGate, ResumeBetweenCheckAndSleepIsNotLost) {
     std::promise<bool> result;
     std::thread waiter([&] {
         bool first = true;
-        const bool open = gate.waitUntilOpen([&] {
+        const bool open = gate.waitUntilOpen(nullptr, [&] {
             if (!first) return;
             first = false;
             std::promise<void> done;
@@ -44,6 +44,21 @@ TEST(PauseGate, ResumeBetweenCheckAndSleepIsNotLost) {
     EXPECT_TRUE(inTime) << "resume() was lost: the waiter slept on with the gate open";
     if (inTime) EXPECT_TRUE(woke.get());
     EXPECT_FALSE(gate.paused());
+}
+
+// A stop flag set without the lock (the CLI's signal handler may not take a mutex) is seen.
+TEST(PauseGate, AFlagSetWithoutTheLockEndsTheWait) {
+    PauseGate gate;
+    gate.pause();
+    std::atomic<bool> flag{false};
+    std::promise<bool> result;
+    std::thread waiter([&] { result.set_value(gate.waitUntilOpen(&flag)); });
+    std::future<bool> r = result.get_future();
+    EXPECT_EQ(r.wait_for(50ms), std::future_status::timeout);
+    flag = true;  // no notify, no lock
+    ASSERT_EQ(r.wait_for(5s), std::future_status::ready);
+    EXPECT_FALSE(r.get());
+    waiter.join();
 }
 
 TEST(PauseGate, StopWakesAPausedWaiterAndRearmKeepsThePause) {
