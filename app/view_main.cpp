@@ -19,11 +19,15 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <thread>
 
 namespace tpb::app {
 
 namespace {
+
+constexpr double kMaxExposureEv = 40.0;  // the Display section's exposure slider spans -40 to 40 EV
+constexpr int64_t kMaxWindowPx = 16384;   // beyond any OpenGL 3.3 framebuffer
 
 std::string gGlfwError;
 std::atomic<bool> gInterrupted{false};
@@ -383,10 +387,10 @@ void runView(const ViewOptions& o) {
         throw UserError("--window-size needs two sizes >= 64");
     if (o.pixel.size() == 2 && (o.pixel[0] < 0 || o.pixel[1] < 0 || o.pixel[0] >= scene->camera.width ||
                                 o.pixel[1] >= scene->camera.height))
-        throw UserError("--pixel is outside the image");
-    checkShownTime(o, scene->time);
-    if (o.exposure && !std::isfinite(*o.exposure))
-        throw UserError("--exposure must be a finite number of EV (e.g. -3.5), or left out for automatic exposure");
+        throw UserError("--pixel " + std::to_string(o.pixel[0]) + " " + std::to_string(o.pixel[1]) +
+                        " is outside the image: X is 0 to " + std::to_string(scene->camera.width - 1) + ", Y 0 to " +
+                        std::to_string(scene->camera.height - 1));
+    checkShownTime(o, scene->time);  // --exposure, --after-passes, --time-budget: checked while parsing
 
     GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + scene->desc.path, !shot);
     ImGuiSession gui(window.get());
@@ -413,12 +417,15 @@ void registerView(CLI::App& app) {
     o->ov.add(cmd);
     // In the viewer --time is the time shown (ns); the render's time budget is --time-budget.
     cmd->remove_option(cmd->get_option("--time"));
-    cmd->add_option("--time-budget", o->ov.timeBudget, "Render time budget in seconds");
+    // Every flag is checked while parsing (cli_common.h flags::), as for `tpb render`: a bad value is
+    // refused with its range and exit code 2 before the scene loads or a window opens.
+    cmd->add_option("--time-budget", o->ov.timeBudget, "Render time budget in seconds")
+        ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), false, "seconds; 0 = no time budget"));
     CLI::Option* shot = cmd->add_option("--screenshot", o->screenshot,
                                         "Save a PNG of the window after --after-passes passes, then exit");
     cmd->add_option("--after-passes", o->afterPasses, "Passes to render before the screenshot (default 1)")
         ->needs(shot)
-        ->check(CLI::PositiveNumber);
+        ->transform(flags::integer(1, INT64_MAX, "passes rendered before the screenshot"));
     cmd->add_option("--export", o->exportDir,
                     "With --screenshot: once the passes are done, export the current frame and the steady "
                     "state to this folder by clicking the Export buttons")
@@ -438,12 +445,16 @@ void registerView(CLI::App& app) {
     cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)")->excludes(unwarp);
     CLI::Option* continuous = cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
     cmd->add_flag("--delta", o->delta, "Start with a delta pulse (the default)")->excludes(continuous);
-    cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)");
+    // The exposure slider's range; leaving the flag out means automatic exposure.
+    cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)")
+        ->check(flags::number(-kMaxExposureEv, kMaxExposureEv, false, "EV; leave it out for automatic exposure"));
     cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
     cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
     cmd->add_flag("--steady", o->steady, "Start on the steady-state image");
     cmd->add_option("--pixel", o->pixel, "Selected pixel: X Y (time profile; Y is the streak row)")->expected(2);
-    cmd->add_option("--window-size", o->windowSize, "Window size: W H (default 1280 800)")->expected(2);
+    cmd->add_option("--window-size", o->windowSize, "Window size: W H (default 1280 800)")
+        ->expected(2)
+        ->transform(flags::integer(64, kMaxWindowPx, "window pixels, width and height"));
     cmd->callback([o] { runView(*o); });
 }
 

@@ -256,6 +256,45 @@ void Viewer::drawTimeSection() {
     track("speed (bins/s)");
 }
 
+namespace {
+
+// The film's bookkeeping, on the displayed axis: the energy that missed the time range, split into
+// before and after it (they call for opposite fixes of film.start), and the estimates the film
+// dropped (non-finite ones, pixel sums that would overflow its floats), a warning when any.
+// Always two one-line rows (the details are in tooltips), so nothing below them ever moves and
+// the Export buttons stay in view in an 800-pixel window.
+void drawFilmStats(const FilmStats& fs, TimeAxis shownAxis) {
+    const long long rejected = static_cast<long long>(fs.rejectedSamples.load());
+    const long long overflowed = static_cast<long long>(fs.overflowedPixels.load());
+    if (overflowed > 0 || rejected > 0) {
+        ImGui::TextColored(ImVec4(1.0f, 0.75f, 0.2f, 1.0f), "warning: %lld rejected, %lld overflowed (hover)", rejected,
+                           overflowed);
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("%lld non-finite (NaN/Inf) estimates were rejected (they are not in the film).\n"
+                              "%lld pixel sums would have overflowed the film's 32-bit floats and were dropped\n"
+                              "from their passes (those pixels are too dark): lower the lights' power (the\n"
+                              "film scales with it).",
+                              rejected, overflowed);
+    } else {
+        ImGui::TextDisabled("rejected samples 0, overflowed pixels 0");
+    }
+    const int a = static_cast<int>(shownAxis);
+    const double in = fs.inside[a].load(), out = fs.outside[a].load(), before = fs.before[a].load();
+    const double total = in + out;
+    if (total > 0) {
+        const double beforePct = 100.0 * before / total, afterPct = 100.0 * std::max(0.0, out - before) / total;
+        ImGui::Text("outside the film %.2g %% (%.2g before, %.2g after)", 100.0 * out / total, beforePct, afterPct);
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("Of the energy that reached the camera, on the %s axis:\n%.3g %% arrived before the "
+                              "film's start, %.3g %% after its end.",
+                              shownAxis == TimeAxis::Real ? "real-time" : "camera-unwarped", beforePct, afterPct);
+    } else {
+        ImGui::TextDisabled("outside the film -");
+    }
+}
+
+}  // namespace
+
 void Viewer::drawProgressSection() {
     if (!section("Progress", ImGuiTreeNodeFlags_DefaultOpen)) return;
     const DriverSettings& s = driver_->settings();
@@ -289,12 +328,7 @@ void Viewer::drawProgressSection() {
         ImGui::TextDisabled("trace -, build -, camera -");
         ImGui::TextDisabled("total time -");
     }
-    const FilmStats& fs = driver_->film().stats;
-    ImGui::Text("rejected samples %lld", static_cast<long long>(fs.rejectedSamples.load()));
-    const int a = static_cast<int>(st_.axis);
-    const double in = fs.inside[a].load(), out = fs.outside[a].load();
-    if (in + out > 0) ImGui::Text("energy outside the film %.3g %%", 100.0 * out / (in + out));
-    else ImGui::TextDisabled("energy outside the film -");
+    drawFilmStats(driver_->film().stats, st_.axis);
     // Pause/Resume stays (disabled) when the render has finished, so the rows below keep their place.
     const char* pause = running && driver_->paused() ? "Resume###render" : "Pause###render";
     ImGui::BeginDisabled(!running);

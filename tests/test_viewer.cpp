@@ -632,7 +632,7 @@ TEST(ViewerCli, BinOrTimeOutsideTheFilmIsRefusedWithTheRange) {
                                      {"--time 1e9", "--time 1e+09 ns is outside the film (0 to "},
                                      {"--time -2", "--time -2 ns is outside the film (0 to "},
                                      {"--time nan", "--time must be a time in ns within the film: 0 to "},
-                                     {"--exposure nan", "--exposure must be a finite number"},
+                                     {"--exposure nan", "--exposure: must be a number in [-40, 40] (EV"},
                                      {"--unwarp --real-time", "excludes"},
                                      {"--continuous --delta", "excludes"}};
     for (const Case& c : cases) {
@@ -642,6 +642,39 @@ TEST(ViewerCli, BinOrTimeOutsideTheFilmIsRefusedWithTheRange) {
                                 dir / "run");
         EXPECT_EQ(r.code, 2) << r.out << r.err;
         EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("cannot open a window"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "x.png"));
+    }
+    fs::remove_all(dir);
+}
+
+// Every `view` flag is checked like `tpb render`'s, while parsing: a bad value is refused with exit
+// code 2 and a short message naming the flag and its range, before any window (so with no
+// display). --after-passes printed a 309-digit range (CLI::PositiveNumber) and --time-budget took
+// NaN, negatives and inf (NaN was then blamed on --time, a flag view does not have).
+TEST(ViewerCli, BadFlagValuesAreRefusedNamingTheFlag) {
+    const fs::path dir = makeTempDir("flags");
+    std::ofstream(dir / "scene.json") << kScene;
+    struct Case {
+        std::string flags, says;
+    };
+    const std::vector<Case> cases = {
+        {"--after-passes 0", "--after-passes: must be an integer >= 1 (passes rendered before the screenshot); got 0"},
+        {"--after-passes -3", "--after-passes: must be an integer >= 1"},
+        {"--after-passes 1e400", "--after-passes: must be an integer >= 1"},
+        {"--time-budget nan", "--time-budget: must be a finite number >= 0 (seconds; 0 = no time budget); got nan"},
+        {"--time-budget -1", "--time-budget: must be a finite number >= 0"},
+        {"--time-budget inf", "--time-budget: must be a finite number >= 0"},
+        {"--exposure 1e300", "--exposure: must be a number in [-40, 40]"},
+        {"--window-size 10 800", "--window-size: must be an integer in [64, 16384]"}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.flags);
+        const Proc r = runShell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(TPB_BINARY) + " view " +
+                                    q(dir / "scene.json") + " --screenshot " + q(dir / "x.png") + " " + c.flags,
+                                dir / "run");
+        EXPECT_EQ(r.code, 2) << r.out << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+        EXPECT_LT(r.err.size(), 300u) << "a short message: " << r.err;
         EXPECT_EQ(r.err.find("cannot open a window"), std::string::npos) << r.err;
         EXPECT_FALSE(fs::exists(dir / "x.png"));
     }
