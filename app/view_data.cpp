@@ -155,6 +155,10 @@ void Viewer::updateBinEnergy() {
             if (r.complete && r.key.passes > 0) {  // the first pass is in: keep this bin
                 st_.autoBin = false;
                 if (st_.autoFrame) frameKey_ = FetchKey{};  // and fit the exposure to it for good
+            } else if (!r.complete) {
+                // A tile was busy (being written, or read by the UI thread's own fetch at that
+                // instant): measure again, even if no pass completes any more.
+                binEnergyRequested_ = FetchKey{};
             }
         }
     }
