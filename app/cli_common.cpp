@@ -29,20 +29,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// %g without the exponent's padding: 1e+09 -> "1e9".
-std::string num(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%g", v);
-    std::string s = b;
-    const size_t e = s.find("e+");
-    if (e != std::string::npos) {
-        size_t digits = e + 2;
-        while (digits + 1 < s.size() && s[digits] == '0') ++digits;
-        s = s.substr(0, e + 1) + s.substr(digits);
-    }
-    return s;
-}
-
 // "0.4 s", "12 s", "17 min", "2.3 h".
 std::string humanSeconds(double s) {
     char b[32];
@@ -89,8 +75,8 @@ CLI::Validator integer(int64_t lo, int64_t hi, const std::string& meaning) {
 
 CLI::Validator number(double lo, double hi, bool loOpen, const std::string& meaning) {
     const bool noHi = hi == std::numeric_limits<double>::infinity();
-    const std::string rule = noHi ? std::string("a finite number ") + (loOpen ? "> " : ">= ") + num(lo)
-                                  : std::string("a number in ") + (loOpen ? "(" : "[") + num(lo) + ", " + num(hi) + "]";
+    const std::string rule = noHi ? std::string("a finite number ") + (loOpen ? "> " : ">= ") + shortNumber(lo)
+                                  : std::string("a number in ") + (loOpen ? "(" : "[") + shortNumber(lo) + ", " + shortNumber(hi) + "]";
     return CLI::Validator(
         [=](std::string& s) -> std::string {
             char* end = nullptr;

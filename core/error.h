@@ -40,6 +40,20 @@ private:
     std::string key_;
 };
 
+// 1e+09 -> "1e9", 0.25 -> "0.25": numbers in messages, without printf's exponent padding.
+inline std::string shortNumber(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    std::string s = buf;
+    const size_t e = s.find("e+");
+    if (e != std::string::npos) {
+        size_t digits = e + 2;
+        while (digits + 1 < s.size() && s[digits] == '0') ++digits;
+        s = s.substr(0, e + 1) + s.substr(digits);
+    }
+    return s;
+}
+
 [[noreturn]] inline void checkFailed(const char* cond, const char* file, int line) {
     std::fprintf(stderr, "internal error (bug): check failed: %s at %s:%d\n", cond, file, line);
     std::abort();

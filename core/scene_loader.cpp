@@ -158,20 +158,6 @@ std::string suggestion(std::string_view word, const std::vector<std::string>& ca
     return " (did you mean \"" + *best + "\"?)";
 }
 
-// 1e+09 -> "1e9", 0.25 -> "0.25": numbers in messages, without printf's padding.
-std::string shortNumber(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", v);
-    std::string s = buf;
-    const size_t e = s.find("e+");
-    if (e != std::string::npos) {
-        size_t digits = e + 2;
-        while (digits + 1 < s.size() && s[digits] == '0') ++digits;
-        s = s.substr(0, e + 1) + s.substr(digits);
-    }
-    return s;
-}
-
 bool isPlainInteger(const std::string& lit) {
     return !lit.empty() && lit.find_first_of(".eE") == std::string::npos;
 }
