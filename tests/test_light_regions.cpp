@@ -182,6 +182,19 @@ void expectLitInside(std::string json) {
 
 // ---- item 3: a closed box holds its light -------------------------------------------------------
 
+// The box holds its light to the last photon: many photons and beams stored, none outside the
+// box, both renderers' images of the outside exactly dark, and the inside lit.
+static void expectBoxHoldsItsLight(const Scene& sc, const Cage& cage, const std::string& json) {
+    size_t photons, beams;
+    const Outside out = storedOutside(sc, cage, 2, photons, beams);
+    EXPECT_GT(photons, 20000u);
+    EXPECT_GT(beams, 20000u);
+    EXPECT_EQ(out.photons, 0);
+    EXPECT_EQ(out.beams, 0);
+    expectDarkOutside(sc);
+    expectLitInside(json);
+}
+
 TEST(ClosedBox, PointLightInFogLightsNothingOutsideTheBox) {
     // Fog everywhere (one region inside and outside): the beam kernel (r = 6.5 cm) and the surface
     // kernel (13 cm) both reach across the walls and across the 5 cm gaps.
@@ -190,14 +203,7 @@ TEST(ClosedBox, PointLightInFogLightsNothingOutsideTheBox) {
     const auto sc = sceneFrom(json);
     ASSERT_GT(sc->beamRadius0, 0.05);
     ASSERT_GT(sc->surfaceRadius0, 0.05);
-    size_t photons, beams;
-    const Outside out = storedOutside(*sc, cage, 2, photons, beams);
-    EXPECT_GT(photons, 20000u);
-    EXPECT_GT(beams, 20000u);
-    EXPECT_EQ(out.photons, 0);
-    EXPECT_EQ(out.beams, 0);
-    expectDarkOutside(*sc);
-    expectLitInside(json);
+    expectBoxHoldsItsLight(*sc, cage, json);
 }
 
 TEST(ClosedBox, AreaLightFillingTheCeilingOfATiltedBoxLightsNothingOutside) {
@@ -212,14 +218,7 @@ TEST(ClosedBox, AreaLightFillingTheCeilingOfATiltedBoxLightsNothingOutside) {
     const std::string json = closedBoxScene(cage, light, true, 20000);
     const auto sc = sceneFrom(json);
     ASSERT_LT(glm::dot(sc->lights[0].normal, cage.toWorld(Vec3(0.0, 1.0, 0.0))), -0.999);  // emits into the box
-    size_t photons, beams;
-    const Outside out = storedOutside(*sc, cage, 2, photons, beams);
-    EXPECT_GT(photons, 20000u);
-    EXPECT_GT(beams, 20000u);
-    EXPECT_EQ(out.photons, 0);
-    EXPECT_EQ(out.beams, 0);
-    expectDarkOutside(*sc);
-    expectLitInside(json);
+    expectBoxHoldsItsLight(*sc, cage, json);
 }
 
 TEST(ClosedBox, BouncesAtTheEdgesOfATiltedBoxLeaveFromInside) {
