@@ -3,8 +3,8 @@
 // Any byte string must either load or throw tpb::UserError: a crash, a sanitizer report, a hang or
 // any other exception is a bug. A scene that loads must also respect the documented ranges (README
 // "Scene format"), so a validation gap is reported as a crash too (__builtin_trap).
-#include "error.h"
-#include "scene_loader.h"
+#include "base/error.h"
+#include "scene/scene_loader.h"
 
 #include <cmath>
 #include <cstdint>

@@ -1,0 +1,699 @@
+#include "cli/common.h"
+
+#include "cli/interrupt.h"
+#include "base/error.h"
+#include "render/time_range.h"
+
+#include "cli/commands.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
+namespace tpb::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// "0.4 s", "12 s", "17 min", "2.3 h".
+std::string humanSeconds(double s) {
+    char b[32];
+    if (s < 10.0) std::snprintf(b, sizeof b, "%.1f s", s);
+    else if (s < 120.0) std::snprintf(b, sizeof b, "%.0f s", s);
+    else if (s < 7200.0) std::snprintf(b, sizeof b, "%.0f min", s / 60.0);
+    else std::snprintf(b, sizeof b, "%.1f h", s / 3600.0);
+    return b;
+}
+
+std::string withMeaning(const std::string& rule, const std::string& meaning) {
+    return meaning.empty() ? rule : rule + " (" + meaning + ")";
+}
+
+}  // namespace
+
+// ---- flag validation ----------------------------------------------------------------------------
+
+namespace flags {
+
+CLI::Validator integer(int64_t lo, int64_t hi, const std::string& meaning) {
+    const std::string rule = hi == INT64_MAX ? "an integer >= " + std::to_string(lo)
+                                             : "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    return CLI::Validator(
+        [=](std::string& s) -> std::string {
+            const std::string fail = "must be " + withMeaning(rule, meaning) + "; got " + s;
+            int64_t v = 0;
+            const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+            if (ec == std::errc::result_out_of_range) return fail;
+            if (ec != std::errc() || ptr != s.data() + s.size()) {
+                // 1e6: an integral number in another notation is fine; rewrite it as digits for CLI11.
+                char* end = nullptr;
+                const double d = std::strtod(s.c_str(), &end);
+                if (s.empty() || end != s.c_str() + s.size() || !std::isfinite(d) || d != std::floor(d) ||
+                    std::fabs(d) >= 9.2e18)
+                    return fail;
+                v = static_cast<int64_t>(d);
+                if (v >= lo && v <= hi) s = std::to_string(v);
+            }
+            return v >= lo && v <= hi ? std::string() : fail;
+        },
+        rule);
+}
+
+CLI::Validator number(double lo, double hi, bool loOpen, const std::string& meaning) {
+    const bool noHi = hi == std::numeric_limits<double>::infinity();
+    const std::string rule = noHi ? std::string("a finite number ") + (loOpen ? "> " : ">= ") + shortNumber(lo)
+                                  : std::string("a number in ") + (loOpen ? "(" : "[") + shortNumber(lo) + ", " + shortNumber(hi) + "]";
+    return CLI::Validator(
+        [=](std::string& s) -> std::string {
+            char* end = nullptr;
+            errno = 0;
+            const double v = std::strtod(s.c_str(), &end);
+            const bool parsed = !s.empty() && end == s.c_str() + s.size();
+            const bool ok = parsed && std::isfinite(v) && (loOpen ? v > lo : v >= lo) && v <= hi;
+            return ok ? std::string() : "must be " + withMeaning(rule, meaning) + "; got " + s;
+        },
+        rule);
+}
+
+CLI::Validator seed() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            uint64_t v = 0;
+            const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+            if (s.empty() || ec != std::errc() || ptr != s.data() + s.size())
+                return "must be an integer in [0, 18446744073709551615] (2^64 - 1); got " + s;
+            return std::string();
+        },
+        "an integer in [0, 2^64 - 1]");
+}
+
+CLI::Validator threads() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            int64_t v = 0;
+            const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+            if (s.empty() || ptr != s.data() + s.size() || ec != std::errc() || v < 0 || v > INT_MAX)
+                return "must be an integer in [0, " + std::to_string(INT_MAX) + "] (0 = all cores; more than " +
+                       std::to_string(maxUsefulThreads()) + " is capped); got " + s;
+            const int cap = maxUsefulThreads();
+            if (v > cap) {
+                std::fprintf(stderr,
+                             "warning: --threads %s is more than %d x the %d cores of this machine: using %d (more "
+                             "threads than cores only add memory and contention; 0 = all cores)\n",
+                             s.c_str(), kThreadsPerCoreCap, cap / kThreadsPerCoreCap, cap);
+                s = std::to_string(cap);
+            }
+            return std::string();
+        },
+        "an integer >= 0");
+}
+
+}  // namespace flags
+
+void RenderOverrides::add(CLI::App* cmd) {
+    using flags::integer;
+    using flags::number;
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    cmd->add_option("--passes", passes, "Number of progressive passes (0 = until --time or Ctrl-C)")
+        ->transform(integer(0, INT64_MAX, "0 = no pass limit: until --time or Ctrl-C"));
+    cmd->add_option("--time", timeBudget, "Time budget in seconds")
+        ->check(number(0.0, kInf, false, "seconds; 0 = no time budget"));
+    cmd->add_option("--photons", photons, "Photons traced per pass")->transform(integer(1, INT64_MAX, "photons per pass"));
+    cmd->add_option("--radius", radius, "Initial beam kernel radius, m (absolute)")
+        ->check(number(0.0, kMaxSceneCoordinateM, true, "meters"));
+    cmd->add_option("--alpha", alpha, "Progressive radius shrink parameter in (0, 1]")
+        ->check(number(0.0, 1.0, true, "1 = no shrinking"));
+    cmd->add_option("--threads", threads, "Worker threads (0 = all cores)")->transform(flags::threads());
+    cmd->add_option("--seed", seed, "Random seed")->check(flags::seed());
+    cmd->add_option("--width", width, "Override the camera's horizontal resolution")
+        ->transform(integer(1, INT_MAX, "pixels"));
+    cmd->add_option("--height", height, "Override the camera's vertical resolution")
+        ->transform(integer(1, INT_MAX, "pixels"));
+    cmd->add_option("--bins", bins, "Override the film's number of time bins (same time range)")
+        ->transform(integer(1, INT_MAX, "time bins of the film"));
+    cmd->add_option("--max-depth", maxDepth, "Maximum number of scattering events per path (1 = single scattering)")
+        ->transform(integer(1, INT_MAX, "1 = single scattering"));
+    cmd->add_option("--profile", profile, "Time profile of a ray-beam estimate: exact | uniform (paper)")
+        ->check(CLI::IsMember({"exact", "uniform"}));
+    cmd->add_option("--beam-length", beamLength, "Photon beams end at the next event (short) or the surface (long)")
+        ->check(CLI::IsMember({"short", "long"}));
+    cmd->add_flag("--pt-free-flight", ptFreeFlight,
+                  "Path tracer: connect point/spot lights only from free-flight vertices, without equiangular "
+                  "sampling (unbiased too, but with infinite variance next to a light in a medium)");
+    cmd->add_option("--accel", accel, "Beam query backend: embree | brute")->check(CLI::IsMember({"embree", "brute"}));
+}
+
+void RenderOverrides::applyToDesc(SceneDesc& d) const {
+    if (width) d.camera.width = *width;
+    if (height) d.camera.height = *height;
+    if (bins && *bins < 1) throw UserError("--bins must be >= 1");
+    if (bins) {
+        // Keep the film's time range, change its resolution.
+        if (!d.film.autoRange) d.film.binWidthOpl = d.film.binWidthOpl * d.film.bins / *bins;
+        d.film.bins = *bins;
+    }
+    if (maxDepth) {
+        if (*maxDepth < 1) throw UserError("--max-depth must be >= 1");
+        d.render.maxDepth = *maxDepth;
+    }
+    if (d.camera.width < 1 || d.camera.height < 1 || d.film.bins < 1)
+        throw UserError("--width, --height and --bins must be >= 1");
+    const uint64_t need = filmBytes(d.camera, d.film.bins);
+    if (need > maxFilmBytes())
+        throw UserError("the film would need " + humanBytes(need) + " but at most " + humanBytes(maxFilmBytes()) +
+                        " is allowed; lower --width/--height/--bins");
+    if (static_cast<int64_t>(d.camera.width) * d.camera.height > INT_MAX)
+        throw UserError("--width x --height is " + std::to_string(static_cast<int64_t>(d.camera.width) * d.camera.height) +
+                        " pixels, more than " + std::to_string(INT_MAX) + "; lower --width/--height");
+}
+
+void RenderOverrides::applyToSettings(DriverSettings& s) const {
+    if (passes) s.passes = *passes;
+    if (timeBudget) {
+        s.timeBudgetSec = *timeBudget;
+        if (!passes) s.passes = 0;  // a time budget alone means: as many passes as fit
+    }
+    if (photons) s.photonsPerPass = *photons;
+    if (radius) s.beamRadius0 = *radius;
+    if (alpha) s.alpha = *alpha;
+    if (threads) s.threads = *threads;
+    if (seed) s.seed = *seed;
+    if (maxDepth) s.maxDepth = *maxDepth;
+    if (profile == "exact") s.profile = TimeProfile::Exact;
+    if (profile == "uniform") s.profile = TimeProfile::Uniform;
+    if (beamLength == "short") s.beamLength = BeamLength::Short;
+    if (beamLength == "long") s.beamLength = BeamLength::Long;
+    s.accel = accel == "brute" ? BeamAccel::Kind::BruteForce : BeamAccel::Kind::Embree;
+    // The flags were validated when parsed (flags::); these hold for the scene's values too.
+    if (s.photonsPerPass < 1) throw UserError("--photons must be >= 1");
+    if (photonMapBytes(s.photonsPerPass) > maxFilmBytes())
+        throw UserError("--photons " + std::to_string(s.photonsPerPass) + " needs about " +
+                        humanBytes(photonMapBytes(s.photonsPerPass)) + " per pass for the photon map, more than " +
+                        humanBytes(maxFilmBytes()) + "; use fewer photons per pass and more passes");
+    if (!(s.alpha > 0.0 && s.alpha <= 1.0)) throw UserError("--alpha must be in (0, 1]");
+    if (!(s.beamRadius0 > 0.0) || !std::isfinite(s.beamRadius0)) throw UserError("--radius must be > 0");
+    if (s.passes < 0) throw UserError("--passes must be >= 0 (0 = until --time or Ctrl-C)");
+    if (!(s.timeBudgetSec >= 0.0) || !std::isfinite(s.timeBudgetSec))
+        throw UserError("--time must be a finite number of seconds >= 0 (0 = no time budget)");
+}
+
+namespace {
+
+// A kernel radius (m) against the scene's diagonal: refused above kMaxRadiusFraction, warned
+// about above kSlowRadiusFraction. `where` is "file:line: key" or a flag.
+void checkAbsoluteRadius(double radius, double diag, const std::string& where, const std::string& name) {
+    const double f = radius / diag;
+    char b[512];
+    if (f > kMaxRadiusFraction) {
+        std::snprintf(b, sizeof b,
+                      "%s %g m is %.0f%% of the scene's diagonal (%.4g m); allowed up to %.0f%% (%.4g m). A kernel "
+                      "that wide makes every camera ray gather every beam or photon, so a pass costs rays x beams "
+                      "(minutes, with no better image); typical radii are 0.1%% to 2%% of the diagonal (%.3g to "
+                      "%.3g m)",
+                      name.c_str(), radius, 100.0 * f, diag, 100.0 * kMaxRadiusFraction, kMaxRadiusFraction * diag,
+                      0.001 * diag, 0.02 * diag);
+        throw UserError(where == name ? std::string(b) : where + ": " + b);
+    }
+    if (f > kSlowRadiusFraction) {
+        std::snprintf(b, sizeof b,
+                      "%s %g m is %.0f%% of the scene's diagonal (%.4g m): passes get much slower as the kernel grows; "
+                      "typical radii are 0.1%% to 2%% of the diagonal (%.3g to %.3g m)",
+                      name.c_str(), radius, 100.0 * f, diag, 0.001 * diag, 0.02 * diag);
+        std::fprintf(stderr, "warning: %s%s%s\n", where == name ? "" : where.c_str(), where == name ? "" : ": ", b);
+    }
+}
+
+std::string keyWhere(const SceneDesc& d, const std::string& key) {
+    std::string w = d.where(key);  // "file:line: "
+    if (w.size() >= 2) w.resize(w.size() - 2);
+    return w + ": " + key;
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo) {
+    SceneDesc desc = loadScene(path);
+    for (const std::string& w : desc.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+    ov.applyToDesc(desc);
+    std::unique_ptr<Scene> scene = Scene::build(desc);
+
+    // Absolute radii, now that the diagonal is known (relative ones were checked by the loader).
+    const double diag = scene->bounds.diagonal() > 0.0 ? scene->bounds.diagonal() : 1.0;
+    if (!desc.render.radiusRelative) {
+        if (desc.locs.count("render.radius"))
+            checkAbsoluteRadius(scene->beamRadius0, diag, keyWhere(desc, "render.radius"), "radius");
+        if (desc.locs.count("render.surface_radius"))
+            checkAbsoluteRadius(scene->surfaceRadius0, diag, keyWhere(desc, "render.surface_radius"), "surface_radius");
+    }
+    if (ov.radius) checkAbsoluteRadius(*ov.radius, diag, "--radius", "--radius");
+
+    if (desc.film.autoRange) {
+        const bool tty = isatty(STDERR_FILENO) && !lo.quiet;
+        const double t0 = nowSec();
+        double lastPrint = t0 - 9.0;  // not on a terminal: a first line after 1 s, then one every 10 s
+        PilotControl pc;
+        pc.abort = &interruptFlag();
+        pc.progress = [&](double f) {
+            if (lo.quiet) return;
+            const double now = nowSec();
+            if (tty) {
+                std::fprintf(stderr, "\rfitting the film's time range (pilot pass): %3.0f%%", 100.0 * f);
+            } else if (now - lastPrint >= 10.0) {  // a log: lines only when it takes that long
+                std::fprintf(stderr, "fitting the film's time range (pilot pass): %.0f%% after %.0f s\n", 100.0 * f,
+                             now - t0);
+                lastPrint = now;
+            }
+        };
+        const TimeRangeFit f = fitTimeRange(*scene, 4000, ov.threads.value_or(desc.render.threads), pc);
+        if (tty) std::fprintf(stderr, "\r%60s\r", "");
+        throwIfInterrupted("while fitting the film's time range (pilot pass)");
+        if (!f.fromPilot)
+            std::fprintf(stderr, "note: the pilot pass saw no energy; the film keeps the scene-size range\n");
+    }
+    throwIfInterrupted("while loading the scene");
+    return scene;
+}
+
+nlohmann::json filmJson(const Scene& scene) {
+    return {{"bins", scene.time.bins}, {"start_opl_m", scene.time.startOpl}, {"bin_width_opl_m", scene.time.binWidth},
+            {"start_ns", scene.time.startOpl / kC_m_per_ns}, {"bin_width_ns", scene.time.binWidth / kC_m_per_ns}};
+}
+
+nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t passes, double wallSec,
+                             const TransientFilm& film, const ExportOptions& opt) {
+    nlohmann::json j;
+    j["scene"] = scene.desc.path;
+    j["method"] = method;
+    j["passes"] = passes;
+    j["wall_seconds"] = wallSec;
+    j["resolution"] = {scene.camera.width, scene.camera.height};
+    j["film"] = filmJson(scene);
+    j["film"]["bytes"] = film.bytes();
+    j["frames"] = {{"axis", opt.axis == TimeAxis::Real ? "real" : "unwarped"},
+                   {"emission", opt.mode == EmissionMode::Delta ? "delta" : "continuous"},
+                   {"step", opt.step}};
+    const FilmStats& fs = film.stats;
+    nlohmann::json energy = {{"rejected_samples", fs.rejectedSamples.load()},
+                             {"overflowed_pixel_sums", fs.overflowedPixels.load()}};
+    for (int a = 0; a < 2; ++a) {
+        // Luminance shares; continuous frames include `before` (a step response), the last
+        // continuous frame is the steady image minus `after`.
+        const double in = fs.inside[a].load(), out = fs.outside[a].load(), before = fs.before[a].load();
+        const double total = in + out;
+        energy[a == 0 ? "real" : "unwarped"] = {{"before_film_fraction", total > 0 ? before / total : 0.0},
+                                                {"inside_film_fraction", total > 0 ? in / total : 0.0},
+                                                {"after_film_fraction", total > 0 ? (out - before) / total : 0.0}};
+    }
+    j["film_energy"] = energy;
+    return j;
+}
+
+int64_t replaceNonFiniteNumbers(nlohmann::json& j) {
+    int64_t n = 0;
+    if (j.is_number_float() && !std::isfinite(j.get<double>())) {
+        const double v = j.get<double>();
+        j = std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf";
+        return 1;
+    }
+    if (j.is_structured())
+        for (auto& e : j) n += replaceNonFiniteNumbers(e);
+    return n;
+}
+
+int64_t warnFilmOverflow(const Scene& scene, const TransientFilm& film) {
+    const int64_t n = film.stats.overflowedPixels.load();
+    if (n > 0)
+        std::fprintf(stderr,
+                     "warning: %s: %lld pixel sums would have overflowed the film's 32-bit floats (max 3.4e38) and "
+                     "were dropped from those passes (the film holds no Inf, but those pixels are too dark): lower "
+                     "the lights' power (transport is linear: scaling every light by s scales the film by s)\n",
+                     keyWhere(scene.desc, scene.desc.lights.empty() ? "lights" : "lights[0].power").c_str(),
+                     static_cast<long long>(n));
+    return n;
+}
+
+// ---- the output folder ----------------------------------------------------------------------------
+
+namespace {
+
+constexpr const char* kLockName = ".tpb.lock";
+constexpr const char* kManifestName = ".tpb-manifest.json";
+
+// A path the manifest may name: relative, inside the folder (no "..", not absolute).
+bool safeRelative(const std::string& p) {
+    if (p.empty() || p[0] == '/') return false;
+    for (const auto& part : fs::path(p))
+        if (part == "..") return false;
+    return true;
+}
+
+// frame_NNNNN.exr -> NNNNN, or -1.
+int frameIndex(const std::string& name) {
+    if (name.size() < 15 || name.rfind("frame_", 0) != 0 || name.compare(name.size() - 4, 4, ".exr") != 0) return -1;
+    int k = 0;
+    const auto [ptr, ec] = std::from_chars(name.data() + 6, name.data() + name.size() - 4, k);
+    return ec == std::errc() && ptr == name.data() + name.size() - 4 && k >= 0 ? k : -1;
+}
+
+// "name" and the temporary files of an interrupted atomic write of it ("name.tmp-<pid>").
+std::string baseOfTemporary(const std::string& name) {
+    const size_t at = name.rfind(".tmp-");
+    return at == std::string::npos ? name : name.substr(0, at);
+}
+
+struct PreviousOutputs {
+    std::set<std::string> files;  // relative to the folder, no frames
+    std::string framesDir;
+    int first = 0, last = -1, step = 1;
+    bool any() const { return !files.empty() || !framesDir.empty(); }
+};
+
+nlohmann::json readJsonFile(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return nlohmann::json::parse(s.str(), nullptr, /*allow_exceptions=*/false);
+}
+
+// What the previous run listed: its manifest, or (a folder written before manifests existed) the
+// outputs of a `tpb render` summary.json: its files, the previews and every frame name of its film.
+PreviousOutputs previousOutputs(const fs::path& dir) {
+    PreviousOutputs prev;
+    std::error_code ec;
+    if (fs::exists(dir / kManifestName, ec)) {
+        const nlohmann::json m = readJsonFile(dir / kManifestName);
+        if (!m.is_object()) {
+            std::fprintf(stderr, "warning: %s is not readable JSON: ignored (no stale output is removed)\n",
+                         (dir / kManifestName).c_str());
+            return prev;
+        }
+        if (m.contains("files") && m["files"].is_array())
+            for (const auto& f : m["files"])
+                if (f.is_string() && safeRelative(f.get<std::string>())) prev.files.insert(f.get<std::string>());
+        if (m.contains("frames") && m["frames"].is_object()) {
+            const auto& fr = m["frames"];
+            if (fr.value("folder", "").size() && safeRelative(fr.value("folder", "")) && fr.value("step", 1) >= 1) {
+                prev.framesDir = fr.value("folder", "");
+                prev.first = fr.value("first", 0);
+                prev.last = fr.value("last", -1);
+                prev.step = fr.value("step", 1);
+            }
+        }
+        return prev;
+    }
+    if (!fs::exists(dir / "summary.json", ec)) return prev;
+    const nlohmann::json s = readJsonFile(dir / "summary.json");
+    const bool render = s.is_object() && s.contains("outputs") && s["outputs"].is_object() && s.contains("film") &&
+                        s["film"].is_object() && s["film"].value("bins", 0) > 0 && s.contains("method");
+    if (!render) return prev;
+    const auto& files = s["outputs"].value("files", nlohmann::json::array());
+    bool frames = false;
+    for (const auto& f : files) {
+        if (!f.is_string()) continue;
+        const std::string name = f.get<std::string>();
+        if (name.rfind("frames/", 0) == 0) frames = true;
+        else if (safeRelative(name) && name.find('/') == std::string::npos) prev.files.insert(name);
+    }
+    prev.files.insert("preview.exr");
+    prev.files.insert("preview.png");
+    prev.files.insert("summary.json");
+    if (frames) {
+        prev.framesDir = "frames";
+        prev.first = 0;
+        prev.last = s["film"].value("bins", 0) - 1;
+        prev.step = 1;
+    }
+    return prev;
+}
+
+// Removes the previous run's files (and their leftover temporaries); returns what was removed.
+std::vector<std::string> removeOutputs(const fs::path& dir, const PreviousOutputs& prev) {
+    std::vector<std::string> removed;
+    std::error_code ec;
+    const auto removeIf = [&](const fs::path& folder, const std::string& rel, const std::string& name, bool listed) {
+        if (!listed) return;
+        const fs::path p = folder / name;
+        const fs::file_status st = fs::symlink_status(p, ec);
+        if (ec || !(fs::is_regular_file(st) || fs::is_symlink(st))) return;  // never a folder
+        if (fs::remove(p, ec)) removed.push_back(rel);
+    };
+    // Top-level files, and files in subfolders the manifest names (none today but frames).
+    std::set<fs::path> folders{fs::path()};
+    for (const std::string& f : prev.files) folders.insert(fs::path(f).parent_path());
+    for (const fs::path& sub : folders) {
+        const fs::path folder = dir / sub;
+        if (!fs::is_directory(folder, ec)) continue;
+        std::vector<std::string> names;
+        for (const fs::directory_entry& e : fs::directory_iterator(folder, ec)) names.push_back(e.path().filename().string());
+        for (const std::string& name : names) {
+            const std::string rel = (sub / baseOfTemporary(name)).generic_string();
+            removeIf(folder, (sub / name).generic_string(), name, prev.files.count(rel) > 0);
+        }
+    }
+    if (!prev.framesDir.empty()) {
+        const fs::path folder = dir / prev.framesDir;
+        if (fs::is_directory(folder, ec)) {
+            std::vector<std::string> names;
+            for (const fs::directory_entry& e : fs::directory_iterator(folder, ec))
+                names.push_back(e.path().filename().string());
+            for (const std::string& name : names) {
+                const int k = frameIndex(baseOfTemporary(name));
+                const bool listed = k >= prev.first && k <= prev.last && (k - prev.first) % prev.step == 0;
+                removeIf(folder, prev.framesDir + "/" + name, name, listed);
+            }
+            if (fs::is_empty(folder, ec)) fs::remove(folder, ec);  // only when nothing else is in it
+        }
+    }
+    return removed;
+}
+
+}  // namespace
+
+OutputFolder::OutputFolder(const std::string& dir, const std::string& command, const OutputFiles& outputs)
+    : dir_(dir) {
+    ensureWritableDir(dir);
+    const fs::path lockPath = fs::path(dir) / kLockName;
+    lockFd_ = ::open(lockPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (lockFd_ < 0)
+        throw UserError(dir, 0, "", std::string("cannot create the lock file ") + kLockName + ": " +
+                                        std::strerror(errno) + "; choose another folder with -o");
+    if (::flock(lockFd_, LOCK_EX | LOCK_NB) != 0) {
+        const int err = errno;
+        if (err == EWOULDBLOCK) {
+            char buf[256] = {};
+            const ssize_t n = ::pread(lockFd_, buf, sizeof buf - 1, 0);
+            std::string holder = n > 0 ? std::string(buf, static_cast<size_t>(n)) : std::string();
+            while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+            ::close(lockFd_);
+            lockFd_ = -1;
+            throw UserError(dir, 0, "",
+                            "another tpb run (" + (holder.empty() ? std::string("unknown process") : holder) +
+                                ") is writing into this folder; two runs in one folder would mix their files: wait "
+                                "for it to end, or give this one another folder with -o");
+        }
+        // A file system without locks (some network mounts): go on, but say what is not detected.
+        std::fprintf(stderr, "warning: %s: cannot lock the folder (%s): a second run into it would not be detected\n",
+                     dir.c_str(), std::strerror(err));
+    }
+    const std::string holder = "tpb " + command + ", pid " + std::to_string(::getpid()) + "\n";
+    if (::ftruncate(lockFd_, 0) == 0) {
+        [[maybe_unused]] const ssize_t n = ::pwrite(lockFd_, holder.data(), holder.size(), 0);
+    }
+
+    removed_ = removeOutputs(dir, previousOutputs(dir));
+
+    nlohmann::json m;
+    m["written_by"] = "tpb " + command;
+    m["pid"] = ::getpid();
+    m["files"] = outputs.files;
+    if (!outputs.framesDir.empty())
+        m["frames"] = {{"folder", outputs.framesDir}, {"first", outputs.firstBin}, {"last", outputs.lastBin},
+                       {"step", outputs.binStep}};
+    m["note"] = "the files the last tpb run wrote into this folder; the next run removes them first";
+    writeTextFile((fs::path(dir) / kManifestName).string(), m.dump(2) + "\n");
+}
+
+OutputFolder::~OutputFolder() {
+    if (lockFd_ >= 0) ::close(lockFd_);  // releases the lock; the file stays (unlinking it would race)
+}
+
+OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
+    OutputFiles f;
+    f.files = {"preview.exr", "preview.png", "steady.exr", "steady.png", "summary.json"};
+    if (r.strip > 0) f.files.push_back("strip.png");
+    const int frames = exportFrameCount(bins, r.opt);
+    if (!r.noFrames && frames > 0) {
+        f.framesDir = "frames";
+        f.firstBin = r.opt.firstBin;
+        f.binStep = std::max(1, r.opt.step);
+        f.lastBin = r.opt.firstBin + (frames - 1) * f.binStep;
+    }
+    return f;
+}
+
+void reportPlannedOutputs(const Scene& scene, const RenderOutputs& r, double previewExrSec) {
+    if (r.noFrames) return;
+    const uint64_t frames = static_cast<uint64_t>(exportFrameCount(scene.time.bins, r.opt));
+    const uint64_t perFrame = static_cast<uint64_t>(scene.camera.width) * scene.camera.height * 3 *
+                              (r.opt.pixel == ExrPixel::Half ? 2 : 4);
+    const uint64_t need = frames * perFrame;
+    const double writeSec = static_cast<double>(frames) * previewExrSec;
+    if (!r.quiet) {
+        const bool large = writeSec > 60.0 || need > (uint64_t(1) << 30);
+        const auto about = [](double sec) { return sec < 0.1 ? std::string("under 0.1 s") : "about " + humanSeconds(sec); };
+        std::printf("frames: %llu EXR files of %dx%d (%s), up to %s uncompressed; writing them will take %s after "
+                    "the render (estimated from preview.exr: %s)%s\n",
+                    static_cast<unsigned long long>(frames), scene.camera.width, scene.camera.height,
+                    r.opt.pixel == ExrPixel::Half ? "half" : "float", humanBytes(need).c_str(), about(writeSec).c_str(),
+                    previewExrSec < 0.1 ? "under 0.1 s" : humanSeconds(previewExrSec).c_str(),
+                    large ? "; --frame-step K, --half or --no-frames write less" : "");
+        std::fflush(stdout);
+    }
+    struct statvfs fsInfo {};
+    if (::statvfs(r.out.c_str(), &fsInfo) != 0) return;
+    const uint64_t freeBytes = static_cast<uint64_t>(fsInfo.f_bavail) * fsInfo.f_frsize;
+    if (need > freeBytes)
+        std::fprintf(stderr,
+                     "warning: %llu frames take up to %s uncompressed and %s has only %s free; they are "
+                     "compressed and may still fit, otherwise use --half, --frame-step, --no-frames or another -o\n",
+                     static_cast<unsigned long long>(frames), humanBytes(need).c_str(), r.out.c_str(),
+                     humanBytes(freeBytes).c_str());
+}
+
+OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& r,
+                                const std::function<nlohmann::json()>& summary) {
+    OutputReport rep;
+    const bool tty = isatty(STDERR_FILENO) && !r.quiet;
+    if (!r.noFrames) rep.framesExpected = exportFrameCount(film.bins(), r.opt);
+    const auto writeSummary = [&](bool final) {
+        nlohmann::json j = summary();
+        replaceNonFiniteNumbers(j);
+        nlohmann::json o = {{"frames_expected", rep.framesExpected}, {"files", rep.kept}};
+        if (final) o["frames_written"] = rep.framesWritten;
+        else o["frames_written"] = nullptr;  // being written: the final summary replaces this one
+        if (!rep.error.empty()) o["error"] = rep.error;
+        j["outputs"] = o;
+        writeTextFile(r.out + "/summary.json", j.dump(2) + "\n");
+    };
+
+    {
+        std::vector<float> steady;  // one image for both files
+        film.steadyImage(steady);
+        writeExr(r.out + "/steady.exr", film.width(), film.height(), steady, r.opt.pixel);
+        rep.kept.push_back("steady.exr");
+        writePngPreview(r.out + "/steady.png", film.width(), film.height(), steady);
+        rep.kept.push_back("steady.png");
+    }
+    rep.kept.push_back("summary.json");
+    writeSummary(false);
+
+    // A first signal during the export stops it after the frame in progress. If the render was
+    // already interrupted, the flag is set: the export runs to the end, and a second signal quits.
+    const std::atomic<bool>* cancel = interrupted() ? nullptr : &interruptFlag();
+    try {
+        if (!r.noFrames) {
+            const double t0 = nowSec();
+            double lastPrint = t0;
+            exportFrames(film, r.out + "/frames", r.opt, [&](int done, int total) {
+                rep.framesWritten = done;
+                if (tty) {
+                    std::fprintf(stderr, "\rwriting frames %d/%d", done, total);
+                } else if (!r.quiet && nowSec() - lastPrint >= 10.0) {
+                    lastPrint = nowSec();
+                    std::fprintf(stderr, "writing frames: %d/%d after %.0f s\n", done, total, lastPrint - t0);
+                }
+            }, cancel);
+            if (tty) std::fprintf(stderr, "\n");
+            if (rep.framesWritten > 0) rep.kept.push_back("frames/");
+            if (cancel && cancel->load() && rep.framesWritten < rep.framesExpected) {
+                rep.interrupted = true;
+                rep.error = "interrupted by " + interruptName() + " while writing the frames";
+            }
+        }
+        if (r.strip > 0 && !rep.interrupted) {
+            exportStripPng(film, r.out + "/strip.png", r.strip, r.opt, r.stripEv);
+            rep.kept.push_back("strip.png");
+        }
+    } catch (const UserError& e) {
+        if (tty) std::fprintf(stderr, "\n");
+        rep.error = e.what();
+        if (rep.framesWritten > 0 && rep.framesWritten < rep.framesExpected) rep.kept.push_back("frames/ (partial)");
+    }
+    if (rep.interrupted && rep.framesWritten > 0) rep.kept.back() = "frames/ (partial)";
+    try {
+        writeSummary(true);
+    } catch (const UserError&) {
+        if (rep.error.empty()) throw;
+        // The first summary.json stays (its frames_written is null: frames were being written).
+    }
+    if (!rep.error.empty()) {
+        std::string kept;
+        for (const std::string& k : rep.kept) kept += (kept.empty() ? "" : ", ") + k;
+        std::fprintf(stderr, "error: %s\nkept in %s (complete files only): %s; %d of %d frames\n", rep.error.c_str(),
+                     r.out.c_str(), kept.c_str(), rep.framesWritten, rep.framesExpected);
+        exitCode() = rep.interrupted ? 128 + interruptSignal() : kExitUserError;
+    }
+    return rep;
+}
+
+double checkEnergyInsideFilm(const Scene& scene, const TransientFilm& film, TimeAxis axis, int threads) {
+    const int a = axis == TimeAxis::Real ? 0 : 1;
+    const double in = film.stats.inside[a].load(), out = film.stats.outside[a].load();
+    if (!(in + out > 0.0)) return 0.0;
+    const double fraction = out / (in + out);
+    const TimeBins& t = scene.time;
+    const char* axisName = axis == TimeAxis::Real ? "real-time" : "unwarped";
+    const SceneDesc& d = scene.desc;
+    const std::string key = d.locs.count("film.start_m") ? "film.start_m"
+                            : d.locs.count("film.start_ns") ? "film.start_ns"
+                            : d.locs.count("film.bin_width_m") ? "film.bin_width_m"
+                            : d.locs.count("film.bin_width_ns") ? "film.bin_width_ns" : "film";
+    char range[160];
+    std::snprintf(range, sizeof range, "%.4g to %.4g m OPL (%.4g to %.4g ns)", t.startOpl, t.endOpl(),
+                  t.startOpl / kC_m_per_ns, t.endOpl() / kC_m_per_ns);
+    if (in > 0.0 && fraction <= kOutsideWarnFraction) return fraction;
+    if (in > 0.0) {
+        std::fprintf(stderr,
+                     "warning: %s: %.1f%% of the energy that reached the camera arrived outside the film's time range, "
+                     "%s on the %s axis: the frames miss it; fit the range with \"film\": {\"range\": \"auto\"} or "
+                     "widen start_m/bin_width_m (or bins)\n",
+                     keyWhere(d, key).c_str(), 100.0 * fraction, range, axisName);
+        return fraction;
+    }
+    // Every frame is black. Measure where the energy arrives, to say which range would hold it.
+    std::string fix = "use \"film\": {\"range\": \"auto\"} to fit it to the scene";
+    PilotControl pc;
+    pc.abort = &interruptFlag();
+    const TimeRangeFit fit = measureArrivalRange(scene, 4000, threads, pc);
+    if (fit.fromPilot) {
+        char b[400];
+        std::snprintf(b, sizeof b,
+                      "a pilot pass measured arrivals from %.4g to %.4g m OPL: set \"film\": {\"start_m\": %.4g, "
+                      "\"bin_width_m\": %.4g} to cover them with the same %d bins, or \"range\": \"auto\" to fit "
+                      "the range automatically",
+                      fit.startOpl, fit.endOpl, fit.startOpl, (fit.endOpl - fit.startOpl) / t.bins, t.bins);
+        fix = b;
+    }
+    std::fprintf(stderr,
+                 "error: %s: every frame is black: all the energy that reached the camera arrived outside the film's "
+                 "time range, %s on the %s axis; %s (the outputs were written)\n",
+                 keyWhere(d, key).c_str(), range, axisName, fix.c_str());
+    if (exitCode() == 0) exitCode() = kExitUserError;
+    return fraction;
+}
+
+}  // namespace tpb::app

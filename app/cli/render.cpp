@@ -1,0 +1,244 @@
+// `tpb render`: headless progressive render to EXR frames + steady state + JSON summary.
+#include "cli/common.h"
+#include "cli/converge.h"
+#include "cli/interrupt.h"
+#include "cli/commands.h"
+#include "base/error.h"
+#include "film/film_export.h"
+#include "io/image_io.h"
+#include "integrators/preview.h"
+
+#include <nlohmann/json.hpp>
+
+#include <climits>
+#include <cstdio>
+#include <unistd.h>
+
+namespace tpb::app {
+
+namespace {
+
+struct RenderCmd {
+    std::string scene, out = "out";
+    RenderOverrides ov;
+    bool unwarp = false, realTime = false, continuous = false, delta = false, half = false;
+    bool noFrames = false, previewOnly = false, quiet = false;
+    int frameStep = 1;
+    int strip = 8;
+    double stripEv = 0.0;
+    std::string method = "beams";
+    int spp = 1;
+};
+
+nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOptions& opt, double wallSec) {
+    using nlohmann::json;
+    const auto hist = drv.history();
+    json j = summaryHeader(scene, "beams", hist.size(), wallSec, drv.film(), opt);
+    json stages = json::array();
+    for (const auto& r : scene.stages.reasons) stages.push_back(r);
+    j["stages"] = stages;
+    const DriverSettings& s = drv.settings();
+    j["settings"] = {{"photons_per_pass", s.photonsPerPass}, {"beam_radius0_m", s.beamRadius0},
+                     {"surface_radius0_m", s.surfaceRadius0}, {"alpha", s.alpha}, {"seed", s.seed},
+                     {"threads", s.threads}, {"time_profile", s.profile == TimeProfile::Exact ? "exact" : "uniform"},
+                     {"beam_length", s.beamLength == BeamLength::Short ? "short" : "long"},
+                     {"accel", s.accel == BeamAccel::Kind::Embree ? "embree" : "brute-force"}};
+    json per = json::array();
+    int64_t beams = 0, estimates = 0, photonEst = 0;
+    double passSec = 0.0;
+    Color emittedFlux(0.0), cutFlux(0.0);
+    int64_t regionOverflows = 0;
+    for (const PassStats& p : hist) {
+        per.push_back({{"pass", p.pass}, {"beam_radius_m", p.beamRadius}, {"surface_radius_m", p.surfaceRadius},
+                       {"beams", p.beams}, {"beam_pieces", p.beamPieces}, {"surface_photons", p.surfacePhotons},
+                       {"beam_estimates", p.camera.beamEstimates}, {"photon_estimates", p.camera.photonEstimates},
+                       {"photon_s", p.photonSec}, {"build_s", p.buildSec}, {"camera_s", p.cameraSec},
+                       {"pass_s", p.passSec}, {"elapsed_s", p.elapsedSec}});
+        beams += p.beams;
+        estimates += p.camera.beamEstimates;
+        photonEst += p.camera.photonEstimates;
+        passSec += p.passSec;
+        emittedFlux += p.emittedFlux;
+        cutFlux += p.cutFlux;
+        regionOverflows += p.regionOverflows + p.camera.regionOverflows;
+    }
+    j["per_pass"] = per;
+    const FilmStats& fs = drv.film().stats;
+    const double in0 = fs.inside[0].load(), out0 = fs.outside[0].load();
+    const double in1 = fs.inside[1].load(), out1 = fs.outside[1].load();
+    j["totals"] = {{"beams", beams}, {"beam_estimates", estimates}, {"photon_estimates", photonEst},
+                   {"render_seconds", passSec},
+                   {"beams_per_second", passSec > 0 ? beams / passSec : 0.0},
+                   {"beam_estimates_per_second", passSec > 0 ? estimates / passSec : 0.0},
+                   {"rejected_samples", fs.rejectedSamples.load()},
+                   {"energy_outside_film_fraction_real", in0 + out0 > 0 ? out0 / (in0 + out0) : 0.0},
+                   {"energy_outside_film_fraction_unwarped", in1 + out1 > 0 ? out1 / (in1 + out1) : 0.0},
+                   // Long beams in an unbounded medium end past the film's end; the flux they still
+                   // carry there is missing from the steady image only (photon_tracer.cpp).
+                   {"region_stack_overflows", regionOverflows},
+                   {"beam_flux_cut_fraction", luminance(emittedFlux) > 0 ? luminance(cutFlux) / luminance(emittedFlux) : 0.0},
+                   {"peak_rss_bytes", peakRssBytes()}};
+    return j;
+}
+
+// Flags that contradict each other; checked before anything is loaded or written.
+void checkFlagConflicts(const RenderCmd& c) {
+    if (c.unwarp && c.realTime)
+        throw UserError("--unwarp and --real-time contradict each other: give one of them (frames are in real time "
+                        "unless --unwarp or the scene's render.unwarp asks for unwarped time)");
+    if (c.continuous && c.delta)
+        throw UserError("--continuous and --delta contradict each other: give one of them (frames are for a delta "
+                        "pulse unless --continuous or the scene's render.emission asks for continuous emission)");
+}
+
+void run(RenderCmd& c) {
+    InterruptScope interrupts;  // Ctrl-C and SIGTERM, from the start (the pilot polls them too)
+    checkFlagConflicts(c);      // (each flag's range was checked when the command line was parsed)
+    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+
+    ExportOptions opt;
+    opt.axis = (scene->desc.render.unwarp || c.unwarp) && !c.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
+    opt.mode = (scene->desc.render.emission == EmissionMode::Continuous || c.continuous) && !c.delta
+                   ? EmissionMode::Continuous : EmissionMode::Delta;
+    opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
+    opt.step = c.frameStep;
+    PathTracedRenderRequest outputs;
+    outputs.out = c.out;
+    outputs.opt = opt;
+    outputs.noFrames = c.noFrames;
+    outputs.quiet = c.quiet;
+    outputs.strip = c.strip;
+    outputs.stripEv = c.stripEv;
+    outputs.spp = c.spp;
+
+    // Every setting is resolved and checked before the first file is written (no preview.exr is left
+    // behind by a bad --alpha or by photons that would not fit in memory).
+    DriverSettings ds = DriverSettings::fromScene(*scene);
+    c.ov.applyToSettings(ds);
+    if (c.method == "pt") checkPathTracedRequest(*scene, c.ov, outputs);
+
+    // The folder is this render's from here on: locked, the previous render's outputs removed.
+    const OutputFolder folder(c.out, "render", renderOutputFiles(outputs, scene->time.bins));
+    if (!c.quiet && !folder.removed().empty())
+        std::printf("removed %zu files of an earlier render in %s (listed in its manifest)\n", folder.removed().size(),
+                    c.out.c_str());
+
+    // Geometry/camera check before any photon is traced.
+    const std::vector<float> preview = renderPreview(*scene, ds.threads);
+    const double tw = nowSec();
+    writeExr(c.out + "/preview.exr", scene->camera.width, scene->camera.height, preview);
+    const double previewExrSec = nowSec() - tw;
+    writePngPreview(c.out + "/preview.png", scene->camera.width, scene->camera.height, preview);
+    if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
+    if (c.previewOnly) return;
+    reportPlannedOutputs(*scene, outputs, previewExrSec);
+
+    if (c.method == "pt") {  // same outputs, rendered by the path tracer (cli_converge.cpp)
+        renderPathTraced(*scene, c.ov, outputs);
+        return;
+    }
+
+    if (ds.passes == 0 && ds.timeBudgetSec == 0.0)
+        std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
+    Driver drv(*scene, ds);
+
+    const bool tty = isatty(STDERR_FILENO) && !c.quiet;
+    const double t0 = nowSec();
+    drv.start([&](const PassStats& p) {
+        if (c.quiet) return;
+        const int64_t total = ds.passes;
+        if (tty) {
+            const int width = 30;
+            const double frac = total > 0 ? double(p.pass) / total
+                                          : (ds.timeBudgetSec > 0 ? std::min(1.0, p.elapsedSec / ds.timeBudgetSec) : 0.0);
+            const int fill = static_cast<int>(frac * width);
+            std::fprintf(stderr, "\r[%.*s%*s] pass %llu  r=%.3g m  %lld beams  %.2f s/pass  %.1f s ",
+                         fill, "##############################", width - fill, "",
+                         static_cast<unsigned long long>(p.pass), p.beamRadius, static_cast<long long>(p.beams),
+                         p.passSec, p.elapsedSec);
+        } else if (p.pass == 1 || p.pass % 10 == 0 || (total > 0 && int64_t(p.pass) == total)) {
+            std::fprintf(stderr, "pass %llu: r=%.4g m, %lld beams, %.3f s\n", static_cast<unsigned long long>(p.pass),
+                         p.beamRadius, static_cast<long long>(p.beams), p.passSec);
+        }
+    });
+    // After start() (which clears a stop request): a signal from before is passed on here, a later
+    // one by the handler.
+    setInterruptDriver(&drv);
+    drv.wait();
+    setInterruptDriver(nullptr);
+    if (tty) std::fprintf(stderr, "\n");
+    const double wall = nowSec() - t0;
+    if (drv.failure()) {
+        // The passes finished before the failure are kept and written; the exit code says it failed.
+        std::fprintf(stderr, "error: %s\nthe render stopped at pass %llu; writing the %llu finished passes\n",
+                     drv.failureMessage().c_str(), static_cast<unsigned long long>(drv.completedPasses() + 1),
+                     static_cast<unsigned long long>(drv.completedPasses()));
+        try {
+            std::rethrow_exception(drv.failure());
+        } catch (const UserError&) {
+            exitCode() = kExitUserError;
+        } catch (...) {
+            exitCode() = 1;
+        }
+    }
+    const bool stoppedBySignal = interrupted();
+    if (stoppedBySignal && !c.quiet)
+        std::fprintf(stderr, "interrupted by %s: writing the %llu finished passes\n", interruptName().c_str(),
+                     static_cast<unsigned long long>(drv.completedPasses()));
+
+    const OutputReport rep =
+        writeRenderOutputs(drv.film(), outputs, [&] { return summaryJson(*scene, drv, opt, wall); });
+    warnFilmOverflow(*scene, drv.film());
+    int64_t regionOverflows = 0;
+    for (const PassStats& p : drv.history()) regionOverflows += p.regionOverflows + p.camera.regionOverflows;
+    if (regionOverflows > 0)
+        std::fprintf(stderr,
+                     "warning: %lld paths were ended because they entered more than 7 nested dielectric/null shapes "
+                     "(open or overlapping shapes crossed again and again); close those shapes or make them not "
+                     "overlap\n",
+                     static_cast<long long>(regionOverflows));
+    const double outside = checkEnergyInsideFilm(*scene, drv.film(), opt.axis, ds.threads);
+    if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
+    const int frames = rep.framesWritten;
+    if (!c.quiet) {
+        const FilmStats& fs = drv.film().stats;
+        std::printf("%llu passes in %.2f s; wrote %d frames (%s, %s) to %s/frames, steady.exr, summary.json; "
+                    "%lld rejected samples; %.2g%% of the energy outside the film\n",
+                    static_cast<unsigned long long>(drv.completedPasses()), wall, frames,
+                    opt.axis == TimeAxis::Real ? "real time" : "unwarped", opt.mode == EmissionMode::Delta ? "delta" : "continuous",
+                    c.out.c_str(), static_cast<long long>(fs.rejectedSamples.load()), 100.0 * outside);
+    }
+}
+
+}  // namespace
+
+void registerRender(CLI::App& app) {
+    auto c = std::make_shared<RenderCmd>();
+    CLI::App* cmd = app.add_subcommand("render", "Render a scene headless: preview.exr, EXR frames per time bin, "
+                                                 "steady.exr and summary.json");
+    cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
+    cmd->add_option("-o,--out", c->out, "Output folder (created if needed; locked while rendering; the outputs of "
+                                        "an earlier render in it are replaced, other files are kept)");
+    c->ov.add(cmd);
+    cmd->add_flag("--unwarp", c->unwarp, "Frames in camera-unwarped time (camera path excluded)");
+    cmd->add_flag("--real-time", c->realTime, "Frames in real time (camera path included; the default)");
+    cmd->add_flag("--continuous", c->continuous, "Frames for continuous emission (running integral of the pulse response)");
+    cmd->add_flag("--delta", c->delta, "Frames for a delta pulse (the default)");
+    cmd->add_flag("--half", c->half, "Write half-float EXR frames");
+    cmd->add_option("--frame-step", c->frameStep, "Write every K-th frame")
+        ->transform(flags::integer(1, INT_MAX, "1 = every frame"));
+    cmd->add_flag("--no-frames", c->noFrames, "Do not write per-bin frames");
+    cmd->add_option("--strip", c->strip, "Frames in strip.png (PNG overview of the time axis; 0 = none)")
+        ->transform(flags::integer(0, 4096, "frames side by side; 0 = no strip.png"));
+    cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of strip.png in EV (it is auto-exposed first)")
+        ->check(flags::number(-64.0, 64.0, false, "EV"));
+    cmd->add_option("--method", c->method, "Renderer: beams (progressive photon beams) | pt (unbiased path tracer)")
+        ->check(CLI::IsMember({"beams", "pt"}));
+    cmd->add_option("--spp", c->spp, "--method pt: camera paths per pixel per pass")
+        ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
+    cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
+    cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
+    cmd->callback([c] { run(*c); });
+}
+
+}  // namespace tpb::app

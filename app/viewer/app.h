@@ -1,0 +1,210 @@
+// The interactive viewer (`tpb view`): a Driver renders in the background while the UI thread
+// shows the film. The UI thread owns everything GL/ImGui; the driver's workers only write the film
+// (and wake the UI with glfwPostEmptyEvent after each pass); exports and the streak/profile reads
+// run on their own threads and hold the driver alive through a shared_ptr.
+#pragma once
+#include "cli/common.h"
+#include "render/driver.h"
+#include "viewer/export.h"
+#include "viewer/gl.h"
+
+#include <imgui.h>
+
+#include <future>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct GLFWwindow;
+
+namespace tpb::app {
+
+struct ViewOptions {
+    std::string scene;
+    RenderOverrides ov;
+    std::string screenshot, exportDir, exportFolder;
+    std::vector<std::string> clicks;  // --click: controls to click before the screenshot, in order
+    int64_t afterPasses = 1;
+    std::optional<double> timeNs;
+    std::optional<int> bin;
+    std::optional<double> exposure;
+    std::vector<int> pixel;  // x y
+    std::vector<int> windowSize{1280, 800};
+    bool unwarp = false, realTime = false, continuous = false, delta = false;
+    bool falseColor = false, noSrgb = false, steady = false;
+};
+
+// What the user looks at (changed by the UI, never by other threads).
+struct ViewState {
+    int bin = 0;
+    TimeAxis axis = TimeAxis::Real;
+    EmissionMode mode = EmissionMode::Delta;
+    bool showSteady = false;
+    DisplayParams display;
+    float evFrame = 0.0f, evSteady = 0.0f;  // exposure per view (frame and streak share evFrame)
+    // Auto exposure pending: refitted to every fetch that shows light (the tiles finished so far)
+    // until it has been fitted to a complete frame of at least one pass.
+    bool autoFrame = true, autoSteady = true;
+    // Automatic bin pending (no --bin/--time, the user has not moved the bin): the bin of peak
+    // energy, refitted like the exposure until the first pass is complete.
+    bool autoBin = true;
+    bool playing = false, loop = true;
+    float speed = 8.0f;  // bins per second
+    double playAccum = 0.0;
+    int selX = 0, selY = 0;  // pixel of the profile; selY is the streak's row
+    std::string outDir = "out/view";
+};
+
+// Identifies the film data a buffer was fetched for.
+struct FetchKey {
+    uint64_t generation = ~0ull, passes = ~0ull;
+    int bin = -1, x = -1, y = -1;
+    TimeAxis axis = TimeAxis::Real;
+    EmissionMode mode = EmissionMode::Delta;
+    bool steady = false;
+    bool operator==(const FetchKey&) const = default;
+};
+
+struct ProfileResult {
+    FetchKey key;
+    std::vector<float> profile;  // bins*3
+    std::vector<float> streak;   // bins rows x W cols x 3
+};
+
+// Luminance of each bin (delta pulse, summed over the image) on one axis, for the automatic bin.
+struct BinEnergyResult {
+    FetchKey key;                // generation, passes, axis
+    std::vector<double> energy;  // per bin
+    bool complete = false;       // no tile was skipped (being written)
+};
+
+// The bin holding the most light, or -1 if the film is black.
+int peakEnergyBin(const std::vector<double>& energy);
+
+// A control as drawn in one frame: its name ("Section/label", the label without its ##id), its
+// rectangle (window pixels) and its ImGui ID (0 for plain text).
+struct ControlRect {
+    std::string name;
+    ImVec2 min, max;
+    ImGuiID id = 0;
+    bool visible = true;  // not scrolled out of view
+};
+
+// Exposure that maps the 99th percentile of the lit pixels' luminance to 1 (black pixels, e.g. of
+// tiles not rendered yet, are left out).
+struct ExposureFit {
+    bool found = false;  // some pixel has light
+    float ev = 0.0f;
+    size_t litPixels = 0;
+};
+ExposureFit fitExposure(const std::vector<float>& rgb);
+
+class Viewer {
+public:
+    Viewer(const Scene& scene, const DriverSettings& settings, const ViewOptions& opt, GLFWwindow* window);
+    ~Viewer();  // stops the driver and joins the helper threads (GL objects go with the members)
+    void run();
+
+private:
+    // session (view_data.cpp)
+    void restart(const DriverSettings& s, const std::string& why);
+    void updateFrame();
+    void updateProfile();
+    void updateBinEnergy();
+    void fitPendingExposure(const FetchKey& key);
+    void pollExport();
+    void startExport(const ExportRequest& req);
+    FetchKey frameKey() const;
+    FetchKey profileKey() const;
+    FetchKey binEnergyKey() const;
+    float binCentreOpl(int bin) const;
+
+    // UI (view_ui.cpp)
+    void drawUi();
+    void drawControls();
+    void drawImagePanel();
+    void drawTimePanel();
+    void drawTimeSection();
+    void drawProgressSection();
+    void drawSettingsSection();
+    void drawExportSection();
+    void drawMessages();
+    bool section(const char* label, ImGuiTreeNodeFlags flags = 0);  // a collapsing header, tracked
+    void track(const char* label);  // records the last item as control "<section>/<label>"
+    void handleKeys(const std::vector<int>& keys);  // GLFW key codes pressed since the last frame
+    void advancePlayback(double dt);
+    void setBin(int bin);  // the user's choice: ends the automatic bin
+    void setAutoBin(int bin);
+
+    // main loop (view_main.cpp)
+    bool settled();  // nothing left to fetch, render or export
+    void scriptedInput();  // screenshot mode: --click / --export, injected as ImGui mouse input
+    void endFrameChecks();
+    void takeScreenshot(int fbWidth, int fbHeight);
+    void saveSnapshot(int fbWidth, int fbHeight);
+
+    const Scene& scene_;
+    ViewOptions opt_;
+    GLFWwindow* window_;
+    ViewState st_;
+
+    std::shared_ptr<Driver> driver_;
+    uint64_t generation_ = 0;
+    DriverSettings edit_;  // the settings panel's copy
+    std::string status_;
+
+    DisplayProgram program_;
+    DisplayImage image_, streak_;
+    bool imageDirty_ = true, streakDirty_ = true;
+    DisplayParams lastImageParams_, lastStreakParams_;
+
+    std::vector<float> frameRgb_;  // CPU copy of what image_ shows
+    FetchKey frameKey_;
+    bool frameComplete_ = false;
+    double lastFetch_ = 0.0, fetchSec_ = 0.0;  // when and how long the last fetch took
+    ExposureFit lastFit_;
+
+    std::future<BinEnergyResult> binEnergyJob_;
+    FetchKey binEnergyRequested_;
+    double binEnergyLaunched_ = -1e9, binEnergySec_ = 0.0;
+
+    std::future<ProfileResult> profileJob_;
+    FetchKey profileRequested_, profileKey_;
+    std::vector<float> profileRgb_, profileLum_;
+
+    ExportJob export_;
+    std::vector<std::string> exportLog_;  // the last export's files
+    std::vector<std::string> exported_;   // every file exported in this session
+    std::string exportError_;
+
+    // Controls drawn this frame, and in the first frame (screenshot mode reports both).
+    const char* section_ = "";
+    std::vector<ControlRect> controls_, firstControls_;
+    float controlsMinX_ = 0.0f, controlsMaxX_ = 0.0f;  // the messages' content, window pixels
+    bool firstRecorded_ = false;
+    uint64_t firstPasses_ = 0;
+    bool firstRunning_ = false;
+    std::vector<std::string> idClashes_;  // "A" and "B" share an ImGui ID (reported once each)
+
+    // Scripted clicks (screenshot mode): the queue, the click in progress and its phase.
+    std::vector<std::string> clicks_;
+    size_t clickIndex_ = 0;
+    int clickPhase_ = 0;
+    ImVec2 clickPos_{0, 0};
+
+    // Where the film image was drawn (framebuffer pixels), for the screenshot report.
+    ImVec2 imageMin_{0, 0}, imageSize_{0, 0};
+    float imageZoom_ = 1.0f;
+
+    bool snapRequested_ = false;  // F12 / the button: save the window to the export folder
+    int snapCount_ = 0;
+
+    int settleFrames_ = 0;
+    bool screenshotTaken_ = false;
+    std::string scriptError_;  // a --click that could not be done
+    int exitCode_ = 0;
+};
+
+
+}  // namespace tpb::app

@@ -1,0 +1,254 @@
+// Viewer: the driver session and the data path from the film to the textures. The UI thread only
+// reads the film with frame(..., wait=false) (tiles being written keep their previous pixels and
+// are fetched again), the streak and the pixel profile are read on a helper thread (they lock
+// tiles and would otherwise stall the UI behind a tile being rendered).
+#include "viewer/app.h"
+
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+namespace tpb::app {
+
+ExposureFit fitExposure(const std::vector<float>& rgb) {
+    std::vector<float> lum;
+    lum.reserve(rgb.size() / 3);
+    for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
+        const float l = 0.2126f * rgb[i] + 0.7152f * rgb[i + 1] + 0.0722f * rgb[i + 2];
+        if (std::isfinite(l) && l > 0.0f) lum.push_back(l);
+    }
+    ExposureFit fit;
+    fit.litPixels = lum.size();
+    fit.found = !lum.empty();
+    if (!fit.found) return fit;
+    // The 99th percentile of the lit pixels maps to 1 (a few highlights may clip).
+    const size_t k = std::min(lum.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(lum.size())));
+    std::nth_element(lum.begin(), lum.begin() + static_cast<std::ptrdiff_t>(k), lum.end());
+    fit.ev = std::clamp(-std::log2(lum[k]), -64.0f, 64.0f);
+    return fit;
+}
+
+int peakEnergyBin(const std::vector<double>& energy) {
+    int best = -1;
+    double peak = 0.0;
+    for (size_t k = 0; k < energy.size(); ++k)
+        if (std::isfinite(energy[k]) && energy[k] > peak) {
+            peak = energy[k];
+            best = static_cast<int>(k);
+        }
+    return best;
+}
+
+void Viewer::restart(const DriverSettings& s, const std::string& why) {
+    if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
+    driver_ = std::make_shared<Driver>(scene_, s);
+    ++generation_;
+    edit_ = driver_->settings();
+    driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
+    status_ = why;
+    if (!why.empty()) {
+        std::printf("%s (photons/pass %lld, alpha %.4g, initial radius %.6g m, pass limit %lld)\n", why.c_str(),
+                    static_cast<long long>(s.photonsPerPass), s.alpha, s.beamRadius0, static_cast<long long>(s.passes));
+        std::fflush(stdout);
+    }
+}
+
+float Viewer::binCentreOpl(int bin) const {
+    return static_cast<float>(scene_.time.startOpl + (bin + 0.5) * scene_.time.binWidth);
+}
+
+FetchKey Viewer::frameKey() const {
+    FetchKey k;
+    k.generation = generation_;
+    k.passes = driver_->completedPasses();
+    k.steady = st_.showSteady;
+    if (!k.steady) {
+        k.bin = st_.bin;
+        k.axis = st_.axis;
+        k.mode = st_.mode;
+    }
+    return k;
+}
+
+FetchKey Viewer::profileKey() const {
+    FetchKey k;
+    k.generation = generation_;
+    k.passes = driver_->completedPasses();
+    k.x = st_.selX;
+    k.y = st_.selY;
+    k.axis = st_.axis;
+    k.mode = st_.mode;
+    return k;
+}
+
+FetchKey Viewer::binEnergyKey() const {
+    FetchKey k;
+    k.generation = generation_;
+    k.passes = driver_->completedPasses();
+    k.axis = st_.axis;
+    return k;
+}
+
+void Viewer::updateFrame() {
+    const FetchKey key = frameKey();
+    const double now = glfwGetTime();
+    // Fetch when the film or the selection changed. An incomplete fetch (tiles being written were
+    // skipped) is repeated, and while a pass renders the tiles it finishes are fetched too (the
+    // first pass can take many seconds): at most 30 (incomplete) or 4 (complete) times a second,
+    // and at most a tenth of the UI thread's time (a continuous frame sums all earlier bins).
+    const bool changed = !(key == frameKey_);
+    const bool rendering = driver_->running() && !driver_->paused();
+    const double gap = std::max(frameComplete_ ? 0.25 : 1.0 / 30.0, 10.0 * fetchSec_);
+    if (changed || ((!frameComplete_ || rendering) && now - lastFetch_ >= gap)) {
+        const TransientFilm& film = driver_->film();
+        frameRgb_.resize(static_cast<size_t>(film.width()) * film.height() * 3, 0.0f);
+        frameComplete_ = key.steady ? film.steadyImage(frameRgb_, false)
+                                    : film.frame(key.bin, key.axis, key.mode, frameRgb_, false);
+        frameKey_ = key;
+        lastFetch_ = now;
+        image_.upload(film.width(), film.height(), frameRgb_.data());
+        imageDirty_ = true;
+        fitPendingExposure(key);
+        fetchSec_ = glfwGetTime() - now;  // the fit included (it sorts the lit pixels)
+    }
+    DisplayParams p = st_.display;
+    p.exposureEv = st_.showSteady ? st_.evSteady : st_.evFrame;
+    if (imageDirty_ || p.exposureEv != lastImageParams_.exposureEv || p.srgb != lastImageParams_.srgb ||
+        p.falseColor != lastImageParams_.falseColor || p.decades != lastImageParams_.decades) {
+        program_.apply(image_, p);
+        lastImageParams_ = p;
+        imageDirty_ = false;
+    }
+}
+
+void Viewer::fitPendingExposure(const FetchKey& key) {
+    // Auto exposure (at start, after the Auto button, after a delta <-> continuous switch): fitted
+    // to the light already there - the tiles finished so far - and again on every fetch, until
+    // it has seen a complete frame of at least one pass on the bin that stays.
+    bool& pending = key.steady ? st_.autoSteady : st_.autoFrame;
+    if (!pending) return;
+    const ExposureFit fit = fitExposure(frameRgb_);
+    if (!fit.found) return;
+    (key.steady ? st_.evSteady : st_.evFrame) = fit.ev;
+    pending = !(frameComplete_ && key.passes > 0 && (key.steady || !st_.autoBin));
+    const bool news = fit.ev != lastFit_.ev || fit.litPixels != lastFit_.litPixels || !pending;
+    lastFit_ = fit;
+    if (!opt_.screenshot.empty() && news) {  // for the tests: when the exposure was fitted, on what
+        std::printf("auto_exposure ev %.6g lit_pixels %zu passes %llu complete %d final %d bin %d steady %d\n",
+                    static_cast<double>(fit.ev), fit.litPixels, static_cast<unsigned long long>(key.passes),
+                    frameComplete_ ? 1 : 0, pending ? 0 : 1, key.bin, key.steady ? 1 : 0);
+        std::fflush(stdout);
+    }
+}
+
+void Viewer::updateBinEnergy() {
+    using namespace std::chrono_literals;
+    if (binEnergyJob_.valid() && binEnergyJob_.wait_for(0s) == std::future_status::ready) {
+        const BinEnergyResult r = binEnergyJob_.get();
+        binEnergySec_ = glfwGetTime() - binEnergyLaunched_;
+        if (st_.autoBin && r.key.generation == generation_ && r.key.axis == st_.axis) {
+            const int k = peakEnergyBin(r.energy);
+            if (k >= 0) setAutoBin(k);
+            if (r.complete && r.key.passes > 0) {  // the first pass is in: keep this bin
+                st_.autoBin = false;
+                if (st_.autoFrame) frameKey_ = FetchKey{};  // and fit the exposure to it for good
+            } else if (!r.complete) {
+                // A tile was busy (being written, or read by the UI thread's own fetch at that
+                // instant): measure again, even if no pass completes any more.
+                binEnergyRequested_ = FetchKey{};
+            }
+        }
+    }
+    if (!st_.autoBin || binEnergyJob_.valid()) return;
+    const FetchKey key = binEnergyKey();
+    // Again when a pass completes, and a few times a second during the first pass (as its tiles
+    // finish), taking at most a tenth of one core (it reads every bin of the film once).
+    const double now = glfwGetTime();
+    const bool rendering = driver_->running() && !driver_->paused();
+    const bool due = rendering && now - binEnergyLaunched_ >= std::max(0.25, 10.0 * binEnergySec_);
+    if (key == binEnergyRequested_ && !due) return;
+    binEnergyRequested_ = key;
+    binEnergyLaunched_ = now;
+    std::shared_ptr<const Driver> drv = driver_;
+    binEnergyJob_ = std::async(std::launch::async, [drv, key] {
+        BinEnergyResult r;
+        r.key = key;
+        r.complete = true;
+        const TransientFilm& film = drv->film();
+        r.energy.assign(static_cast<size_t>(film.bins()), 0.0);
+        std::vector<float> rgb;
+        for (int k = 0; k < film.bins(); ++k) {
+            rgb.assign(static_cast<size_t>(film.width()) * film.height() * 3, 0.0f);  // skipped tiles: 0
+            r.complete &= film.frame(k, key.axis, EmissionMode::Delta, rgb, false);
+            double sum = 0.0;
+            for (size_t i = 0; i + 2 < rgb.size(); i += 3)
+                sum += 0.2126 * rgb[i] + 0.7152 * rgb[i + 1] + 0.0722 * rgb[i + 2];
+            r.energy[static_cast<size_t>(k)] = sum;
+        }
+        return r;
+    });
+}
+
+void Viewer::updateProfile() {
+    using namespace std::chrono_literals;
+    if (profileJob_.valid() && profileJob_.wait_for(0s) == std::future_status::ready) {
+        ProfileResult r = profileJob_.get();
+        const TransientFilm& film = driver_->film();
+        if (r.key.generation == generation_) {
+            profileKey_ = r.key;
+            profileRgb_ = std::move(r.profile);
+            profileLum_.resize(profileRgb_.size() / 3);
+            for (size_t k = 0; k < profileLum_.size(); ++k)
+                profileLum_[k] = 0.2126f * profileRgb_[k * 3] + 0.7152f * profileRgb_[k * 3 + 1] +
+                                 0.0722f * profileRgb_[k * 3 + 2];
+            streak_.upload(film.width(), film.bins(), r.streak.data());
+            streakDirty_ = true;
+        }
+    }
+    const FetchKey key = profileKey();
+    if (!profileJob_.valid() && !(key == profileRequested_)) {
+        profileRequested_ = key;
+        std::shared_ptr<const Driver> drv = driver_;
+        profileJob_ = std::async(std::launch::async, [drv, key] {
+            ProfileResult r;
+            r.key = key;
+            drv->film().pixelProfile(key.x, key.y, key.axis, key.mode, r.profile);
+            drv->film().streak(key.y, key.axis, key.mode, r.streak);
+            return r;
+        });
+    }
+    DisplayParams p = st_.display;
+    p.exposureEv = st_.evFrame;
+    if (!streak_.empty() &&
+        (streakDirty_ || p.exposureEv != lastStreakParams_.exposureEv || p.srgb != lastStreakParams_.srgb ||
+         p.falseColor != lastStreakParams_.falseColor || p.decades != lastStreakParams_.decades)) {
+        program_.apply(streak_, p);
+        lastStreakParams_ = p;
+        streakDirty_ = false;
+    }
+}
+
+void Viewer::startExport(const ExportRequest& req) {
+    if (export_.busy()) {
+        status_ = "an export is already running";
+        return;
+    }
+    exportError_.clear();
+    exportLog_.clear();
+    export_.start(driver_, req);
+}
+
+void Viewer::pollExport() {
+    if (!export_.collect()) return;
+    exportLog_ = export_.written();
+    exported_.insert(exported_.end(), exportLog_.begin(), exportLog_.end());
+    exportError_ = export_.error();
+    for (const std::string& w : exportLog_) std::printf("exported: %s\n", w.c_str());
+    if (!exportError_.empty()) std::fprintf(stderr, "export failed: %s\n", exportError_.c_str());
+    std::fflush(stdout);
+}
+
+}  // namespace tpb::app

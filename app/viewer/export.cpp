@@ -1,0 +1,144 @@
+#include "viewer/export.h"
+
+#include "base/error.h"
+
+#include <cstdio>
+
+namespace tpb::app {
+
+std::string axisModeTag(TimeAxis axis, EmissionMode mode) {
+    return std::string(axis == TimeAxis::Real ? "real" : "unwarped") + "_" +
+           (mode == EmissionMode::Delta ? "delta" : "continuous");
+}
+
+std::string exportFrameName(int bin, TimeAxis axis, EmissionMode mode) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "frame_%05d_", bin);
+    return buf + axisModeTag(axis, mode) + ".exr";
+}
+
+std::string exportFramesDir(TimeAxis axis, EmissionMode mode) { return "frames_" + axisModeTag(axis, mode); }
+
+std::string exportStreakName(int row, TimeAxis axis, EmissionMode mode) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "streak_row%04d_", row);
+    return buf + axisModeTag(axis, mode) + ".exr";
+}
+
+std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode) {
+    return "profile_x" + std::to_string(x) + "_y" + std::to_string(y) + "_" + axisModeTag(axis, mode) + ".csv";
+}
+
+bool ExportJob::start(std::shared_ptr<const Driver> driver, const ExportRequest& req) {
+    if (running_.load()) return false;
+    if (thread_.joinable()) thread_.join();
+    {
+        std::lock_guard<std::mutex> g(mutex_);
+        error_.clear();
+        written_.clear();
+        stage_ = "starting";
+    }
+    cancel_ = false;
+    done_ = 0;
+    total_ = 0;
+    running_ = true;
+    thread_ = std::thread([this, driver = std::move(driver), req] { run(driver, req); });
+    return true;
+}
+
+void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
+    const TransientFilm& film = driver->film();
+    ExportOptions opt;
+    opt.axis = req.axis;
+    opt.mode = req.mode;
+    const int frames = req.allFrames ? film.bins() : 0;
+    total_ = (req.frame ? 1 : 0) + frames + (req.steady ? 1 : 0) + (req.streak ? 1 : 0) + (req.profile ? 1 : 0);
+    auto step = [&](const std::string& stage) {
+        std::lock_guard<std::mutex> g(mutex_);
+        stage_ = stage;
+    };
+    auto wrote = [&](const std::string& path) {
+        std::lock_guard<std::mutex> g(mutex_);
+        written_.push_back(path);
+    };
+    try {
+        ensureWritableDir(req.dir);
+        if (req.frame && !cancel_) {
+            step("current frame");
+            const std::string path = req.dir + "/" + exportFrameName(req.bin, req.axis, req.mode);
+            exportFrame(film, req.bin, path, opt);
+            wrote(path);
+            ++done_;
+        }
+        if (req.steady && !cancel_) {
+            step("steady state");
+            const std::string path = req.dir + "/steady.exr";
+            exportSteady(film, path);
+            wrote(path);
+            ++done_;
+        }
+        if (req.streak && !cancel_) {
+            step("streak image");
+            const std::string path = req.dir + "/" + exportStreakName(req.row, req.axis, req.mode);
+            exportStreak(film, req.row, path, opt);
+            wrote(path);
+            ++done_;
+        }
+        if (req.profile && !cancel_) {
+            step("pixel profile");
+            const std::string path = req.dir + "/" + exportProfileName(req.x, req.y, req.axis, req.mode);
+            exportProfileCsv(film, req.x, req.y, path, opt);
+            wrote(path);
+            ++done_;
+        }
+        if (frames > 0 && !cancel_) {
+            step("all frames");
+            const std::string dir = req.dir + "/" + exportFramesDir(req.axis, req.mode);
+            const int base = done_.load();
+            const int n = exportFrames(film, dir, opt, [&](int d, int) { done_ = base + d; }, &cancel_);
+            wrote(dir + "/ (" + std::to_string(n) + " frames)");
+        }
+        if (cancel_) {
+            std::lock_guard<std::mutex> g(mutex_);
+            error_ = "export cancelled";
+        }
+    } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> g(mutex_);
+        error_ = e.what();
+    }
+    step("done");
+    running_ = false;
+}
+
+bool ExportJob::collect() {
+    if (running_.load() || !thread_.joinable()) return false;
+    thread_.join();
+    return true;
+}
+
+float ExportJob::progress() const {
+    const int t = total_.load();
+    return t > 0 ? static_cast<float>(done_.load()) / static_cast<float>(t) : 0.0f;
+}
+
+std::string ExportJob::progressLabel() const {
+    std::lock_guard<std::mutex> g(mutex_);
+    return stage_ + " " + std::to_string(done_.load()) + "/" + std::to_string(total_.load());
+}
+
+std::vector<std::string> ExportJob::written() const {
+    std::lock_guard<std::mutex> g(mutex_);
+    return written_;
+}
+
+std::string ExportJob::error() const {
+    std::lock_guard<std::mutex> g(mutex_);
+    return error_;
+}
+
+void ExportJob::cancelAndJoin() {
+    cancel_ = true;
+    if (thread_.joinable()) thread_.join();
+}
+
+}  // namespace tpb::app

@@ -1,0 +1,63 @@
+// The viewer's exports, run on a background thread so the window keeps drawing: the current
+// frame, all frames, the steady-state image, the streak image of a row and a pixel's profile, in
+// the time axis and emission mode shown. The job holds a reference to the driver, so a restart or
+// closing the window never frees the film under it. Only film_export.h is called from the thread.
+#pragma once
+#include "render/driver.h"
+#include "film/film_export.h"
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace tpb::app {
+
+struct ExportRequest {
+    std::string dir = "out/view";
+    bool frame = false, allFrames = false, steady = false, streak = false, profile = false;
+    int bin = 0, row = 0, x = 0, y = 0;
+    TimeAxis axis = TimeAxis::Real;
+    EmissionMode mode = EmissionMode::Delta;
+};
+
+// File names (relative to the request's folder).
+std::string axisModeTag(TimeAxis axis, EmissionMode mode);               // e.g. "real_delta"
+std::string exportFrameName(int bin, TimeAxis axis, EmissionMode mode);  // frame_00012_real_delta.exr
+std::string exportFramesDir(TimeAxis axis, EmissionMode mode);           // frames_real_delta
+std::string exportStreakName(int row, TimeAxis axis, EmissionMode mode); // streak_row0031_real_delta.exr
+std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode);  // profile_x12_y40_real_delta.csv
+
+class ExportJob {
+public:
+    ExportJob() = default;
+    ExportJob(const ExportJob&) = delete;
+    ExportJob& operator=(const ExportJob&) = delete;
+    ~ExportJob() { cancelAndJoin(); }
+
+    // Starts the export (returns false if one is already running).
+    bool start(std::shared_ptr<const Driver> driver, const ExportRequest& req);
+    bool busy() const { return running_.load(); }
+    // Joins a finished thread; true once per finished job (then result()/error() describe it).
+    bool collect();
+    float progress() const;
+    std::string progressLabel() const;
+    std::vector<std::string> written() const;
+    std::string error() const;
+    void cancel() { cancel_ = true; }
+    void cancelAndJoin();
+
+private:
+    void run(std::shared_ptr<const Driver> driver, ExportRequest req);
+
+    std::thread thread_;
+    std::atomic<bool> running_{false}, cancel_{false};
+    std::atomic<int> done_{0}, total_{0};
+    mutable std::mutex mutex_;
+    std::string stage_, error_;
+    std::vector<std::string> written_;
+};
+
+}  // namespace tpb::app

@@ -1,0 +1,547 @@
+// Viewer: the ImGui panels (controls on the left, the film image top right, the streak image and
+// the selected pixel's time profile bottom right). Layout follows the window size.
+#include "viewer/app.h"
+
+#include <imgui_internal.h>  // ImGui::GetItemID (public from ImGui 1.88)
+#include <imgui_stdlib.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>  // key codes (ImGui 1.86 indexes keys by the backend's codes)
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+
+namespace tpb::app {
+
+namespace {
+
+constexpr ImGuiWindowFlags kPanel = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                                    ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings |
+                                    ImGuiWindowFlags_NoBringToFrontOnFocus;
+
+ImTextureID texId(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
+
+void hint(const char* text) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+    ImGui::TextWrapped("%s", text);
+    ImGui::PopStyleColor();
+}
+
+void wrappedColored(const ImVec4& colour, const std::string& text) {
+    ImGui::PushStyleColor(ImGuiCol_Text, colour);
+    ImGui::TextWrapped("%s", text.c_str());
+    ImGui::PopStyleColor();
+}
+
+// What the user reads on a control: the label without its "##id" / "###id" suffix.
+// (An unlabelled control, e.g. "##prev", is named by its ID.)
+std::string visibleLabel(const char* label) {
+    const std::string s(label);
+    const size_t hash = s.find("##");
+    if (hash == 0) return s.substr(s.find_first_not_of('#'));
+    return s.substr(0, hash);
+}
+
+const char* axisName(TimeAxis a) { return a == TimeAxis::Real ? "real time" : "camera-unwarped time"; }
+const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta pulse" : "continuous emission"; }
+
+}  // namespace
+
+void Viewer::setBin(int bin) {
+    st_.bin = std::clamp(bin, 0, scene_.time.bins - 1);
+    st_.autoBin = false;  // the user chose a time: no more automatic bin
+}
+
+void Viewer::setAutoBin(int bin) { st_.bin = std::clamp(bin, 0, scene_.time.bins - 1); }
+
+bool Viewer::section(const char* label, ImGuiTreeNodeFlags flags) {
+    const bool open = ImGui::CollapsingHeader(label, flags);
+    section_ = "";
+    track(label);
+    section_ = label;
+    return open;
+}
+
+void Viewer::track(const char* label) {
+    ControlRect c;
+    c.name = section_[0] ? visibleLabel(section_) + "/" + visibleLabel(label) : visibleLabel(label);
+    c.min = ImGui::GetItemRectMin();
+    c.max = ImGui::GetItemRectMax();
+    c.id = ImGui::GetItemID();
+    c.visible = ImGui::IsItemVisible();
+    // Two widgets of one window with the same ID share their hover/click state: the second one
+    // never fires (the "Steady state" export button did nothing that way). Report each clash once.
+    if (c.id != 0)
+        for (const ControlRect& o : controls_)
+            if (o.id == c.id) {
+                const std::string clash = "'" + o.name + "' and '" + c.name + "'";
+                if (std::find(idClashes_.begin(), idClashes_.end(), clash) == idClashes_.end()) {
+                    idClashes_.push_back(clash);
+                    std::fprintf(stderr, "internal error (bug): the viewer's controls %s share an ImGui ID\n",
+                                 clash.c_str());
+                }
+            }
+    controls_.push_back(std::move(c));
+}
+
+void Viewer::handleKeys(const std::vector<int>& keys) {
+    if (ImGui::GetIO().WantTextInput) return;  // typing in a field
+    for (int key : keys) {
+        switch (key) {
+            case GLFW_KEY_LEFT: setBin(st_.bin - 1); break;
+            case GLFW_KEY_RIGHT: setBin(st_.bin + 1); break;
+            case GLFW_KEY_HOME: setBin(0); break;
+            case GLFW_KEY_END: setBin(scene_.time.bins - 1); break;
+            case GLFW_KEY_SPACE: st_.playing = !st_.playing; break;
+            case GLFW_KEY_F12: snapRequested_ = true; break;
+            default: break;
+        }
+    }
+}
+
+void Viewer::advancePlayback(double dt) {
+    if (!st_.playing) {
+        st_.playAccum = 0.0;
+        return;
+    }
+    st_.autoBin = false;
+    st_.playAccum += std::min(dt, 0.25) * st_.speed;
+    while (st_.playAccum >= 1.0) {
+        st_.playAccum -= 1.0;
+        if (st_.bin + 1 < scene_.time.bins) {
+            ++st_.bin;
+        } else if (st_.loop) {
+            st_.bin = 0;
+        } else {
+            st_.playing = false;
+            st_.playAccum = 0.0;
+            break;
+        }
+    }
+}
+
+void Viewer::drawUi() {
+    const ImVec2 ds = ImGui::GetIO().DisplaySize;
+    const float left = std::floor(std::min(std::clamp(ds.x * 0.3f, 300.0f, 420.0f), ds.x * 0.5f));
+    const float topH = std::floor(ds.y * 0.6f);
+
+    controls_.clear();
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ImVec2(left, ds.y));
+    if (ImGui::Begin("Controls", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) {
+        // The controls scroll; below them, always in view and always the same size, the messages
+        // (wrapped, scrolling when long), so a message never moves a control.
+        const ImGuiStyle& style = ImGui::GetStyle();
+        const float messagesH = 3.0f * ImGui::GetTextLineHeightWithSpacing() + 2.0f * style.WindowPadding.y;
+        ImGui::BeginChild("##controls", ImVec2(0, -(messagesH + style.ItemSpacing.y)), false,
+                          ImGuiWindowFlags_AlwaysVerticalScrollbar);
+        drawControls();
+        ImGui::EndChild();
+        ImGui::BeginChild("##messages", ImVec2(0, messagesH), true);
+        section_ = "Messages";
+        drawMessages();
+        controlsMinX_ = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMin().x;
+        controlsMaxX_ = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMax().x;
+        ImGui::EndChild();
+    }
+    ImGui::End();
+    if (!firstRecorded_) {  // the layout the user first aims at (screenshot mode reports it)
+        firstRecorded_ = true;
+        firstControls_ = controls_;
+        firstPasses_ = driver_->completedPasses();
+        firstRunning_ = driver_->running();
+    }
+
+    ImGui::SetNextWindowPos(ImVec2(left, 0));
+    ImGui::SetNextWindowSize(ImVec2(ds.x - left, topH));
+    if (ImGui::Begin("Image", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawImagePanel();
+    ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(left, topH));
+    ImGui::SetNextWindowSize(ImVec2(ds.x - left, ds.y - topH));
+    if (ImGui::Begin("Streak and pixel profile", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawTimePanel();
+    ImGui::End();
+}
+
+// Layout rule: what render progress changes (pass statistics, the render finishing, messages)
+// never changes the number of rows above a control, so a click aimed during the render lands on
+// the same control after it. Rows that come and go are reserved (shown disabled or as "-"), and
+// messages of any length go to the fixed-size, wrapped messages box below the controls (drawUi).
+void Viewer::drawControls() {
+    const TimeBins& tb = scene_.time;
+    ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels
+    ImGui::TextWrapped("%s", scene_.desc.path.c_str());
+    ImGui::TextWrapped("%d x %d px, %d bins, %.3f - %.3f ns", scene_.camera.width, scene_.camera.height, tb.bins,
+                       tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
+    drawTimeSection();
+
+    if (section("View", ImGuiTreeNodeFlags_DefaultOpen)) {
+        int show = st_.showSteady ? 1 : 0;
+        ImGui::RadioButton("Time frame", &show, 0);
+        track("Time frame");
+        ImGui::SameLine();
+        ImGui::RadioButton("Steady state##view", &show, 1);  // unique ID: the Export section has one too
+        track("Steady state##view");
+        st_.showSteady = show == 1;
+        bool unwarp = st_.axis == TimeAxis::Unwarped;
+        if (ImGui::Checkbox("Camera unwarping", &unwarp)) st_.axis = unwarp ? TimeAxis::Unwarped : TimeAxis::Real;
+        track("Camera unwarping");
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Time since emission without the path to the camera");
+        bool cont = st_.mode == EmissionMode::Continuous;
+        if (ImGui::Checkbox("Continuous emission", &cont)) {
+            st_.mode = cont ? EmissionMode::Continuous : EmissionMode::Delta;
+            // A running sum and a pulse response differ by orders of magnitude: fit the exposure again.
+            st_.autoFrame = true;
+        }
+        track("Continuous emission");
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Light on from the pulse instant (running sum of the delta response)");
+    }
+
+    if (section("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
+        float& ev = st_.showSteady ? st_.evSteady : st_.evFrame;
+        if (ImGui::SliderFloat("exposure (EV)", &ev, -40.0f, 40.0f, "%.2f"))
+            (st_.showSteady ? st_.autoSteady : st_.autoFrame) = false;  // the user's exposure from now on
+        track("exposure (EV)");
+        if (ImGui::Button("Auto exposure")) {
+            (st_.showSteady ? st_.autoSteady : st_.autoFrame) = true;
+            frameKey_ = FetchKey{};  // fetch again: the exposure is computed from a fresh frame
+        }
+        track("Auto exposure");
+        ImGui::SameLine();
+        ImGui::Checkbox("sRGB", &st_.display.srgb);
+        track("sRGB");
+        ImGui::SameLine();
+        ImGui::Checkbox("False colour", &st_.display.falseColor);
+        track("False colour");
+        if (st_.display.falseColor) {
+            ImGui::SliderFloat("decades", &st_.display.decades, 1.0f, 12.0f, "%.1f");
+            track("decades");
+            hint("log10 luminance over the decades below the white point: blue (dim) to red; "
+                 "white = clipped, black = no energy");
+        }
+    }
+    drawProgressSection();
+    drawSettingsSection();
+    drawExportSection();
+    ImGui::PopItemWidth();
+}
+
+void Viewer::drawTimeSection() {
+    if (!section("Time", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    const TimeBins& tb = scene_.time;
+    int bin = st_.bin;
+    if (ImGui::SliderInt("bin", &bin, 0, tb.bins - 1)) setBin(bin);
+    track("bin");
+    const double opl = binCentreOpl(st_.bin);
+    ImGui::Text("t = %.4f ns  |  %.4f m of OPL", opl / kC_m_per_ns, opl);
+    ImGui::TextDisabled("(bin centre, %s)", axisName(st_.axis));
+    ImGui::TextDisabled("bin width %.4f ns = %.4f m", tb.binWidth / kC_m_per_ns, tb.binWidth);
+    if (ImGui::ArrowButton("##prev", ImGuiDir_Left)) setBin(st_.bin - 1);
+    track("##prev");
+    ImGui::SameLine();
+    // "###": one ID whatever the label says (and not the Progress section's "Pause").
+    const char* play = st_.playing ? "Pause###playback" : "Play###playback";
+    if (ImGui::Button(play, ImVec2(60, 0))) st_.playing = !st_.playing;
+    track(play);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("keys: Left/Right one bin, Home/End, Space play/pause");
+    ImGui::SameLine();
+    if (ImGui::ArrowButton("##next", ImGuiDir_Right)) setBin(st_.bin + 1);
+    track("##next");
+    ImGui::SameLine();
+    ImGui::Checkbox("loop", &st_.loop);
+    track("loop");
+    ImGui::SliderFloat("speed (bins/s)", &st_.speed, 0.5f, 120.0f, "%.1f", ImGuiSliderFlags_Logarithmic);
+    track("speed (bins/s)");
+}
+
+namespace {
+
+// The film's bookkeeping, on the displayed axis: the energy that missed the time range, split into
+// before and after it (they call for opposite fixes of film.start), and the estimates the film
+// dropped (non-finite ones, pixel sums that would overflow its floats), a warning when any.
+// Always two one-line rows (the details are in tooltips), so nothing below them ever moves and
+// the Export buttons stay in view in an 800-pixel window.
+void drawFilmStats(const FilmStats& fs, TimeAxis shownAxis) {
+    const long long rejected = static_cast<long long>(fs.rejectedSamples.load());
+    const long long overflowed = static_cast<long long>(fs.overflowedPixels.load());
+    if (overflowed > 0 || rejected > 0) {
+        ImGui::TextColored(ImVec4(1.0f, 0.75f, 0.2f, 1.0f), "warning: %lld rejected, %lld overflowed (hover)", rejected,
+                           overflowed);
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("%lld non-finite (NaN/Inf) estimates were rejected (they are not in the film).\n"
+                              "%lld pixel sums would have overflowed the film's 32-bit floats and were dropped\n"
+                              "from their passes (those pixels are too dark): lower the lights' power (the\n"
+                              "film scales with it).",
+                              rejected, overflowed);
+    } else {
+        ImGui::TextDisabled("rejected samples 0, overflowed pixels 0");
+    }
+    const int a = static_cast<int>(shownAxis);
+    const double in = fs.inside[a].load(), out = fs.outside[a].load(), before = fs.before[a].load();
+    const double total = in + out;
+    if (total > 0) {
+        const double beforePct = 100.0 * before / total, afterPct = 100.0 * std::max(0.0, out - before) / total;
+        ImGui::Text("outside the film %.2g %% (%.2g before, %.2g after)", 100.0 * out / total, beforePct, afterPct);
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("Of the energy that reached the camera, on the %s axis:\n%.3g %% arrived before the "
+                              "film's start, %.3g %% after its end.",
+                              shownAxis == TimeAxis::Real ? "real-time" : "camera-unwarped", beforePct, afterPct);
+    } else {
+        ImGui::TextDisabled("outside the film -");
+    }
+}
+
+}  // namespace
+
+void Viewer::drawProgressSection() {
+    if (!section("Progress", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    const DriverSettings& s = driver_->settings();
+    const uint64_t done = driver_->completedPasses();
+    const PassStats last = driver_->lastPass();
+    const bool running = driver_->running();
+    const bool failed = !running && driver_->failure();
+    const char* state = failed ? "stopped by an error, see below" : !running ? "finished"
+                        : driver_->paused() ? "paused" : "rendering";
+    if (s.passes > 0)
+        ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes), state);
+    else
+        ImGui::Text("pass %llu  (%s)", static_cast<unsigned long long>(done), state);
+    if (s.passes > 0)
+        ImGui::ProgressBar(static_cast<float>(done) / static_cast<float>(s.passes), ImVec2(-1, 0));
+    else
+        ImGui::ProgressBar(0.0f, ImVec2(-1, 0), "no pass limit");
+    // Always these rows, with "-" until the first pass is in.
+    if (done > 0) {
+        ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
+        ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
+                    static_cast<long long>(last.photons));
+        ImGui::Text("time per pass %.3f s", last.passSec);
+        ImGui::TextDisabled("trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
+                            last.cameraSec);
+        ImGui::Text("total time %.2f s", last.elapsedSec);
+    } else {
+        ImGui::TextDisabled(failed ? "kernel radius -" : "kernel radius -  (first pass in progress...)");
+        ImGui::TextDisabled("beams per pass -");
+        ImGui::TextDisabled("time per pass -");
+        ImGui::TextDisabled("trace -, build -, camera -");
+        ImGui::TextDisabled("total time -");
+    }
+    drawFilmStats(driver_->film().stats, st_.axis);
+    // Pause/Resume stays (disabled) when the render has finished, so the rows below keep their place.
+    const char* pause = running && driver_->paused() ? "Resume###render" : "Pause###render";
+    ImGui::BeginDisabled(!running);
+    if (ImGui::Button(pause, ImVec2(80, 0))) {
+        if (driver_->paused()) driver_->resume();
+        else driver_->pause();
+    }
+    ImGui::EndDisabled();
+    track(pause);
+    if (running && ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+        ImGui::SetTooltip("takes effect between passes");
+    ImGui::SameLine();
+    if (ImGui::Button("Restart", ImVec2(80, 0))) restart(driver_->settings(), "accumulation restarted");
+    track("Restart");
+}
+
+void Viewer::drawSettingsSection() {
+    if (!section("Render settings")) return;
+    hint("a change (Enter or leaving the field) restarts the accumulation");
+    bool apply = false;
+    const int64_t step = 1000, stepFast = 10000;
+    ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    track("photons / pass");
+    ImGui::InputDouble("alpha", &edit_.alpha, 0.05, 0.1, "%.3f");
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    track("alpha");
+    ImGui::InputDouble("initial radius (m)", &edit_.beamRadius0, 0.0, 0.0, "%.6g");
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("beam kernel radius of pass 1 (as --radius)");
+    track("initial radius (m)");
+    const int64_t one = 1, ten = 10;
+    ImGui::InputScalar("pass limit (0: none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    track("pass limit (0: none)");
+    if (!apply) return;
+    const DriverSettings& cur = driver_->settings();
+    if (edit_.photonsPerPass < 1 || !(edit_.alpha > 0.0 && edit_.alpha <= 1.0) || !(edit_.beamRadius0 > 0.0) ||
+        edit_.passes < 0) {
+        status_ = "invalid setting (photons >= 1, alpha in (0, 1], radius > 0, passes >= 0): not applied";
+        edit_ = cur;
+        return;
+    }
+    if (edit_.photonsPerPass == cur.photonsPerPass && edit_.alpha == cur.alpha &&
+        edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
+        return;
+    DriverSettings s = cur;  // everything else (seed, threads, radii ratio...) as before
+    s.photonsPerPass = edit_.photonsPerPass;
+    s.alpha = edit_.alpha;
+    s.beamRadius0 = edit_.beamRadius0;
+    s.passes = edit_.passes;
+    restart(s, "settings changed: accumulation restarted");
+}
+
+void Viewer::drawExportSection() {
+    if (!section("Export (EXR)", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    ImGui::InputText("folder", &st_.outDir);
+    track("folder");
+    // Short names: the long ones were cut off (and wrapping would move the buttons with the mode).
+    ImGui::TextDisabled("in %s time, %s", st_.axis == TimeAxis::Real ? "real" : "unwarped",
+                        st_.mode == EmissionMode::Delta ? "delta pulse" : "continuous");
+    ExportRequest r;
+    r.dir = st_.outDir.empty() ? "." : st_.outDir;
+    r.bin = st_.bin;
+    r.row = st_.selY;
+    r.x = st_.selX;
+    r.y = st_.selY;
+    r.axis = st_.axis;
+    r.mode = st_.mode;
+    const bool busy = export_.busy();
+    ImGui::BeginDisabled(busy);
+    bool go = false;
+    if (ImGui::Button("Current frame")) go = r.frame = true;
+    track("Current frame");
+    ImGui::SameLine();
+    if (ImGui::Button("All frames")) go = r.allFrames = true;
+    track("All frames");
+    ImGui::SameLine();
+    if (ImGui::Button("Steady state##export")) go = r.steady = true;  // unique ID: the View section has one too
+    track("Steady state##export");
+    if (ImGui::Button("Streak (selected row)")) go = r.streak = true;
+    track("Streak (selected row)");
+    ImGui::SameLine();
+    if (ImGui::Button("Pixel profile (CSV)")) go = r.profile = true;
+    track("Pixel profile (CSV)");
+    ImGui::EndDisabled();
+    if (ImGui::Button("Window screenshot (F12)")) snapRequested_ = true;
+    track("Window screenshot (F12)");
+    if (go) startExport(r);  // its progress bar and Cancel button are in the messages, below
+}
+
+void Viewer::drawMessages() {
+    // The export in progress, the render's error, the last action's status, the last export.
+    if (export_.busy()) {
+        ImGui::ProgressBar(export_.progress(), ImVec2(-70, 0), export_.progressLabel().c_str());
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel")) export_.cancel();
+        track("Cancel");
+    }
+    if (!driver_->running() && driver_->failure()) {
+        // The render thread caught it (core/render/driver.h): the finished passes stay on screen.
+        wrappedColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "error: " + driver_->failureMessage());
+        track("error");
+    }
+    if (!status_.empty()) {
+        wrappedColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), status_);
+        track("status");
+    }
+    if (!exportError_.empty() && !export_.busy()) {
+        wrappedColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), exportError_);
+        track("export error");
+    }
+    for (const std::string& w : exportLog_) ImGui::TextWrapped("wrote %s", w.c_str());
+}
+
+void Viewer::drawImagePanel() {
+    const int w = scene_.camera.width, h = scene_.camera.height;
+    if (st_.showSteady) {
+        ImGui::TextWrapped("Steady state (all time), %llu passes", static_cast<unsigned long long>(frameKey_.passes));
+    } else {
+        const double opl = binCentreOpl(st_.bin);
+        ImGui::TextWrapped("bin %d: t = %.4f ns (%.4f m), %s, %s", st_.bin, opl / kC_m_per_ns, opl,
+                           axisName(st_.axis), modeName(st_.mode));
+    }
+    const ImVec2 avail = ImGui::GetContentRegionAvail();
+    float zoom = std::min(avail.x / w, avail.y / h);
+    if (zoom >= 1.0f) zoom = std::floor(zoom);  // whole screen pixels per film pixel when it fits
+    zoom = std::max(zoom, 0.01f);
+    const ImVec2 size(w * zoom, h * zoom);
+    ImGui::SetCursorPosX(ImGui::GetCursorPosX() + std::floor(std::max(0.0f, (avail.x - size.x) * 0.5f)));
+    const ImVec2 p0 = ImGui::GetCursorScreenPos();
+    ImGui::Image(texId(image_.texture()), size);
+    const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+    imageMin_ = ImVec2(p0.x * scale.x, p0.y * scale.y);
+    imageSize_ = ImVec2(size.x * scale.x, size.y * scale.y);
+    imageZoom_ = zoom * scale.x;
+
+    if (ImGui::IsItemHovered()) {
+        const ImVec2 m = ImGui::GetIO().MousePos;
+        const int x = std::clamp(static_cast<int>((m.x - p0.x) / zoom), 0, w - 1);
+        const int y = std::clamp(static_cast<int>((m.y - p0.y) / zoom), 0, h - 1);
+        const size_t i = (static_cast<size_t>(y) * w + x) * 3;
+        if (i + 2 < frameRgb_.size())
+            ImGui::SetTooltip("pixel (%d, %d)\nRGB %.4g %.4g %.4g\nclick: profile + streak row", x, y, frameRgb_[i],
+                              frameRgb_[i + 1], frameRgb_[i + 2]);
+        if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+            st_.selX = x;
+            st_.selY = y;
+        }
+    }
+    // Selection markers: the pixel's outline and ticks beside the image for the streak row.
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const ImU32 col = IM_COL32(255, 200, 40, 255);
+    const float sx = p0.x + st_.selX * zoom, sy = p0.y + st_.selY * zoom;
+    dl->AddRect(ImVec2(sx - 1, sy - 1), ImVec2(sx + zoom + 1, sy + zoom + 1), col);
+    const float cy = sy + 0.5f * zoom;
+    dl->AddTriangleFilled(ImVec2(p0.x - 8, cy - 4), ImVec2(p0.x - 8, cy + 4), ImVec2(p0.x - 2, cy), col);
+    dl->AddTriangleFilled(ImVec2(p0.x + size.x + 8, cy - 4), ImVec2(p0.x + size.x + 8, cy + 4),
+                          ImVec2(p0.x + size.x + 2, cy), col);
+}
+
+void Viewer::drawTimePanel() {
+    const int w = scene_.camera.width, bins = scene_.time.bins;
+    ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s", st_.selY, axisName(st_.axis),
+                       modeName(st_.mode));
+    const ImVec2 avail = ImGui::GetContentRegionAvail();
+    const float lineH = ImGui::GetTextLineHeightWithSpacing();
+    const float plotH = std::max(60.0f, std::min(140.0f, avail.y * 0.4f));
+    const float streakH = std::max(20.0f, avail.y - plotH - 2.0f * lineH - 8.0f);
+    const ImVec2 size(avail.x, streakH);
+    const ImVec2 p0 = ImGui::GetCursorScreenPos();
+    if (!streak_.empty()) {
+        ImGui::Image(texId(streak_.texture()), size);
+        const float zx = size.x / w, zy = size.y / bins;
+        if (ImGui::IsItemHovered()) {
+            const ImVec2 m = ImGui::GetIO().MousePos;
+            const int x = std::clamp(static_cast<int>((m.x - p0.x) / zx), 0, w - 1);
+            const int k = std::clamp(static_cast<int>((m.y - p0.y) / zy), 0, bins - 1);
+            const double opl = binCentreOpl(k);
+            ImGui::SetTooltip("x %d, bin %d (%.4f ns)\nclick: go to this time and pixel", x, k, opl / kC_m_per_ns);
+            if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+                st_.selX = x;
+                setBin(k);
+            }
+        }
+        ImDrawList* dl = ImGui::GetWindowDrawList();
+        const float y = p0.y + (st_.bin + 0.5f) * zy;
+        dl->AddLine(ImVec2(p0.x, y), ImVec2(p0.x + size.x, y), IM_COL32(255, 200, 40, 160));
+        const float x = p0.x + (st_.selX + 0.5f) * zx;
+        dl->AddLine(ImVec2(x, p0.y), ImVec2(x, p0.y + size.y), IM_COL32(255, 200, 40, 90));
+    } else {
+        ImGui::Dummy(size);
+    }
+
+    ImGui::Text("Time profile of pixel (%d, %d), luminance", st_.selX, st_.selY);
+    if (!profileLum_.empty()) {
+        const float peak = *std::max_element(profileLum_.begin(), profileLum_.end());
+        char overlay[96];
+        std::snprintf(overlay, sizeof overlay, "peak %.4g, bin %d: %.4g", peak, st_.bin,
+                      st_.bin < static_cast<int>(profileLum_.size()) ? profileLum_[st_.bin] : 0.0f);
+        ImGui::PlotLines("##profile", profileLum_.data(), static_cast<int>(profileLum_.size()), 0, overlay, 0.0f,
+                         peak > 0 ? peak * 1.05f : 1.0f, ImVec2(avail.x, plotH));
+        const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+        const float pad = ImGui::GetStyle().FramePadding.x;
+        // PlotLines puts value k at k / (count - 1) of the inner frame.
+        const float span = std::max(1.0f, b.x - a.x - 2.0f * pad);
+        const float x = a.x + pad + (bins > 1 ? static_cast<float>(st_.bin) / (bins - 1) : 0.5f) * span;
+        ImGui::GetWindowDrawList()->AddLine(ImVec2(x, a.y), ImVec2(x, b.y), IM_COL32(255, 200, 40, 200));
+        if (ImGui::IsItemHovered() && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+            const float t = (ImGui::GetIO().MousePos.x - a.x - pad) / span;
+            setBin(static_cast<int>(std::lround(t * (bins - 1))));
+        }
+    }
+}
+
+}  // namespace tpb::app

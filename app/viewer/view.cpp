@@ -1,0 +1,461 @@
+// `tpb view`: the interactive viewer (GLFW window, OpenGL 3.3 core, Dear ImGui). The driver
+// renders in the background; this file holds the command line, the window and the main loop,
+// including the headless screenshot mode used by the tests (--screenshot, --after-passes).
+#include "cli/commands.h"
+#include "base/error.h"
+#include "io/image_io.h"
+#include "viewer/app.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cfloat>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <thread>
+
+namespace tpb::app {
+
+namespace {
+
+constexpr double kMaxExposureEv = 40.0;  // the Display section's exposure slider spans -40 to 40 EV
+constexpr int64_t kMaxWindowPx = 16384;   // beyond any OpenGL 3.3 framebuffer
+
+std::string gGlfwError;
+std::atomic<bool> gInterrupted{false};
+
+void onGlfwError(int code, const char* msg) {
+    gGlfwError = msg ? msg : "GLFW error " + std::to_string(code);
+}
+
+void onSigint(int) { gInterrupted = true; }
+
+// Key presses (and auto-repeats), recorded by a GLFW key callback: ImGui 1.86 samples key states
+// once per frame, so a press and release between two frames would be lost. ImGui chains to it.
+std::vector<int> gKeys;
+void onKey(GLFWwindow*, int key, int, int action, int) {
+    const bool arrow = key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT;  // the only keys that repeat
+    if (action == GLFW_PRESS || (action == GLFW_REPEAT && arrow)) gKeys.push_back(key);
+}
+
+// The window and its GL context; glfwTerminate on destruction.
+class GlfwWindow {
+public:
+    GlfwWindow(int width, int height, const std::string& title, bool vsync) {
+        glfwSetErrorCallback(onGlfwError);
+        if (!glfwInit()) fail();
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+        glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+        glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+        glfwWindowHint(GLFW_DOUBLEBUFFER, GLFW_TRUE);
+        window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+        if (!window_) {
+            glfwTerminate();
+            fail();
+        }
+        glfwMakeContextCurrent(window_);
+        glfwSwapInterval(vsync ? 1 : 0);
+    }
+    ~GlfwWindow() {
+        if (window_) glfwDestroyWindow(window_);
+        glfwTerminate();
+    }
+    GlfwWindow(const GlfwWindow&) = delete;
+    GlfwWindow& operator=(const GlfwWindow&) = delete;
+    GLFWwindow* get() const { return window_; }
+
+private:
+    [[noreturn]] static void fail() {
+        const std::string why = gGlfwError.empty() ? "" : " (" + gGlfwError + ")";
+        throw UserError("cannot open a window" + why + ": no display? use `tpb render` or run under xvfb-run");
+    }
+    GLFWwindow* window_ = nullptr;
+};
+
+class ImGuiSession {
+public:
+    explicit ImGuiSession(GLFWwindow* window) {
+        IMGUI_CHECKVERSION();
+        ImGui::CreateContext();
+        ImGui::GetIO().IniFilename = nullptr;  // the layout is fixed; write nothing to the cwd
+        ImGui::StyleColorsDark();
+        glfwSetKeyCallback(window, onKey);  // before ImGui installs its callbacks, which chain to it
+        ImGui_ImplGlfw_InitForOpenGL(window, true);
+        if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
+            ImGui_ImplGlfw_Shutdown();
+            ImGui::DestroyContext();
+            throw std::runtime_error("Dear ImGui: cannot initialise the OpenGL 3 renderer");
+        }
+    }
+    ~ImGuiSession() {
+        ImGui_ImplOpenGL3_Shutdown();
+        ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+    }
+    ImGuiSession(const ImGuiSession&) = delete;
+    ImGuiSession& operator=(const ImGuiSession&) = delete;
+};
+
+}  // namespace
+
+Viewer::Viewer(const Scene& scene, const DriverSettings& settings, const ViewOptions& opt, GLFWwindow* window)
+    : scene_(scene), opt_(opt), window_(window) {
+    program_.load(TPB_SHADER_DIR);
+    const int maxTex = maxTextureSize();
+    if (scene.camera.width > maxTex || scene.camera.height > maxTex || scene.time.bins > maxTex)
+        throw UserError("the film (" + std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height) +
+                        ", " + std::to_string(scene.time.bins) + " bins) exceeds the largest OpenGL texture (" +
+                        std::to_string(maxTex) + "); lower --width/--height/--bins");
+
+    // Initial view: the scene's render settings, then the flags (as `tpb render` does).
+    const RenderDesc& rd = scene.desc.render;
+    st_.axis = (rd.unwarp || opt.unwarp) && !opt.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
+    st_.mode = (rd.emission == EmissionMode::Continuous || opt.continuous) && !opt.delta ? EmissionMode::Continuous
+                                                                                        : EmissionMode::Delta;
+    // --bin and --time were checked against the film (runView). Without them, the bin of peak
+    // energy once light arrives (updateBinEnergy): bin 0 is often before any light.
+    if (opt.bin) setBin(*opt.bin);
+    else if (opt.timeNs) setBin(scene.time.binOf(*opt.timeNs * kC_m_per_ns));
+    st_.autoBin = !opt.bin && !opt.timeNs;
+    if (opt.exposure) {
+        st_.evFrame = st_.evSteady = static_cast<float>(*opt.exposure);
+        st_.autoFrame = st_.autoSteady = false;
+    }
+    st_.display.falseColor = opt.falseColor;
+    st_.display.srgb = !opt.noSrgb;
+    st_.showSteady = opt.steady;
+    st_.selX = scene.camera.width / 2;
+    st_.selY = scene.camera.height / 2;
+    if (opt.pixel.size() == 2) {
+        st_.selX = std::clamp(opt.pixel[0], 0, scene.camera.width - 1);
+        st_.selY = std::clamp(opt.pixel[1], 0, scene.camera.height - 1);
+    }
+    if (!opt.exportFolder.empty()) st_.outDir = opt.exportFolder;
+    // --export presses the Export buttons (screenshot mode), after the --click ones.
+    clicks_ = opt.clicks;
+    if (!opt.exportDir.empty()) {
+        st_.outDir = opt.exportDir;
+        clicks_.push_back("Export/Current frame");
+        clicks_.push_back("Export/Steady state");
+    }
+    frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
+    image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
+    restart(settings, "");
+}
+
+Viewer::~Viewer() {
+    // Helper threads first (they only read the film), then the render workers; the GL objects
+    // (members) are deleted afterwards, while the context still exists.
+    export_.cancelAndJoin();
+    if (profileJob_.valid()) profileJob_.wait();
+    if (binEnergyJob_.valid()) binEnergyJob_.wait();
+    if (driver_) driver_->stop();
+}
+
+bool Viewer::settled() {
+    if (driver_->running() || export_.busy() || profileJob_.valid() || binEnergyJob_.valid()) return false;
+    if (st_.autoBin && !(binEnergyRequested_ == binEnergyKey())) return false;
+    if (!(frameKey_ == frameKey()) || !frameComplete_) return false;
+    return profileKey_ == profileKey();
+}
+
+namespace {
+
+// "Export (EXR)/Current frame" may be written "Export/Current frame" (a section without its note).
+bool controlNamed(const ControlRect& c, const std::string& want) {
+    if (c.name == want) return true;
+    const size_t slash = c.name.find('/'), paren = c.name.find(" (");
+    return slash != std::string::npos && paren < slash && c.name.substr(0, paren) + c.name.substr(slash) == want;
+}
+
+}  // namespace
+
+void Viewer::scriptedInput() {
+    // Screenshot mode: the pointer stays off the window (no hover in the picture) except to do the
+    // --click and --export clicks, as ImGui mouse input, so they go where a user's clicks go: the
+    // control's hit test and ID. Each waits until the previous one's effect is over.
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
+    for (bool& down : io.MouseDown) down = false;
+    if (clickIndex_ >= clicks_.size() || !scriptError_.empty()) return;
+    if (clickPhase_ == 0) {
+        if (settleFrames_ < 3) return;
+        const std::string& want = clicks_[clickIndex_];
+        const auto c = std::find_if(controls_.begin(), controls_.end(),
+                                    [&](const ControlRect& r) { return controlNamed(r, want); });
+        if (c == controls_.end()) {
+            scriptError_ = "--click '" + want + "': no such control in the window; the controls are:";
+            for (const ControlRect& r : controls_) scriptError_ += "\n  " + r.name;
+            return;
+        }
+        if (!c->visible) {
+            scriptError_ = "--click '" + want + "': the control is scrolled out of view; use a taller --window-size";
+            return;
+        }
+        clickPos_ = ImVec2(std::floor(0.5f * (c->min.x + c->max.x)), std::floor(0.5f * (c->min.y + c->max.y)));
+        std::printf("click: %s at %.0f %.0f\n", c->name.c_str(), clickPos_.x, clickPos_.y);
+        std::fflush(stdout);
+    }
+    // Frames: 1 hover, 2 press, 3 release (a button fires on release over it).
+    ++clickPhase_;
+    io.MousePos = clickPos_;
+    io.MouseDown[0] = clickPhase_ == 2;
+    if (clickPhase_ == 3) {
+        clickPhase_ = 0;
+        ++clickIndex_;
+        settleFrames_ = 0;
+    }
+}
+
+void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
+    const std::vector<unsigned char> px = readBackBuffer(fbWidth, fbHeight);
+    const std::filesystem::path parent = std::filesystem::path(opt_.screenshot).parent_path();
+    if (!parent.empty()) ensureWritableDir(parent.string());
+    writePng8(opt_.screenshot, fbWidth, fbHeight, px);
+    screenshotTaken_ = true;
+    const uint64_t passes = driver_->completedPasses();
+    if (passes < static_cast<uint64_t>(opt_.afterPasses))
+        std::fprintf(stderr, "warning: the render stopped after %llu passes (asked: %lld)\n",
+                     static_cast<unsigned long long>(passes), static_cast<long long>(opt_.afterPasses));
+    std::printf("screenshot: %s (%dx%d) after %llu passes\n", opt_.screenshot.c_str(), fbWidth, fbHeight,
+                static_cast<unsigned long long>(passes));
+    // Machine-readable: where the film image is in the screenshot and how it was mapped.
+    std::printf("image_area %.3f %.3f %.3f %.3f zoom %.6f exposure_ev %.9g bin %d steady %d mode %s axis %s\n",
+                imageMin_.x, imageMin_.y, imageSize_.x, imageSize_.y, imageZoom_,
+                static_cast<double>(st_.showSteady ? st_.evSteady : st_.evFrame), st_.bin, st_.showSteady ? 1 : 0,
+                st_.mode == EmissionMode::Delta ? "delta" : "continuous",
+                st_.axis == TimeAxis::Real ? "real" : "unwarped");
+    // The controls (window pixels) now and in the first frame, drawn while the first pass rendered.
+    std::printf("messages_area %.1f %.1f\n", controlsMinX_, controlsMaxX_);
+    std::printf("layout_first passes %llu running %d\n", static_cast<unsigned long long>(firstPasses_),
+                firstRunning_ ? 1 : 0);
+    for (const ControlRect& c : firstControls_)
+        std::printf("control_first %.1f %.1f %.1f %.1f %s\n", c.min.x, c.min.y, c.max.x - c.min.x, c.max.y - c.min.y,
+                    c.name.c_str());
+    for (const ControlRect& c : controls_)
+        std::printf("control %.1f %.1f %.1f %.1f %s\n", c.min.x, c.min.y, c.max.x - c.min.x, c.max.y - c.min.y,
+                    c.name.c_str());
+    std::fflush(stdout);
+}
+
+void Viewer::saveSnapshot(int fbWidth, int fbHeight) {
+    snapRequested_ = false;
+    char name[48];
+    std::snprintf(name, sizeof name, "/window_%03d.png", ++snapCount_);
+    const std::string dir = st_.outDir.empty() ? "." : st_.outDir;
+    try {
+        ensureWritableDir(dir);
+        writePng8(dir + name, fbWidth, fbHeight, readBackBuffer(fbWidth, fbHeight));
+        status_ = "saved " + dir + name;
+        std::printf("saved %s%s\n", dir.c_str(), name);
+        std::fflush(stdout);
+    } catch (const std::exception& e) {
+        status_ = e.what();
+    }
+}
+
+void Viewer::endFrameChecks() {
+    // Screenshot mode: the film is final, every click done and its effect over. Checks, then the
+    // picture is taken by the caller.
+    if (!exportError_.empty()) exitCode() = kExitUserError;
+    if (!opt_.exportDir.empty()) {
+        const std::string frame = st_.outDir + "/" + exportFrameName(st_.bin, st_.axis, st_.mode);
+        for (const std::string& want : {frame, st_.outDir + "/steady.exr"})
+            if (std::find(exported_.begin(), exported_.end(), want) == exported_.end()) {
+                std::fprintf(stderr, "error: --export: the Export buttons did not write %s\n", want.c_str());
+                exitCode() = 1;
+            }
+    }
+    if (!idClashes_.empty()) exitCode() = 1;  // reported on stderr when found
+}
+
+void Viewer::run() {
+    const bool shot = !opt_.screenshot.empty();
+    double last = glfwGetTime();
+    int extraFrames = 3;  // after an event, draw a few frames so ImGui settles
+    while (!glfwWindowShouldClose(window_) && !gInterrupted) {
+        const bool busyDriver = driver_->running() && !driver_->paused();
+        const bool animate =
+            shot || st_.playing || export_.busy() || profileJob_.valid() || binEnergyJob_.valid() || !frameComplete_;
+        if (animate || extraFrames > 0) {
+            glfwPollEvents();
+            if (extraFrames > 0) --extraFrames;
+        } else {
+            const double t0 = glfwGetTime();
+            glfwWaitEventsTimeout(0.5);  // a finished pass wakes us (glfwPostEmptyEvent)
+            if (glfwGetTime() - t0 < 0.45) extraFrames = 3;
+        }
+        int fbw = 0, fbh = 0;
+        glfwGetFramebufferSize(window_, &fbw, &fbh);
+        if (fbw <= 0 || fbh <= 0 || glfwGetWindowAttrib(window_, GLFW_ICONIFIED)) {  // minimised: nothing to draw
+            pollExport();
+            glfwWaitEventsTimeout(0.1);
+            continue;
+        }
+
+        ImGui_ImplOpenGL3_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        if (shot) scriptedInput();  // after the backend has read the real mouse
+        ImGui::NewFrame();
+        const double now = glfwGetTime();
+        const double dt = now - last;
+        last = now;
+        handleKeys(gKeys);
+        gKeys.clear();
+        advancePlayback(dt);
+        pollExport();
+        updateFrame();
+        updateProfile();
+        updateBinEnergy();
+        drawUi();
+        ImGui::Render();
+
+        glViewport(0, 0, fbw, fbh);
+        glClearColor(0.06f, 0.06f, 0.07f, 1.0f);
+        glClear(GL_COLOR_BUFFER_BIT);
+        ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+        if (snapRequested_) saveSnapshot(fbw, fbh);
+        if (shot) {
+            if (!scriptError_.empty()) {
+                std::fprintf(stderr, "error: %s\n", scriptError_.c_str());
+                exitCode() = kExitUserError;
+                screenshotTaken_ = true;  // nothing to take: the error says why
+                break;
+            }
+            settleFrames_ = settled() ? settleFrames_ + 1 : 0;
+            // Two full frames with the final data drawn, then read this one.
+            if (clickIndex_ >= clicks_.size() && settleFrames_ >= 3) {
+                endFrameChecks();
+                takeScreenshot(fbw, fbh);
+                break;
+            }
+        }
+        glfwSwapBuffers(window_);
+
+        if (animate || extraFrames > 0) {  // cap the frame rate; leave the cores to the workers
+            const double frame = busyDriver ? 1.0 / 30.0 : 1.0 / 60.0;
+            const double spent = glfwGetTime() - now;
+            if (spent < frame) std::this_thread::sleep_for(std::chrono::duration<double>(frame - spent));
+        }
+    }
+    if (shot && !screenshotTaken_) {
+        std::fprintf(stderr, "error: the viewer was closed before the screenshot was taken\n");
+        exitCode() = 1;
+    }
+}
+
+namespace {
+
+// --bin and --time name a bin of the film, or are refused with the film's range (before any window).
+void checkShownTime(const ViewOptions& o, const TimeBins& tb) {
+    if (o.bin && (*o.bin < 0 || *o.bin >= tb.bins))
+        throw UserError("--bin " + std::to_string(*o.bin) + " is outside the film: its bins are 0 to " +
+                        std::to_string(tb.bins - 1) + "; pick one of them (or a time with --time in ns)");
+    if (!o.timeNs) return;
+    char range[128];
+    std::snprintf(range, sizeof range, "%.6g to %.6g ns", tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
+    if (!std::isfinite(*o.timeNs))
+        throw UserError(std::string("--time must be a time in ns within the film: ") + range);
+    const int k = tb.binOf(*o.timeNs * kC_m_per_ns);
+    if (k < 0 || k >= tb.bins) {
+        char t[32];
+        std::snprintf(t, sizeof t, "%.6g", *o.timeNs);
+        throw UserError(std::string("--time ") + t + " ns is outside the film (" + range +
+                        "); pick a time in that range (the scene's film.range sets it; `tpb info` prints it)");
+    }
+}
+
+void runView(const ViewOptions& o) {
+    std::unique_ptr<Scene> scene = loadAndBuild(o.scene, o.ov);
+    DriverSettings ds = DriverSettings::fromScene(*scene);
+    o.ov.applyToSettings(ds);
+    const bool shot = !o.screenshot.empty();
+    if (shot) {  // run exactly N passes, then take the picture
+        ds.passes = o.afterPasses;
+        ds.timeBudgetSec = 0.0;
+    }
+    if (o.windowSize.size() != 2 || o.windowSize[0] < 64 || o.windowSize[1] < 64)
+        throw UserError("--window-size needs two sizes >= 64");
+    if (o.pixel.size() == 2 && (o.pixel[0] < 0 || o.pixel[1] < 0 || o.pixel[0] >= scene->camera.width ||
+                                o.pixel[1] >= scene->camera.height))
+        throw UserError("--pixel " + std::to_string(o.pixel[0]) + " " + std::to_string(o.pixel[1]) +
+                        " is outside the image: X is 0 to " + std::to_string(scene->camera.width - 1) + ", Y 0 to " +
+                        std::to_string(scene->camera.height - 1));
+    checkShownTime(o, scene->time);  // --exposure, --after-passes, --time-budget: checked while parsing
+
+    GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + scene->desc.path, !shot);
+    ImGuiSession gui(window.get());
+    gInterrupted = false;
+    std::signal(SIGINT, onSigint);  // Ctrl-C closes the window like the close button
+    try {
+        Viewer viewer(*scene, ds, o, window.get());
+        viewer.run();
+    } catch (...) {
+        std::signal(SIGINT, SIG_DFL);
+        throw;
+    }
+    std::signal(SIGINT, SIG_DFL);
+    // ~Viewer stopped the driver; ~ImGuiSession and ~GlfwWindow now release ImGui and the window.
+}
+
+}  // namespace
+
+void registerView(CLI::App& app) {
+    auto o = std::make_shared<ViewOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "view", "Interactive viewer: the render refines in the background while you scrub through time");
+    cmd->add_option("scene", o->scene, "Scene file (JSON)")->required();
+    o->ov.add(cmd);
+    // In the viewer --time is the time shown (ns); the render's time budget is --time-budget.
+    cmd->remove_option(cmd->get_option("--time"));
+    // Every flag is checked while parsing (cli_common.h flags::), as for `tpb render`: a bad value is
+    // refused with its range and exit code 2 before the scene loads or a window opens.
+    cmd->add_option("--time-budget", o->ov.timeBudget, "Render time budget in seconds")
+        ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), false, "seconds; 0 = no time budget"));
+    CLI::Option* shot = cmd->add_option("--screenshot", o->screenshot,
+                                        "Save a PNG of the window after --after-passes passes, then exit");
+    cmd->add_option("--after-passes", o->afterPasses, "Passes to render before the screenshot (default 1)")
+        ->needs(shot)
+        ->transform(flags::integer(1, INT64_MAX, "passes rendered before the screenshot"));
+    cmd->add_option("--export", o->exportDir,
+                    "With --screenshot: once the passes are done, export the current frame and the steady "
+                    "state to this folder by clicking the Export buttons")
+        ->needs(shot);
+    cmd->add_option("--export-folder", o->exportFolder, "The Export section's folder (default out/view)");
+    cmd->add_option("--click", o->clicks,
+                    "With --screenshot: once the passes are done, click this control before the screenshot, "
+                    "as 'Section/label' (e.g. 'View/Continuous emission', 'Export/Steady state'); repeatable, "
+                    "in order")
+        ->needs(shot)
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    CLI::Option* t = cmd->add_option(
+        "--time", o->timeNs, "Time shown, in ns, within the film (the bin containing it; default: the bin of peak energy)");
+    cmd->add_option("--bin", o->bin, "Time bin shown, 0 to bins - 1 (default: the bin of peak energy)")->excludes(t);
+    CLI::Option* unwarp = cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
+    cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)")->excludes(unwarp);
+    CLI::Option* continuous = cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
+    cmd->add_flag("--delta", o->delta, "Start with a delta pulse (the default)")->excludes(continuous);
+    // The exposure slider's range; leaving the flag out means automatic exposure.
+    cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)")
+        ->check(flags::number(-kMaxExposureEv, kMaxExposureEv, false, "EV; leave it out for automatic exposure"));
+    cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
+    cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
+    cmd->add_flag("--steady", o->steady, "Start on the steady-state image");
+    cmd->add_option("--pixel", o->pixel, "Selected pixel: X Y (time profile; Y is the streak row)")->expected(2);
+    cmd->add_option("--window-size", o->windowSize, "Window size: W H (default 1280 800)")
+        ->expected(2)
+        ->transform(flags::integer(64, kMaxWindowPx, "window pixels, width and height"));
+    cmd->callback([o] { runView(*o); });
+}
+
+}  // namespace tpb::app

@@ -1,0 +1,193 @@
+#include "accel/beam_accel.h"
+
+#include "base/error.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <mutex>
+
+namespace tpb {
+
+void sortBeamHits(std::vector<BeamHit>& hits, size_t from) {
+    std::sort(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(), [](const BeamHit& a, const BeamHit& b) {
+        return a.beam != b.beam ? a.beam < b.beam : a.piece < b.piece;
+    });
+    // Embree may visit a primitive twice (spatial splits); keep one hit per (beam, piece).
+    hits.erase(std::unique(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
+                           [](const BeamHit& a, const BeamHit& b) { return a.beam == b.beam && a.piece == b.piece; }),
+               hits.end());
+}
+
+namespace {
+
+// Everything the overlap test needs, contiguous (one memory access per candidate).
+struct Piece {
+    Vec3 origin, dir;  // of the beam
+    double sbLo, sbHi;
+    uint32_t beam, piece;
+    int region;
+};
+
+void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece>& pieces) {
+    pieces.clear();
+    size_t n = 0;
+    for (const Beam& b : beams) n += beamPieceCount(b.length, radius);
+    pieces.reserve(n);
+    for (uint32_t b = 0; b < beams.size(); ++b) {
+        const uint32_t n = beamPieceCount(beams[b].length, radius);
+        for (uint32_t k = 0; k < n; ++k)
+            pieces.push_back({beams[b].origin, beams[b].dir, beams[b].length * k / n,
+                              k + 1 == n ? beams[b].length : beams[b].length * (k + 1) / n, b, k, beams[b].region});
+    }
+}
+
+bool testPiece(const Piece& p, double radius, const Vec3& o, const Vec3& d, double sMax, int region, BeamHit& hit) {
+    if (p.region != region) return false;
+    if (!rayBeamOverlap(o, d, sMax, p.origin, p.dir, p.sbLo, p.sbHi, radius, hit.overlap)) return false;
+    hit.beam = p.beam;
+    hit.piece = p.piece;
+    return true;
+}
+
+class BruteForceBeams final : public BeamAccel {
+public:
+    void build(const std::vector<Beam>& beams, double radius, int) override {
+        beams_ = &beams;
+        radius_ = radius;
+        makePieces(beams, radius, pieces_);
+    }
+    void query(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamHit>& hits) const override {
+        const size_t from = hits.size();
+        BeamHit h;
+        for (const Piece& p : pieces_)
+            if (testPiece(p, radius_, o, d, sMax, region, h)) hits.push_back(h);
+        sortBeamHits(hits, from);
+    }
+    std::string name() const override { return "brute-force"; }
+    size_t pieceCount() const override { return pieces_.size(); }
+
+private:
+    const std::vector<Beam>* beams_ = nullptr;
+    double radius_ = 0.0;
+    std::vector<Piece> pieces_;
+};
+
+RTCDevice beamDevice() {
+    static RTCDevice device = [] {
+        RTCDevice d = rtcNewDevice(nullptr);
+        if (!d) {
+            std::fprintf(stderr, "error: cannot create the Embree device for photon beams\n");
+            std::abort();
+        }
+        return d;
+    }();
+    return device;
+}
+
+class EmbreeBeams final : public BeamAccel {
+public:
+    ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
+
+    void build(const std::vector<Beam>& beams, double radius, int) override {
+        beams_ = &beams;
+        radius_ = radius;
+        makePieces(beams, radius, pieces_);
+        if (scene_) rtcReleaseScene(scene_);
+        scene_ = rtcNewScene(beamDevice());
+        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
+        RTCGeometry g = rtcNewGeometry(beamDevice(), RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(pieces_.size()));
+        rtcSetGeometryUserData(g, this);
+        rtcSetGeometryBoundsFunction(g, &EmbreeBeams::boundsFn, this);
+        rtcSetGeometryIntersectFunction(g, &EmbreeBeams::intersectFn);
+        rtcSetGeometryOccludedFunction(g, &EmbreeBeams::occludedFn);
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(scene_, g);
+        rtcReleaseGeometry(g);
+        rtcCommitScene(scene_);
+    }
+
+    void query(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamHit>& hits) const override {
+        const size_t from = hits.size();
+        if (pieces_.empty()) return;
+        Context ctx;
+        rtcInitIntersectContext(&ctx.base);
+        ctx.self = this;
+        ctx.o = o;
+        ctx.d = d;
+        ctx.sMax = sMax;
+        ctx.region = region;
+        ctx.hits = &hits;
+        RTCRayHit rh;
+        rh.ray.org_x = static_cast<float>(o.x);
+        rh.ray.org_y = static_cast<float>(o.y);
+        rh.ray.org_z = static_cast<float>(o.z);
+        rh.ray.dir_x = static_cast<float>(d.x);
+        rh.ray.dir_y = static_cast<float>(d.y);
+        rh.ray.dir_z = static_cast<float>(d.z);
+        rh.ray.tnear = 0.0f;
+        // Pad the float ray so Embree's culling never drops a piece the double test would accept.
+        rh.ray.tfar = std::isfinite(sMax) ? static_cast<float>(sMax * (1.0 + 1e-5) + 1e-5) : std::numeric_limits<float>::infinity();
+        rh.ray.mask = 0xFFFFFFFFu;
+        rh.ray.flags = 0;
+        rh.ray.time = 0.0f;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene_, &ctx.base, &rh);
+        sortBeamHits(hits, from);
+    }
+    std::string name() const override { return "embree"; }
+    size_t pieceCount() const override { return pieces_.size(); }
+
+private:
+    struct Context {
+        RTCIntersectContext base;  // must be first: Embree hands this pointer back to the callbacks
+        const EmbreeBeams* self;
+        Vec3 o, d;
+        double sMax;
+        int region;
+        std::vector<BeamHit>* hits;
+    };
+
+    static void boundsFn(const RTCBoundsFunctionArguments* args) {
+        const auto* self = static_cast<const EmbreeBeams*>(args->geometryUserPtr);
+        const Piece& p = self->pieces_[args->primID];
+        const Vec3 a = p.origin + p.sbLo * p.dir, e = p.origin + p.sbHi * p.dir;
+        const double pad = self->radius_ * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
+        const Vec3 lo = glm::min(a, e) - pad, hi = glm::max(a, e) + pad;
+        RTCBounds* out = args->bounds_o;
+        out->lower_x = std::nextafter(static_cast<float>(lo.x), -INFINITY);
+        out->lower_y = std::nextafter(static_cast<float>(lo.y), -INFINITY);
+        out->lower_z = std::nextafter(static_cast<float>(lo.z), -INFINITY);
+        out->upper_x = std::nextafter(static_cast<float>(hi.x), INFINITY);
+        out->upper_y = std::nextafter(static_cast<float>(hi.y), INFINITY);
+        out->upper_z = std::nextafter(static_cast<float>(hi.z), INFINITY);
+    }
+
+    static void intersectFn(const RTCIntersectFunctionNArguments* args) {
+        if (!args->valid[0]) return;
+        auto* ctx = reinterpret_cast<Context*>(args->context);
+        const EmbreeBeams* self = ctx->self;
+        BeamHit h;
+        if (testPiece(self->pieces_[args->primID], self->radius_, ctx->o, ctx->d, ctx->sMax, ctx->region, h))
+            ctx->hits->push_back(h);
+        // No hit is reported to Embree: traversal goes on and visits every overlapping piece.
+    }
+    static void occludedFn(const RTCOccludedFunctionNArguments*) {}
+
+    const std::vector<Beam>* beams_ = nullptr;
+    double radius_ = 0.0;
+    std::vector<Piece> pieces_;
+    RTCScene scene_ = nullptr;
+};
+
+}  // namespace
+
+std::unique_ptr<BeamAccel> BeamAccel::create(Kind kind) {
+    if (kind == Kind::BruteForce) return std::make_unique<BruteForceBeams>();
+    return std::make_unique<EmbreeBeams>();
+}
+
+}  // namespace tpb

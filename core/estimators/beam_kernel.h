@@ -1,0 +1,56 @@
+// Ray-beam density estimation with the 2D kernel of Transient Photon Beams (Marco et al. 2017),
+// building on Jarosz et al. 2011 ("Beam x Beam 2D").
+//
+// Glossary (units):
+//   x_r, w_r   camera segment origin and unit direction; s_r in [0, S] distance along it (m)
+//   x_b, w_b   beam origin and unit direction; s_b in [0, L_b] distance along it (m)
+//   c          cos between w_r and w_b (dot(w_r, w_b)); the scattering cosine is -c
+//   r          kernel radius (m): the beam is blurred into a cylinder of radius r around its axis
+//   sigma_t    extinction of the medium (1/m, RGB); tau_b the beam attenuation used inside the kernel
+//              (sigma_t for long beams; sigma_t - sigma_sampling for short beams, see photon_tracer.h)
+//   eta        index of refraction of the medium: OPL = eta * distance
+//
+// Eq. 8 of the paper (with Omega_R(r^2) = pi r^2, the kernel's cross-section perpendicular to the beam):
+//   L_b = sigma_s rho(-c) Phi_b / (pi r^2) * Int_{s-}^{s+} T(s_r) T_b(s_b(s_r)) ds_r,
+// where s_b(s_r) = s_b0 + c s_r is the projection of the ray point on the beam axis.
+// The closed form of the integral (derived in README "Derivations", checked against quadrature in
+// tests/estimators/test_beam_kernel.cpp) is, with kappa = sigma_t + tau_b c and E(s) = sigma_t s + tau_b s_b(s):
+//   Int = exp(-E(s-)) * (s+ - s-) * g(kappa (s+ - s-)),   g(x) = (1 - e^{-x}) / x,
+// evaluated from the end with the larger transmittance so g's argument is >= 0 (no overflow, no 0/0;
+// g(0) = 1 gives the beam-pointing-at-the-camera limit kappa -> 0 and the sigma_t -> 0 limit).
+// (The paper's eq. 9 divides by mu_t cos(theta_b); with our convention the factor is sigma_t (1 + c)
+//  for long beams. Our tests pin the correct form.)
+//
+// Time (eqs. 11-15): the optical path length of the light reaching the camera through the kernel
+// point at s_r is linear in s_r:
+//   real:      t(s_r) = t_cam + t_b0 + eta (s_b0 + c s_r) + eta s_r     (slope eta (1 + c) >= 0)
+//   unwarped:  t(s_r) = t_b0 + eta (s_b0 + c s_r)                        (slope eta c)
+// and the energy density along s_r is proportional to exp(-kappa s_r): exponential in time too.
+#pragma once
+#include "base/math.h"
+
+namespace tpb {
+
+// g(x) = (1 - exp(-x)) / x, with g(0) = 1. Stable for all x >= -700.
+inline double expRel(double x) {
+    if (std::abs(x) < 1e-5) return 1.0 - 0.5 * x + x * x / 6.0;
+    return -std::expm1(-x) / x;
+}
+
+// Interval of the camera segment inside the beam's kernel cylinder (radius r, axis = the beam's
+// segment, flat end caps), intersected with the segment [0, sMax]. Returns false when empty.
+struct RayBeamOverlap {
+    double sMinus = 0.0, sPlus = 0.0;  // s_r interval (m)
+    double sb0 = 0.0;                  // projection of x_r on the beam axis: s_b(s_r) = sb0 + c s_r
+    double cosRB = 0.0;                // c = dot(w_r, w_b)
+};
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
+                    double beamLength, double radius, RayBeamOverlap& out);
+// Same, restricted to beam parameters [sbLo, sbHi] (the BVH splits long beams into pieces).
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
+                    double sbLo, double sbHi, double radius, RayBeamOverlap& out);
+
+// Int_{s-}^{s+} exp(-sigma_t s - tau_b (sb0 + c s)) ds for one channel (closed form above).
+double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap& o);
+
+}  // namespace tpb

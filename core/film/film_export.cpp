@@ -1,0 +1,123 @@
+#include "film/film_export.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace tpb {
+
+std::string frameFileName(int bin) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "frame_%05d.exr", bin);
+    return buf;
+}
+
+void exportFrame(const TransientFilm& film, int bin, const std::string& path, const ExportOptions& opt) {
+    std::vector<float> img;
+    film.frame(bin, opt.axis, opt.mode, img);
+    writeExr(path, film.width(), film.height(), img, opt.pixel);
+}
+
+namespace {
+int lastExportBin(int bins, const ExportOptions& opt) { return opt.lastBin < 0 ? bins - 1 : std::min(opt.lastBin, bins - 1); }
+}  // namespace
+
+int exportFrameCount(int bins, const ExportOptions& opt) {
+    const int last = lastExportBin(bins, opt);
+    return last >= opt.firstBin ? (last - opt.firstBin) / std::max(1, opt.step) + 1 : 0;
+}
+
+int exportFrames(const TransientFilm& film, const std::string& dir, const ExportOptions& opt,
+                 const std::function<void(int, int)>& progress, const std::atomic<bool>* cancel) {
+    ensureWritableDir(dir);
+    const int last = lastExportBin(film.bins(), opt);
+    const int step = std::max(1, opt.step);
+    const int total = exportFrameCount(film.bins(), opt);
+    int done = 0;
+    for (int k = opt.firstBin; k <= last; k += step) {
+        if (cancel && cancel->load()) break;
+        exportFrame(film, k, dir + "/" + frameFileName(k), opt);
+        ++done;
+        if (progress) progress(done, total);
+    }
+    return done;
+}
+
+void exportSteady(const TransientFilm& film, const std::string& path, ExrPixel pixel) {
+    std::vector<float> img;
+    film.steadyImage(img);
+    writeExr(path, film.width(), film.height(), img, pixel);
+}
+
+void exportStreak(const TransientFilm& film, int row, const std::string& path, const ExportOptions& opt) {
+    std::vector<float> img;
+    film.streak(row, opt.axis, opt.mode, img);
+    writeExr(path, film.width(), film.bins(), img, opt.pixel);
+}
+
+void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string& path, const ExportOptions& opt) {
+    std::vector<float> prof;
+    film.pixelProfile(x, y, opt.axis, opt.mode, prof);
+    std::ostringstream os;
+    os << "bin,t_opl_m,t_ns,r,g,b\n";
+    const TimeBins& tb = film.time();
+    for (int k = 0; k < film.bins(); ++k) {
+        const double t = tb.startOpl + (k + 0.5) * tb.binWidth;
+        os << k << ',' << t << ',' << t / kC_m_per_ns << ',' << prof[k * 3] << ',' << prof[k * 3 + 1] << ','
+           << prof[k * 3 + 2] << '\n';
+    }
+    writeTextFile(path, os.str());
+}
+
+std::vector<int> exportStripPng(const TransientFilm& film, const std::string& path, int count, const ExportOptions& opt,
+                                double exposureEv) {
+    count = std::clamp(count, 1, film.bins());
+    const int W = film.width(), H = film.height();
+    std::vector<int> binsUsed;
+    std::vector<float> strip(static_cast<size_t>(W) * count * H * 3, 0.0f), img;
+    std::vector<float> lum;
+    // Frames spread over the part of the time axis that carries the energy: from the 0.5% to the
+    // 90% quantile of the (delta) arrival-time distribution summed over the image.
+    std::vector<double> perBin(film.bins(), 0.0);
+    ExportOptions delta = opt;
+    delta.mode = EmissionMode::Delta;
+    for (int k = 0; k < film.bins(); ++k) {
+        film.frame(k, delta.axis, delta.mode, img);
+        for (size_t p = 0; p < img.size(); p += 3) perBin[k] += 0.2126 * img[p] + 0.7152 * img[p + 1] + 0.0722 * img[p + 2];
+    }
+    double total = 0.0;
+    for (double v : perBin) total += std::max(v, 0.0);
+    int kLo = 0, kHi = film.bins() - 1;
+    if (total > 0.0) {
+        double cum = 0.0;
+        kLo = -1;
+        for (int k = 0; k < film.bins(); ++k) {
+            cum += std::max(perBin[k], 0.0);
+            if (kLo < 0 && cum >= 0.005 * total) kLo = k;
+            if (cum >= 0.9 * total) { kHi = k; break; }
+        }
+        kLo = std::max(kLo, 0);
+    }
+    for (int i = 0; i < count; ++i) {
+        const int k = std::min(kHi, kLo + static_cast<int>(std::lround(i * double(kHi - kLo) / std::max(1, count - 1))));
+        binsUsed.push_back(k);
+        film.frame(k, opt.axis, opt.mode, img);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x)
+                for (int c = 0; c < 3; ++c)
+                    strip[((static_cast<size_t>(y) * W * count) + static_cast<size_t>(i) * W + x) * 3 + c] =
+                        img[(static_cast<size_t>(y) * W + x) * 3 + c];
+    }
+    for (size_t p = 0; p < strip.size(); p += 3) {
+        const float l = 0.2126f * strip[p] + 0.7152f * strip[p + 1] + 0.0722f * strip[p + 2];
+        if (l > 0.0f) lum.push_back(l);  // lit pixels only: a small lit region must not read as black
+    }
+    std::sort(lum.begin(), lum.end());
+    const float ref = lum.empty() ? 0.0f : lum[static_cast<size_t>(0.995 * (lum.size() - 1))];
+    const double norm = ref > 0.0f ? std::log2(1.0 / ref) : 0.0;
+    writePngPreview(path, W * count, H, strip, norm + exposureEv);
+    return binsUsed;
+}
+
+}  // namespace tpb

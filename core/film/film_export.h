@@ -1,0 +1,43 @@
+// Writing the transient film to disk: frames (one EXR per time bin), the steady-state image, the
+// streak image of a row, and a pixel's time profile as CSV. Each file is written atomically
+// (image_io.h). Used by `tpb render` and by the viewer's export buttons.
+#pragma once
+#include "film/film.h"
+#include "io/image_io.h"
+
+#include <atomic>
+#include <functional>
+#include <string>
+
+namespace tpb {
+
+struct ExportOptions {
+    TimeAxis axis = TimeAxis::Real;
+    EmissionMode mode = EmissionMode::Delta;
+    ExrPixel pixel = ExrPixel::Float;
+    int firstBin = 0, lastBin = -1, step = 1;  // lastBin -1 = last bin of the film
+};
+
+// Writes <dir>/frame_<bin>.exr for the selected bins; progress(done, total) after each file.
+// Returns the number of frames written (stops early if `cancel` is set).
+int exportFrames(const TransientFilm& film, const std::string& dir, const ExportOptions& opt,
+                 const std::function<void(int, int)>& progress = {}, const std::atomic<bool>* cancel = nullptr);
+void exportFrame(const TransientFilm& film, int bin, const std::string& path, const ExportOptions& opt);
+void exportSteady(const TransientFilm& film, const std::string& path, ExrPixel pixel = ExrPixel::Float);
+// Streak image: x horizontally, time (bins) vertically, for image row `row`.
+void exportStreak(const TransientFilm& film, int row, const std::string& path, const ExportOptions& opt);
+// "bin,t_opl_m,t_ns,r,g,b" rows.
+void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string& path, const ExportOptions& opt);
+
+std::string frameFileName(int bin);
+// How many frames exportFrames writes for a film of `bins` bins with these options.
+int exportFrameCount(int bins, const ExportOptions& opt);
+
+// A PNG strip of `count` frames side by side (sRGB), for a quick look or a README: evenly spaced
+// over the part of the time axis that carries the energy (0.5% to 90% of the arrival times).
+// Exposure: 2^exposureEv times a normalisation that maps the 99.5th percentile of the strip's
+// lit pixels' luminance to 1 (so strips of different scenes are comparable without tuning). Returns the bins used.
+std::vector<int> exportStripPng(const TransientFilm& film, const std::string& path, int count, const ExportOptions& opt,
+                                double exposureEv = 0.0);
+
+}  // namespace tpb

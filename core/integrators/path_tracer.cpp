@@ -1,0 +1,414 @@
+// Unbiased transient volumetric path tracer (see path_tracer.h for the algorithm and the time axes).
+//
+// Glossary (units): beta camera-path throughput (dimensionless RGB, 1 at the sensor); oplCam OPL
+// of the camera path from the sensor to the current vertex (m); oplUnw OPL of the camera path from
+// its first non-specular vertex to the current vertex (m, 0 while there is none: the unwarped time
+// of a contribution is emitOpl + connection + oplUnw, a sum of positive terms, so it never suffers
+// the cancellation of "total - camera prefix"); Li light term of a connection (incident radiance
+// times solid angle over the sampling pdfs, W / (m^2 sr)).
+#include "integrators/path_tracer.h"
+
+#include "scene/bsdf.h"
+#include "base/error.h"
+#include "base/parallel.h"
+#include "base/rng.h"
+#include "base/sampling.h"
+
+#include <vector>
+
+namespace tpb {
+
+namespace {
+
+constexpr int kMaxShadowCrossings = 64;
+constexpr int kRussianRouletteDepth = 3;
+
+struct PathContext {
+    const Scene& scene;
+    const TimeBins& time;
+    PixelAccumulator& acc;
+    PathTracerStats& stats;
+    double sampleWeight;  // 1 / samplesPerPixel
+};
+
+// One contribution at real time tReal and unwarped time tUnw.
+void splat(PathContext& ctx, const Color& L, double tReal, double tUnw) {
+    const int64_t rejectedBefore = ctx.stats.rejected;
+    splatInstant(ctx.time, ctx.acc, ctx.stats, L * ctx.sampleWeight, tReal, tUnw);
+    if (ctx.stats.rejected == rejectedBefore && !isBlack(L)) ++ctx.stats.contributions;
+}
+
+// Shadow ray from `from` (in the region on top of `stack`) to `to`. Null boundaries are crossed
+// (push on entering, pop on leaving), any other surface blocks. On success returns the product of
+// the regions' transmittances and the OPL of the connection.
+bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stack, Color& tr, double& opl,
+                 PathTracerStats& stats) {
+    tr = Color(1.0);
+    opl = 0.0;
+    for (int i = 0; i < kMaxShadowCrossings; ++i) {
+        const Vec3 v = to - from;
+        const double dist = glm::length(v);
+        if (!(dist > 0.0)) return true;
+        const Ray ray{from, v / dist, 0.0, dist};
+        const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
+        const double seg = hit ? hit->t : dist;
+        const Region& region = scene.regions[stack.top()];
+        opl += region.ior * seg;
+        if (region.hasMedium) tr *= region.medium.transmittance(seg);
+        if (!hit) return true;
+        const ShapeInfo& shape = scene.shapes[hit->shape];
+        if (shape.areaLight >= 0 || shape.material < 0) return false;
+        if (scene.materials[shape.material].type != MaterialType::Null) return false;
+        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
+        const Vec3 ng = front ? hit->ng : -hit->ng;
+        if (front) {
+            if (!stack.push(shape.interiorRegion)) { ++stats.regionOverflows; return false; }
+        } else {
+            stack.pop();
+        }
+        from = hit->p - scene.rayEps * ng;
+    }
+    return false;
+}
+
+bool isDeltaPositionLight(const Light& l) { return l.type == LightType::Point || l.type == LightType::Spot; }
+
+// The connection of vertex x to light `li` (picked with probability `pick`; u1, u2 place the point
+// on an area light): light term, shadow ray from x + offset, splat at the connection's times.
+// `scatter(w)` is the vertex's phase function or BSDF-times-cosine for the direction w to the light.
+template <class Scatter>
+void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, const Vec3& x, const Vec3& offset,
+                  const RegionStack& regions, const Color& beta, double oplCam, double oplUnw, Scatter&& scatter) {
+    const Scene& scene = ctx.scene;
+    const Light& light = scene.lights[li];
+    Vec3 y;
+    Color Li(0.0);
+    switch (light.type) {
+        case LightType::Point:
+        case LightType::Spot: {
+            y = light.position;
+            const Vec3 v = y - x;
+            const double d2 = glm::dot(v, v);
+            if (!(d2 > 0.0)) return;
+            double intensity = 1.0 / (4.0 * kPi);  // per watt, point light
+            if (light.type == LightType::Spot) {
+                const double cosL = glm::dot(light.direction, -v / std::sqrt(d2));
+                intensity = light.spotIntegral > 0.0 ? light.spotProfile(cosL) / light.spotIntegral : 0.0;
+            }
+            Li = light.power * (intensity / d2);
+            break;
+        }
+        case LightType::AreaQuad: {
+            // pdf 1 / area. The shadow ray ends where the light's photons start (rayEps in front of
+            // the quad and in from its edges): a light filling a closed box's ceiling is then out
+            // of reach from outside, also through the box's edges.
+            y = light.offsetAreaPoint(u1, u2, scene.rayEps);
+            const Vec3 v = y - x;
+            const double d2 = glm::dot(v, v);
+            if (!(d2 > 0.0)) return;
+            const double cosL = -glm::dot(light.normal, v) / std::sqrt(d2);
+            if (cosL <= 0.0) return;  // one-sided: emits along its normal only
+            Li = light.areaRadiance() * (cosL * light.area / d2);
+            break;
+        }
+        case LightType::Laser:
+            ++ctx.stats.laserSamples;
+            return;
+    }
+    if (isBlack(Li)) return;
+    const Vec3 w = glm::normalize(y - x);
+    const Color f = scatter(w);
+    if (isBlack(f)) return;
+    ++ctx.stats.shadowRays;
+    Color tr;
+    double oplShadow;
+    if (!traceShadow(scene, x + offset, y, regions, tr, oplShadow, ctx.stats)) return;
+    const Color L = beta * f * Li * tr / pick;
+    splat(ctx, L, light.emitOpl + oplShadow + oplCam, light.emitOpl + oplShadow + oplUnw);
+}
+
+// Equiangular sampling (Kulla and Fajardo 2012) of a point on the medium segment x(t) = o + t w,
+// 0 <= t < tMax, towards a light at y. With D = (y - o).w and h the distance from y to the line,
+// |x(t) - y|^2 = h^2 + (t - D)^2; the angle theta(t) = atan((t - D) / h) has
+// d theta / dt = h / (h^2 + (t - D)^2), so theta uniform in [theta(0), theta(tMax)] gives
+//     pdf(t) = h / ((theta_b - theta_a) (h^2 + (t - D)^2)),     t = D + h tan(theta),
+// whose 1/|x - y|^2 cancels the light's. (Checked against free-flight NEE in test_path_tracer.)
+struct EquiangularFrame {
+    double D = 0.0, h = 0.0, thetaA = 0.0, thetaB = 0.0;
+    bool valid = false;
+
+    EquiangularFrame(const Ray& ray, double tMax, const Vec3& y) {
+        const Vec3 oy = y - ray.o;
+        D = glm::dot(oy, ray.d);
+        h = glm::length(oy - D * ray.d);
+        if (!(h > 0.0) || !(tMax > 0.0)) return;  // the light on the ray's line: a set of measure zero
+        thetaA = std::atan2(-D, h);
+        thetaB = std::isfinite(tMax) ? std::atan2(tMax - D, h) : 0.5 * kPi;
+        valid = thetaB > thetaA;
+    }
+    double sample(double u) const { return D + h * std::tan(thetaA + u * (thetaB - thetaA)); }
+    double pdf(double t) const { return h / ((thetaB - thetaA) * (h * h + (t - D) * (t - D))); }
+};
+
+// Where equiangular sampling stops on a segment: transmittance e^-30 in the clearest channel.
+// Beyond it, free-flight vertices alone connect to delta lights, so an unbounded segment (an open
+// medium) neither wastes samples at negligible transmittance nor puts them at absurd times.
+double equiangularReach(const Medium& m) {
+    const double sigmaMin = std::min(m.sigma_t.x, std::min(m.sigma_t.y, m.sigma_t.z));
+    return sigmaMin > 0.0 ? 30.0 / sigmaMin : kInf;
+}
+
+// The two techniques that place a scattering point on a medium segment and connect it to a point
+// or spot light: free flight (pdf sigma_bar exp(-sigma_bar t), the vertex the path continues
+// from) and equiangular (pdf above, on [0, reach)). Each takes one sample; the balance heuristic
+// weights them, so the sum stays unbiased while each covers where the other is poor: equiangular
+// next to the light (where free flight has infinite variance: the integral of 1/d^4 over a ball
+// around the light diverges), free flight far from it, where the transmittance dominates.
+struct SegmentMis {
+    Ray ray;
+    double reach = 0.0, sigmaBar = 0.0;
+    double freeFlightPdf(double t) const { return sigmaBar * std::exp(-sigmaBar * t); }
+};
+
+// Next-event estimation at vertex x: one light picked with Scene::pickLight, then connectLight.
+// At a free-flight medium vertex (distance t along `mis->ray`) a delta light's connection carries
+// the free-flight technique's MIS weight.
+template <class Scatter>
+void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, const RegionStack& regions,
+               Color beta, double oplCam, double oplUnw, const SegmentMis* mis, double t, Scatter&& scatter) {
+    // Always draw the same count of numbers, so later decisions do not depend on the light type.
+    const double uLight = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    double pick = 0.0;
+    const int li = ctx.scene.pickLight(uLight, pick);
+    if (li < 0 || !(pick > 0.0)) return;
+    const Light& light = ctx.scene.lights[li];
+    if (mis && isDeltaPositionLight(light) && t < mis->reach) {
+        const EquiangularFrame f(mis->ray, mis->reach, light.position);
+        if (f.valid) {
+            const double pff = mis->freeFlightPdf(t), peq = f.pdf(t);
+            beta *= pff / (pff + peq);
+        }
+    }
+    connectLight(ctx, li, pick, u1, u2, x, offset, regions, beta, oplCam, oplUnw, scatter);
+}
+
+// The equiangular technique on one medium segment (see SegmentMis): a light picked with
+// Scene::pickLight; a point or spot light gets an equiangular point t on [0, reach) and the
+// estimate  beta sigma_s(t) T(t) / pdf_eq(t) * w_eq(t) * connection.
+void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const Region& region,
+                        const RegionStack& regions, const Color& beta, double oplCam, double oplUnw, bool nonSpecular) {
+    const double uLight = rng.uniform(), uT = rng.uniform();  // always two numbers
+    double pick = 0.0;
+    const int li = ctx.scene.pickLight(uLight, pick);
+    if (li < 0 || !(pick > 0.0)) return;
+    const Light& light = ctx.scene.lights[li];
+    if (!isDeltaPositionLight(light)) return;
+    const EquiangularFrame f(mis.ray, mis.reach, light.position);
+    if (!f.valid) return;
+    const double t = f.sample(uT);
+    if (!(t >= 0.0 && t < mis.reach)) return;  // rounding at the ends
+    const double peq = f.pdf(t), pff = mis.freeFlightPdf(t);
+    if (!(peq > 0.0) || !std::isfinite(peq)) return;
+    const Medium& m = region.medium;
+    // sigma_s T / pdf_eq * w_eq = sigma_s T / pdf_eq * pdf_eq / (pdf_eq + pdf_ff) = sigma_s T / (pdf_eq + pdf_ff)
+    const Color weight = beta * m.sigma_s * m.transmittance(t) / (peq + pff);
+    const double dOpl = region.ior * t;
+    ++ctx.stats.equiangularSamples;
+    connectLight(ctx, li, pick, 0.0, 0.0, mis.ray.at(t), Vec3(0.0), regions, weight, oplCam + dOpl,
+                 nonSpecular ? oplUnw + dOpl : 0.0,
+                 [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(mis.ray.d, w))); });
+}
+
+// Russian roulette on the throughput; false if the path dies.
+bool roulette(Rng& rng, Color& beta, int depth) {
+    if (depth < kRussianRouletteDepth) return true;
+    const double q = std::min(1.0, maxComponent(beta));
+    if (!(q > 0.0)) return false;
+    if (q < 1.0) {
+        if (rng.uniform() >= q) return false;
+        beta /= q;
+    }
+    return true;
+}
+
+void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng) {
+    const Scene& scene = ctx.scene;
+    Color beta(1.0);
+    double oplCam = 0.0, oplUnw = 0.0;
+    bool nonSpecular = false;    // the path has reached its first non-specular vertex
+    bool emitterVisible = true;  // previous vertex is the sensor or specular: emitter hits count
+    RegionStack regions = scene.cameraRegions;  // where the camera sits (usually the outside)
+    int depth = 0;
+    ++ctx.stats.cameraPaths;
+    // Null crossings do not count as depth; this bounds the loop in degenerate geometry.
+    const int maxIterations = 4 * std::max(s.maxDepth, 1) + 256;
+
+    for (int it = 0; it < maxIterations; ++it) {
+        const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
+        const double dSurf = hit ? hit->t : kInf;
+        const Region& region = scene.regions[regions.top()];
+
+        if (region.hasMedium) {
+            const Medium& m = region.medium;
+            if (m.scattering) {
+                // A scattering vertex on this segment would be at depth + 1 <= maxDepth.
+                const double sigmaBar = m.samplingSigma();
+                const SegmentMis mis{ray, s.equiangular ? std::min(dSurf, equiangularReach(m)) : 0.0, sigmaBar};
+                if (s.equiangular) equiangularSegment(ctx, rng, mis, region, regions, beta, oplCam, oplUnw, nonSpecular);
+                const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
+                if (d < dSurf) {
+                    // Medium scattering vertex.
+                    beta *= m.sigma_s * m.transmittance(d) / (sigmaBar * std::exp(-sigmaBar * d));
+                    oplCam += region.ior * d;
+                    if (nonSpecular) oplUnw += region.ior * d;
+                    nonSpecular = true;
+                    if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
+                    const Vec3 x = ray.at(d);
+                    ++depth;
+                    const Vec3 wi = ray.d;
+                    nextEvent(ctx, rng, x, Vec3(0.0), regions, beta, oplCam, oplUnw, s.equiangular ? &mis : nullptr, d,
+                              [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(wi, w))); });
+                    if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+                    if (!roulette(rng, beta, depth)) return;
+                    const double v1 = rng.uniform(), v2 = rng.uniform();
+                    ray = {x, m.phase.sample(wi, v1, v2)};
+                    emitterVisible = false;
+                    continue;
+                }
+                if (hit) beta *= m.transmittance(dSurf) / std::exp(-sigmaBar * dSurf);
+            } else if (hit) {
+                beta *= m.transmittance(dSurf);
+            }
+        }
+        if (!hit) return;  // escaped
+        oplCam += region.ior * hit->t;
+        if (nonSpecular) oplUnw += region.ior * hit->t;
+        if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
+        if (isBlack(beta)) return;
+
+        const ShapeInfo& shape = scene.shapes[hit->shape];
+        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
+        const Vec3 ng = front ? hit->ng : -hit->ng;  // facing the incoming ray
+        Vec3 ns = front ? hit->ns : -hit->ns;
+        if (glm::dot(ns, ng) <= 0.0) ns = ng;
+
+        if (shape.areaLight >= 0) {  // emitter: visible from its front side, absorbs
+            if (front && emitterVisible) {
+                const Light& l = scene.lights[shape.areaLight];
+                splat(ctx, beta * l.areaRadiance(), l.emitOpl + oplCam, l.emitOpl + oplUnw);
+            }
+            return;
+        }
+        if (shape.material < 0) return;
+        const Material& mat = scene.materials[shape.material];
+
+        if (mat.type == MaterialType::Null) {
+            // Index-matched boundary (as in the beam core): no bending, no reflection, no depth.
+            ray = {hit->p - scene.rayEps * ng, ray.d};
+            if (front) {
+                if (!regions.push(shape.interiorRegion)) { ++ctx.stats.regionOverflows; return; }
+            } else {
+                regions.pop();
+            }
+            continue;
+        }
+
+        ++depth;
+        if (mat.type == MaterialType::Diffuse) {
+            nonSpecular = true;
+            const Color fr = mat.albedo * kInvPi;
+            const Vec3 origin = scene.bounceOrigin(ray, *hit, ng);
+            nextEvent(ctx, rng, hit->p, origin - hit->p, regions, beta, oplCam, oplUnw, nullptr, 0.0, [&](const Vec3& w) {
+                if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
+                return fr * std::max(0.0, glm::dot(w, ns));
+            });
+            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            const double v1 = rng.uniform(), v2 = rng.uniform();
+            const Vec3 wo = glm::normalize(toWorld(sampleCosineHemisphere(v1, v2), ns));
+            if (glm::dot(wo, ng) <= 0.0) return;
+            beta *= mat.albedo;  // f cos / pdf
+            ray = {origin, wo};
+            emitterVisible = false;
+        } else if (mat.type == MaterialType::Mirror) {
+            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            beta *= mat.specular;
+            ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
+            emitterVisible = true;
+        } else {  // dielectric: reflection or refraction chosen by Fresnel
+            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            const std::optional<Ray> next =
+                scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+            if (!next) { ++ctx.stats.regionOverflows; return; }
+            ray = *next;
+            beta *= mat.specular;
+            emitterVisible = true;
+        }
+        if (!roulette(rng, beta, depth)) return;
+    }
+    ++ctx.stats.depthLimited;
+}
+
+}  // namespace
+
+PathTracerStats& PathTracerStats::operator+=(const PathTracerStats& o) {
+    FilmTally::operator+=(o);
+    cameraPaths += o.cameraPaths;
+    contributions += o.contributions;
+    shadowRays += o.shadowRays;
+    laserSamples += o.laserSamples;
+    equiangularSamples += o.equiangularSamples;
+    depthLimited += o.depthLimited;
+    regionOverflows += o.regionOverflows;
+    return *this;
+}
+
+void pathTracePixel(const Scene& scene, const PathTracerSettings& s, uint64_t pass, const TimeBins& time, int x,
+                    int y, PixelAccumulator& acc, PathTracerStats& stats) {
+    const int spp = std::max(1, s.samplesPerPixel);
+    const uint64_t pixelIndex = static_cast<uint64_t>(y) * static_cast<uint64_t>(scene.camera.width) + x;
+    Rng rng(s.seed, Stream::PathTracer, pass, pixelIndex);
+    PathContext ctx{scene, time, acc, stats, 1.0 / spp};
+    for (int i = 0; i < spp; ++i) {
+        const double jx = rng.uniform(), jy = rng.uniform();
+        tracePath(ctx, s, scene.camera.generate(x + jx, y + jy), rng);
+    }
+}
+
+void renderPathTracerPass(const Scene& scene, const PathTracerSettings& s, uint64_t pass, TransientFilm& film,
+                          PathTracerStats* stats, const std::atomic<bool>* abort) {
+    TPB_CHECK(film.width() == scene.camera.width && film.height() == scene.camera.height);
+    const int threads = resolveThreads(s.threads);
+    std::vector<PixelAccumulator> accs(static_cast<size_t>(threads), PixelAccumulator(film.bins()));
+    // Per-tile tallies, summed in tile order: the stats do not depend on the thread count either.
+    std::vector<PathTracerStats> tileStats(static_cast<size_t>(film.tileCount()));
+    parallelFor(film.tileCount(), threads, [&](int64_t tile, int t) {
+        PixelAccumulator& acc = accs[static_cast<size_t>(t)];
+        PathTracerStats& st = tileStats[static_cast<size_t>(tile)];
+        const TileRect r = film.tileRect(static_cast<int>(tile));
+        TransientFilm::TileWriter writer(film, static_cast<int>(tile));
+        for (int y = r.y0; y < r.y0 + r.h; ++y)
+            for (int x = r.x0; x < r.x0 + r.w; ++x) {
+                pathTracePixel(scene, s, pass, film.time(), x, y, acc, st);
+                writer.addPixel(x, y, acc);
+                acc.clearTouched();
+            }
+    }, abort);
+    PathTracerStats total;
+    for (const PathTracerStats& st : tileStats) total += st;
+    total.flushInto(film.stats);
+    if (stats) *stats += total;
+}
+
+int64_t renderPathTracer(const Scene& scene, const PathTracerSettings& s, uint64_t firstPass, int64_t passes,
+                         TransientFilm& film, PathTracerStats* stats, const std::atomic<bool>* abort) {
+    int64_t done = 0;
+    for (int64_t i = 0; i < passes; ++i) {
+        if (abort && abort->load()) break;
+        renderPathTracerPass(scene, s, firstPass + static_cast<uint64_t>(i), film, stats, abort);
+        if (abort && abort->load()) break;  // the pass may be incomplete
+        ++done;
+    }
+    return done;
+}
+
+}  // namespace tpb

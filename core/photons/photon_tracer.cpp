@@ -1,0 +1,198 @@
+#include "photons/photon_tracer.h"
+
+#include "scene/bsdf.h"
+#include "base/error.h"
+#include "render/memory_budget.h"
+#include "base/parallel.h"
+#include "base/rng.h"
+#include "base/sampling.h"
+
+namespace tpb {
+
+namespace {
+
+
+// Length of a long beam that never reaches a surface (an unbounded medium). A contribution from
+// the point s along the beam arrives at OPL >= opl0 + eta s on both time axes (the unwarped time is
+// that of the scattering point, the real one adds the camera path), so a beam that reaches the
+// film's end loses nothing the frames show: only the steady image and the energy counted after the
+// film miss the flux the beam still carries at its end, which is counted (PhotonMap::cutFlux).
+// At least 10 scene diagonals (the steady image near the scene), and never past the distance where
+// the transmittance of every scattering channel is below 1e-7 (exp(-16.2)).
+double openBeamLength(const Scene& scene, const Medium& m, double eta, double opl0, double filmEndOpl) {
+    double sigmaScatter = kInf;  // smallest extinction among the channels that scatter
+    for (int c = 0; c < 3; ++c)
+        if (m.sigma_s[c] > 0.0) sigmaScatter = std::min(sigmaScatter, m.sigma_t[c]);
+    const double diag = std::max(scene.bounds.diagonal(), 1e-3);
+    const double toFilmEnd = filmEndOpl > opl0 ? (filmEndOpl - opl0) / eta : 0.0;
+    const double wanted = std::max(10.0 * diag, toFilmEnd);
+    return std::isfinite(sigmaScatter) ? std::min(wanted, 16.2 / sigmaScatter) : 10.0 * diag;
+}
+
+[[noreturn]] void mapTooLarge(const PhotonTraceSettings& s, const std::string& who) {
+    throw UserError("", 0, "render.photons_per_pass",
+                    "pass " + std::to_string(s.pass) + ": " + who + " stored more than " + humanBytes(s.maxMapBytes) +
+                        " of photon beams and surface photons, the memory limit (TPB_MAX_FILM_BYTES); lower "
+                        "photons_per_pass or render.max_depth (a medium or walls with albedo near 1 keep photons "
+                        "alive for up to max_depth bounces)");
+}
+
+uint64_t mapBytes(size_t beams, size_t photons) { return beams * sizeof(Beam) + photons * sizeof(SurfacePhoton); }
+
+}  // namespace
+
+void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index, PhotonMap& out) {
+    Rng rng(s.seed, Stream::Photon, s.pass, static_cast<uint64_t>(index));
+    double lightPdf;
+    const int li = scene.pickLight(rng.uniform(), lightPdf);
+    if (li < 0 || lightPdf <= 0.0) return;
+    const Light& light = scene.lights[li];
+    EmissionSample em = light.sampleEmission(rng, scene.rayEps);
+    Color power = em.power / (lightPdf * static_cast<double>(s.photons));
+    const double power0 = maxComponent(power);
+    if (!(power0 > 0.0)) return;
+    out.emittedFlux += power;
+    Ray ray = em.ray;
+    // The photon starts in the region where it leaves the light: a light inside a fog container
+    // or a closed box emits into it (an area light may straddle a boundary: per point).
+    const std::optional<RegionStack> startRegions = scene.emissionRegions(li, ray.o);
+    if (!startRegions) { ++out.regionOverflows; return; }
+    RegionStack regions = *startRegions;
+    double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
+    int nullCrossings = 0;  // index-matched boundaries are not events: they do not use up depth
+    const size_t beams0 = out.beams.size(), photons0 = out.photons.size();
+
+    for (int depth = 0; depth < s.maxDepth; ++depth) {
+        if (s.maxMapBytes > 0 && (depth & 4095) == 4095) {
+            const uint64_t mine = mapBytes(out.beams.size() - beams0, out.photons.size() - photons0);
+            if (mine > s.maxMapBytes) mapTooLarge(s, "photon " + std::to_string(index) + " alone");
+        }
+        const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
+        const double dSurf = hit ? hit->t : kInf;
+        const Region& region = scene.regions[regions.top()];
+
+        if (region.hasMedium && !region.medium.scattering) {
+            // Absorbing only: no scattering event to sample, just attenuate up to the surface.
+            if (!hit) break;
+            power *= region.medium.transmittance(hit->t);
+        } else if (region.hasMedium) {
+            const Medium& m = region.medium;
+            const double sigmaBar = m.samplingSigma();
+            // Free-flight sampling with pdf sigma_bar exp(-sigma_bar d).
+            const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
+            const bool scatters = d < dSurf;
+            const double segment = scatters ? d : dSurf;
+            if (s.storeBeams) {
+                double len = s.beamLength == BeamLength::Short ? segment : dSurf;
+                if (!std::isfinite(len)) {
+                    len = openBeamLength(scene, m, region.ior, opl, s.filmEndOpl);
+                    out.cutFlux += power * m.transmittance(len);  // what flows on past the beam's end
+                }
+                if (len > 0.0 && std::isfinite(len))
+                    out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
+            }
+            if (!std::isfinite(segment)) break;
+            // Weight: T(d) sigma_s / (sigma_bar T_bar(d)) at a scattering event, T / T_bar at a surface.
+            const Color tr = m.transmittance(segment);
+            const double trBar = std::exp(-sigmaBar * segment);
+            if (scatters) {
+                power *= m.sigma_s * tr / (sigmaBar * trBar);
+                opl += region.ior * d;
+                ray = {ray.at(d), m.phase.sample(ray.d, rng.uniform(), rng.uniform())};
+            } else {
+                power *= tr / trBar;
+            }
+            if (!isFinite(power)) { ++out.rejected; return; }
+            if (scatters) {
+                // Russian roulette on the throughput relative to the emitted power.
+                const double q = std::min(1.0, maxComponent(power) / power0);
+                if (q <= 0.0) return;
+                if (q < 1.0) {
+                    if (rng.uniform() >= q) return;
+                    power /= q;
+                }
+                continue;
+            }
+        }
+        if (!hit) break;
+        opl += region.ior * hit->t;
+
+        const ShapeInfo& shape = scene.shapes[hit->shape];
+        if (shape.areaLight >= 0 || shape.material < 0) return;  // emitters and unassigned shapes absorb
+        const Material& mat = scene.materials[shape.material];
+        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
+        const Vec3 ng = front ? hit->ng : -hit->ng;  // facing the incoming photon
+        Vec3 ns = front ? hit->ns : -hit->ns;
+        if (glm::dot(ns, ng) <= 0.0) ns = ng;
+        Vec3 newDir;
+        switch (mat.type) {
+            case MaterialType::Diffuse: {
+                if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, ng, power, opl});
+                newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), ns));
+                if (glm::dot(newDir, ng) <= 0.0) return;
+                power *= mat.albedo;
+                ray = {scene.bounceOrigin(ray, *hit, ng), newDir};
+                break;
+            }
+            case MaterialType::Mirror:
+                power *= mat.specular;
+                ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
+                break;
+            case MaterialType::Dielectric:
+            case MaterialType::Null: {
+                const std::optional<Ray> next =
+                    scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
+                if (!next) { ++out.regionOverflows; return; }
+                ray = *next;
+                if (mat.type == MaterialType::Null && ++nullCrossings <= 64) { --depth; continue; }
+                if (mat.type == MaterialType::Dielectric) power *= mat.specular;
+                break;
+            }
+        }
+        const double q = std::min(1.0, maxComponent(power) / power0);
+        if (q <= 0.0) return;
+        if (q < 1.0) {
+            if (rng.uniform() >= q) return;
+            power /= q;
+        }
+    }
+}
+
+PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s, const std::atomic<bool>* abort) {
+    // Fixed batches so the output order does not depend on the number of threads.
+    constexpr int64_t kBatch = 1024;
+    const int64_t batches = (s.photons + kBatch - 1) / kBatch;
+    std::vector<PhotonMap> parts(static_cast<size_t>(batches));
+    std::atomic<uint64_t> stored{0};  // bytes of all batches so far, for the memory guard
+    parallelFor(batches, s.threads, [&](int64_t b, int) {
+        PhotonMap& part = parts[static_cast<size_t>(b)];
+        const int64_t end = std::min(s.photons, (b + 1) * kBatch);
+        for (int64_t i = b * kBatch; i < end; ++i) {
+            const uint64_t before = mapBytes(part.beams.size(), part.photons.size());
+            tracePhoton(scene, s, i, part);
+            if (s.maxMapBytes > 0) {
+                const uint64_t total = stored.fetch_add(mapBytes(part.beams.size(), part.photons.size()) - before) +
+                                       mapBytes(part.beams.size(), part.photons.size()) - before;
+                if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
+            }
+        }
+        part.emitted = end - b * kBatch;
+    }, abort);
+    PhotonMap all;
+    size_t nb = 0, np = 0;
+    for (const PhotonMap& p : parts) { nb += p.beams.size(); np += p.photons.size(); }
+    all.beams.reserve(nb);
+    all.photons.reserve(np);
+    for (PhotonMap& p : parts) {
+        all.beams.insert(all.beams.end(), p.beams.begin(), p.beams.end());
+        all.photons.insert(all.photons.end(), p.photons.begin(), p.photons.end());
+        all.emitted += p.emitted;
+        all.rejected += p.rejected;
+        all.emittedFlux += p.emittedFlux;
+        all.cutFlux += p.cutFlux;
+        all.regionOverflows += p.regionOverflows;
+    }
+    return all;
+}
+
+}  // namespace tpb

@@ -1,0 +1,143 @@
+#include "render/time_range.h"
+
+#include "render/memory_budget.h"
+
+#include "accel/beam_accel.h"
+#include "integrators/camera_pass.h"
+#include "base/parallel.h"
+#include "accel/photon_grid.h"
+#include "photons/photon_tracer.h"
+
+#include <mutex>
+
+namespace tpb {
+
+TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int threads, const PilotControl& control) {
+    TimeRangeFit fit;
+    double t0, t1;
+    autoTimeRange(scene, t0, t1);
+    fit.heuristicStart = t0;
+    fit.heuristicEnd = t1;
+    fit.startOpl = t0;
+    fit.endOpl = t1;
+    const auto aborted = [&] { return control.abort && control.abort->load(); };
+    const auto progress = [&](double f) {
+        if (control.progress) control.progress(f);
+    };
+    // Rough shares of the pilot's time, for the progress report: photons, then camera rows.
+    constexpr double kPhotonShare = 0.2;
+
+    // Histogram over a window 4x wider than the heuristic one.
+    TimeBins wide{t0, 4.0 * (t1 - t0) / 4096.0, 4096};
+    threads = resolveThreads(threads);
+    PhotonTraceSettings pt;
+    pt.seed = scene.desc.render.seed ^ 0x9E3779B97F4A7C15ull;
+    pt.pass = 0;
+    pt.photons = pilotPhotons;
+    pt.maxDepth = scene.desc.render.maxDepth;
+    pt.storeBeams = scene.stages.beams;
+    pt.storeSurfacePhotons = scene.stages.surfacePhotons;
+    pt.beamLength = scene.desc.render.beamLength;
+    pt.threads = threads;
+    pt.maxMapBytes = maxFilmBytes();
+    progress(0.0);
+    const PhotonMap map = tracePhotons(scene, pt, control.abort);
+    if (aborted()) {
+        fit.interrupted = true;
+        return fit;
+    }
+    progress(kPhotonShare);
+    const double diag = std::max(scene.bounds.diagonal(), 1e-6);
+    CameraPassSettings cs;
+    cs.seed = pt.seed;
+    cs.pass = 0;
+    // Generous kernels (a low-noise pilot), never wider than kPilotMaxRadiusFraction of the diagonal:
+    // the render's own radius may be huge, and the pilot only needs the arrival times.
+    cs.beamRadius = std::min(std::max(scene.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
+    cs.surfaceRadius = std::min(std::max(scene.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
+    cs.maxDepth = scene.desc.render.maxDepth;
+    std::unique_ptr<BeamAccel> accel;
+    if (scene.stages.beams && !map.beams.empty()) {
+        accel = BeamAccel::create(BeamAccel::Kind::Embree);
+        accel->build(map.beams, cs.beamRadius, threads);
+    }
+    std::unique_ptr<PhotonGrid> grid;
+    if (scene.stages.surfacePhotons && !map.photons.empty()) {
+        grid = std::make_unique<PhotonGrid>();
+        grid->build(map.photons, cs.surfaceRadius);
+    }
+    if (aborted()) {
+        fit.interrupted = true;
+        return fit;
+    }
+    // Every 8th pixel in each direction (at least an 8x8 grid).
+    const int W = scene.camera.width, H = scene.camera.height;
+    const int sx = std::max(1, W / 32), sy = std::max(1, H / 32);
+    const int rows = (H + sy - 1) / sy;
+    std::vector<double> hist(wide.bins, 0.0);
+    std::mutex m;
+    std::atomic<int> rowsDone{0};
+    parallelFor(rows, threads, [&](int64_t r, int worker) {
+        CameraPassScratch scratch;
+        scratch.acc.reset(wide.bins);
+        CameraPassStats stats;
+        std::vector<double> local(wide.bins, 0.0);
+        const int y = static_cast<int>(r) * sy;
+        for (int x = 0; x < W; x += sx) {
+            if (aborted()) return;  // (a row of a huge film is long too)
+            renderPixel(scene, map, accel.get(), grid.get(), cs, wide, x, y, scratch, stats);
+            for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
+                for (int k = scratch.acc.lo(a); k <= scratch.acc.hi(a); ++k) {
+                    const double* v = scratch.acc.bin(a, k);
+                    local[k] += std::max(0.0, 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]);
+                }
+            scratch.acc.clearTouched();
+        }
+        {
+            std::lock_guard<std::mutex> g(m);
+            for (int k = 0; k < wide.bins; ++k) hist[k] += local[k];
+        }
+        const int done = rowsDone.fetch_add(1) + 1;
+        if (worker == 0) progress(kPhotonShare + (1.0 - kPhotonShare) * done / rows);
+    }, control.abort);
+    if (aborted()) {
+        fit.interrupted = true;
+        return fit;
+    }
+    progress(1.0);
+    double total = 0.0;
+    for (double v : hist) total += v;
+    if (!(total > 0.0)) return fit;
+    double cum = 0.0;
+    int kLo = -1, kHi = wide.bins - 1;
+    for (int k = 0; k < wide.bins; ++k) {
+        cum += hist[k];
+        if (kLo < 0 && cum > 5e-4 * total) kLo = k;
+        if (cum >= 0.98 * total) { kHi = k; break; }
+    }
+    kLo = std::max(kLo, 0);
+    const double lo = wide.startOpl + kLo * wide.binWidth, hi = wide.startOpl + (kHi + 1) * wide.binWidth;
+    const double pad = 0.05 * (hi - lo);
+    fit.startOpl = std::max(t0, lo - pad);
+    fit.endOpl = hi + pad;
+    fit.fromPilot = true;
+    return fit;
+}
+
+TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads, const PilotControl& control) {
+    if (!scene.desc.film.autoRange) {
+        TimeRangeFit fit;
+        autoTimeRange(scene, fit.startOpl, fit.endOpl);
+        fit.heuristicStart = fit.startOpl;
+        fit.heuristicEnd = fit.endOpl;
+        return fit;
+    }
+    const TimeRangeFit fit = measureArrivalRange(scene, pilotPhotons, threads, control);
+    if (fit.fromPilot) {
+        scene.time.startOpl = fit.startOpl;
+        scene.time.binWidth = (fit.endOpl - fit.startOpl) / scene.time.bins;
+    }
+    return fit;
+}
+
+}  // namespace tpb

@@ -1,0 +1,484 @@
+// Ray casting with Embree 3. This is the only file that includes Embree.
+//
+// - One process-wide RTCDevice, created on first use; Embree errors are collected by an error
+//   callback and rethrown as std::runtime_error naming the operation.
+// - Triangle meshes are Embree triangle geometry (float vertices). The positions kept here for
+//   normals and the double-precision refinement of t are the float-rounded ones, so that they
+//   describe exactly the triangles Embree intersects.
+// - Spheres are Embree user geometry, intersected in double precision against the original
+//   double ray, which the callbacks find in an extended intersection context.
+// - geomID -> shape: geometries are attached with rtcAttachGeometryByID, the ID being the index
+//   into Impl::geoms.
+#include "scene/geometry.h"
+#include "base/error.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace tpb {
+namespace {
+
+// ---- device and errors ------------------------------------------------------------------------
+
+const char* errorName(RTCError code) {
+    switch (code) {
+        case RTC_ERROR_NONE: return "no error";
+        case RTC_ERROR_UNKNOWN: return "unknown error";
+        case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+        case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+        case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+        case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+        case RTC_ERROR_CANCELLED: return "cancelled";
+    }
+    return "unrecognised error";
+}
+
+// Message of the last Embree error raised on this thread (Embree calls the error function on the
+// thread that made the failing API call).
+thread_local std::string tlsEmbreeMessage;
+
+void onEmbreeError(void*, RTCError code, const char* str) {
+    tlsEmbreeMessage = std::string(errorName(code));
+    if (str && *str) tlsEmbreeMessage += std::string(": ") + str;
+}
+
+// Throws if an Embree call on this thread failed since the last check.
+void checkEmbree(RTCDevice device, const char* during) {
+    const RTCError code = rtcGetDeviceError(device);
+    if (code == RTC_ERROR_NONE) return;
+    std::string msg = tlsEmbreeMessage.empty() ? errorName(code) : tlsEmbreeMessage;
+    tlsEmbreeMessage.clear();
+    throw std::runtime_error(std::string("Embree error while ") + during + ": " + msg);
+}
+
+struct SharedDevice {
+    RTCDevice device = nullptr;
+    std::string failure;
+    SharedDevice() {
+        device = rtcNewDevice("verbose=0");
+        if (!device) {
+            failure = errorName(rtcGetDeviceError(nullptr));
+            return;
+        }
+        rtcSetDeviceErrorFunction(device, onEmbreeError, nullptr);
+    }
+    ~SharedDevice() {
+        // Scenes hold their own reference, so this is safe even if a Geometry outlives us.
+        if (device) rtcReleaseDevice(device);
+    }
+};
+
+RTCDevice sharedDevice() {
+    static SharedDevice shared;  // created on first use, thread-safe initialisation
+    if (!shared.device)
+        throw std::runtime_error("cannot create the Embree device (" + shared.failure +
+                                 "); Embree needs an x86-64 CPU with SSE2 or newer");
+    return shared.device;
+}
+
+// ---- float conversions ---------------------------------------------------------------------------
+
+float roundDown(double x) {
+    float f = static_cast<float>(x);
+    if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+    return f;
+}
+float roundUp(double x) {
+    float f = static_cast<float>(x);
+    if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+}
+Vec3 toFloatPrecision(const Vec3& p) {
+    return Vec3(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z));
+}
+double maxAbs(const Vec3& v) { return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}); }
+
+// ---- shapes -------------------------------------------------------------------------------------
+
+struct MeshData {
+    std::vector<Vec3> positions;  // float-rounded, as given to Embree
+    std::vector<Vec3> normals;    // unit, may be empty
+    std::vector<glm::uvec3> triangles;
+};
+
+struct SphereData {
+    Vec3 center;
+    double radius;
+};
+
+enum class Kind { Mesh, Sphere };
+
+struct GeomInfo {
+    Kind kind;
+    int shapeId;
+    size_t index;  // into Impl::meshes or Impl::spheres
+};
+
+// Ray parameters t0 <= t1 where the line o + t d meets the sphere; false if it misses.
+// Numerically stable: the discriminant is computed from the distance between the centre and the
+// line (no cancellation for distant origins), and the two roots from q and c/q (no cancellation
+// between -b and sqrt(disc)).
+bool sphereRoots(const Vec3& o, const Vec3& d, const Vec3& c, double r, double& t0, double& t1) {
+    const Vec3 f = o - c;
+    const double a = glm::dot(d, d);
+    if (!(a > 0.0)) return false;
+    const double b = glm::dot(f, d);             // half the usual b
+    const Vec3 l = f - (b / a) * d;              // centre -> closest point of the line
+    const double dist = glm::length(l);
+    const double disc = (r - dist) * (r + dist);  // r^2 - |l|^2
+    if (!(disc >= 0.0)) return false;
+    const double q = -(b + std::copysign(std::sqrt(a * disc), b));
+    if (q == 0.0) {  // tangent at the origin itself
+        t0 = t1 = -b / a;
+        return true;
+    }
+    const double lenF = glm::length(f);
+    const double cc = (lenF - r) * (lenF + r);   // |f|^2 - r^2
+    t0 = cc / q;
+    t1 = q / a;
+    if (t0 > t1) std::swap(t0, t1);
+    return true;
+}
+
+// Nearest root in the open interval (tmin, tmax).
+bool sphereHit(const Vec3& o, const Vec3& d, const SphereData& s, double tmin, double tmax,
+               double& t) {
+    double t0, t1;
+    if (!sphereRoots(o, d, s.center, s.radius, t0, t1)) return false;
+    if (t0 > tmin && t0 < tmax) { t = t0; return true; }
+    if (t1 > tmin && t1 < tmax) { t = t1; return true; }
+    return false;
+}
+
+// The intersection context handed to Embree, extended with the double-precision ray so that the
+// sphere callbacks can use it. Embree passes the RTCIntersectContext pointer back to callbacks.
+struct QueryContext {
+    RTCIntersectContext ctx;  // must stay the first member
+    Vec3 o, d;
+    double tmin = 0.0, tmax = kInf;
+    // Closest hit so far in double precision. Embree only knows the float tfar; as long as tfar
+    // still holds the value we wrote last (lastTfar), no triangle came closer and `closest` is
+    // the exact bound. A sphere hit in (float(tmax), tmax) is thus not lost to float rounding.
+    double closest = kInf;
+    float lastTfar = 0.0f;
+    double sphereT = kInf;  // t of the last accepted sphere hit (the closest so far)
+
+    double bound(float tfar) const { return tfar == lastTfar ? closest : double(tfar); }
+};
+static_assert(std::is_standard_layout_v<QueryContext>, "QueryContext must be standard-layout");
+
+QueryContext* queryContext(RTCIntersectContext* ctx) { return reinterpret_cast<QueryContext*>(ctx); }
+
+void sphereBounds(const RTCBoundsFunctionArguments* args) {
+    const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
+    // Float bounds rounded outwards plus a small margin, so that the float ray Embree traverses
+    // with cannot miss the box when the double ray grazes the sphere.
+    const double pad = s->radius + 1e-6 * (s->radius + maxAbs(s->center));
+    RTCBounds* b = args->bounds_o;
+    b->lower_x = roundDown(s->center.x - pad);
+    b->lower_y = roundDown(s->center.y - pad);
+    b->lower_z = roundDown(s->center.z - pad);
+    b->upper_x = roundUp(s->center.x + pad);
+    b->upper_y = roundUp(s->center.y + pad);
+    b->upper_z = roundUp(s->center.z + pad);
+}
+
+void sphereIntersect(const RTCIntersectFunctionNArguments* args) {
+    if (args->N != 1 || !args->valid[0]) return;  // only rtcIntersect1 is used
+    QueryContext* qc = queryContext(args->context);
+    const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
+    RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, 1);
+    RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, 1);
+    float& tfar = RTCRayN_tfar(ray, 1, 0);
+    double t;
+    if (!sphereHit(qc->o, qc->d, *s, qc->tmin, qc->bound(tfar), t)) return;
+    tfar = std::min(static_cast<float>(t), tfar);
+    qc->lastTfar = tfar;
+    qc->closest = t;
+    qc->sphereT = t;
+    const Vec3 n = qc->o + t * qc->d - s->center;
+    RTCHitN_Ng_x(hit, 1, 0) = static_cast<float>(n.x);
+    RTCHitN_Ng_y(hit, 1, 0) = static_cast<float>(n.y);
+    RTCHitN_Ng_z(hit, 1, 0) = static_cast<float>(n.z);
+    RTCHitN_u(hit, 1, 0) = 0.0f;
+    RTCHitN_v(hit, 1, 0) = 0.0f;
+    RTCHitN_primID(hit, 1, 0) = args->primID;
+    RTCHitN_geomID(hit, 1, 0) = args->geomID;
+    RTCHitN_instID(hit, 1, 0, 0) = args->context->instID[0];
+}
+
+void sphereOccluded(const RTCOccludedFunctionNArguments* args) {
+    if (args->N != 1 || !args->valid[0]) return;  // only rtcOccluded1 is used
+    QueryContext* qc = queryContext(args->context);
+    const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
+    float& tfar = RTCRayN_tfar(args->ray, 1, 0);
+    double t;
+    if (sphereHit(qc->o, qc->d, *s, qc->tmin, qc->tmax, t))
+        tfar = -std::numeric_limits<float>::infinity();
+}
+
+// Embree rejects origins/directions beyond ~1.8e18 (FLT_LARGE); stay well inside.
+constexpr double kMaxCoordinate = 1e18;
+
+// Fills the Embree ray and the double ray of the context. False if the ray cannot hit anything
+// (empty interval) or is unusable (non-finite, zero direction, coordinates Embree rejects).
+bool setupRay(const Ray& ray, QueryContext& qc, RTCRay& r) {
+    const double tmin = std::max(ray.tmin, 0.0);  // Embree segments start at t >= 0
+    const double tmax = ray.tmax;
+    if (!(tmin < tmax)) return false;  // also catches NaN
+    if (!(maxAbs(ray.o) < kMaxCoordinate) || !(maxAbs(ray.d) < kMaxCoordinate)) return false;
+    if (!(glm::dot(ray.d, ray.d) > 0.0)) return false;
+    rtcInitIntersectContext(&qc.ctx);
+    qc.o = ray.o;
+    qc.d = ray.d;
+    qc.tmin = tmin;
+    qc.tmax = tmax;
+    qc.sphereT = kInf;
+    r.org_x = static_cast<float>(ray.o.x);
+    r.org_y = static_cast<float>(ray.o.y);
+    r.org_z = static_cast<float>(ray.o.z);
+    r.dir_x = static_cast<float>(ray.d.x);
+    r.dir_y = static_cast<float>(ray.d.y);
+    r.dir_z = static_cast<float>(ray.d.z);
+    if (r.dir_x == 0.0f && r.dir_y == 0.0f && r.dir_z == 0.0f) return false;  // underflow
+    // Float interval inside the double one: tnear >= tmin, tfar <= tmax.
+    r.tnear = roundUp(tmin);
+    r.tfar = std::isinf(tmax) ? std::numeric_limits<float>::infinity() : roundDown(tmax);
+    if (r.tfar < r.tnear) r.tfar = r.tnear;  // tiny interval: let double-precision spheres decide
+    qc.closest = tmax;
+    qc.lastTfar = r.tfar;
+    r.time = 0.0f;
+    r.mask = 0xFFFFFFFFu;
+    r.id = 0;
+    r.flags = 0;
+    return true;
+}
+
+}  // namespace
+
+struct Geometry::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    std::vector<GeomInfo> geoms;   // indexed by Embree geomID
+    std::deque<MeshData> meshes;   // deque: stable addresses
+    std::deque<SphereData> spheres;  // user data pointers of the sphere geometries
+    Bounds3 bounds;
+    size_t triangles = 0;
+    bool committed = false;
+
+    unsigned attach(RTCGeometry geom, const GeomInfo& info, const char* what) {
+        const unsigned id = static_cast<unsigned>(geoms.size());
+        rtcCommitGeometry(geom);
+        rtcAttachGeometryByID(scene, geom, id);
+        rtcReleaseGeometry(geom);  // the scene holds it now
+        checkEmbree(device, what);
+        geoms.push_back(info);
+        return id;
+    }
+};
+
+Geometry::Geometry() : impl_(std::make_unique<Impl>()) {
+    impl_->device = sharedDevice();
+    impl_->scene = rtcNewScene(impl_->device);
+    checkEmbree(impl_->device, "creating the scene");
+    // Robust mode: conservative traversal and no accuracy-reducing shortcuts, so that rays through
+    // shared edges of neighbouring triangles are not lost (costs ~10% on the armadillo). High
+    // build quality: the scene is static and built once.
+    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    try {
+        checkEmbree(impl_->device, "configuring the scene");
+    } catch (...) {
+        rtcReleaseScene(impl_->scene);
+        throw;
+    }
+}
+
+Geometry::~Geometry() {
+    if (impl_ && impl_->scene) rtcReleaseScene(impl_->scene);
+}
+
+void Geometry::addMesh(const TriangleMesh& mesh, int shapeId) {
+    TPB_CHECK(!impl_->committed);
+    if (mesh.triangles.empty()) return;
+    const size_t nv = mesh.positions.size();
+    TPB_CHECK(mesh.normals.empty() || mesh.normals.size() == nv);
+    for (const glm::uvec3& t : mesh.triangles) TPB_CHECK(t.x < nv && t.y < nv && t.z < nv);
+
+    MeshData data;
+    data.positions.reserve(nv);
+    for (const Vec3& p : mesh.positions) {
+        const Vec3 q = toFloatPrecision(p);
+        if (!(maxAbs(q) < kMaxCoordinate))
+            throw UserError("mesh (shape " + std::to_string(shapeId) +
+                            ") has non-finite or too large vertex coordinates after its transform");
+        data.positions.push_back(q);
+    }
+    if (!mesh.normals.empty()) {
+        data.normals.reserve(nv);
+        for (const Vec3& n : mesh.normals) {
+            const double len = glm::length(n);
+            data.normals.push_back(len > 0.0 && std::isfinite(len) ? n / len : Vec3(0.0));
+        }
+    }
+    data.triangles = mesh.triangles;
+
+    RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    checkEmbree(impl_->device, "creating a triangle mesh");
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+        data.triangles.size()));
+    if (!vb || !ib) {
+        rtcReleaseGeometry(geom);
+        checkEmbree(impl_->device, "allocating triangle mesh buffers");
+        throw std::runtime_error("Embree could not allocate triangle mesh buffers");
+    }
+    for (size_t i = 0; i < nv; ++i) {
+        vb[3 * i + 0] = static_cast<float>(data.positions[i].x);
+        vb[3 * i + 1] = static_cast<float>(data.positions[i].y);
+        vb[3 * i + 2] = static_cast<float>(data.positions[i].z);
+    }
+    for (size_t i = 0; i < data.triangles.size(); ++i) {
+        ib[3 * i + 0] = data.triangles[i].x;
+        ib[3 * i + 1] = data.triangles[i].y;
+        ib[3 * i + 2] = data.triangles[i].z;
+        for (int k = 0; k < 3; ++k) impl_->bounds.expand(data.positions[data.triangles[i][k]]);
+    }
+
+    impl_->meshes.push_back(std::move(data));
+    try {
+        impl_->attach(geom, GeomInfo{Kind::Mesh, shapeId, impl_->meshes.size() - 1},
+                      "adding a triangle mesh");
+    } catch (...) {
+        impl_->meshes.pop_back();
+        throw;
+    }
+    impl_->triangles += mesh.triangles.size();
+}
+
+void Geometry::addSphere(const Vec3& center, double radius, int shapeId) {
+    TPB_CHECK(!impl_->committed);
+    TPB_CHECK(radius > 0.0 && std::isfinite(radius));
+    TPB_CHECK(std::isfinite(center.x) && std::isfinite(center.y) && std::isfinite(center.z));
+    if (!(maxAbs(center) + radius < kMaxCoordinate))
+        throw UserError("sphere (shape " + std::to_string(shapeId) + ") is too large or too far away");
+
+    impl_->spheres.push_back(SphereData{center, radius});
+    SphereData* s = &impl_->spheres.back();
+    RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
+    checkEmbree(impl_->device, "creating a sphere");
+    rtcSetGeometryUserPrimitiveCount(geom, 1);
+    rtcSetGeometryUserData(geom, s);
+    rtcSetGeometryBoundsFunction(geom, sphereBounds, nullptr);
+    rtcSetGeometryIntersectFunction(geom, sphereIntersect);
+    rtcSetGeometryOccludedFunction(geom, sphereOccluded);
+    try {
+        impl_->attach(geom, GeomInfo{Kind::Sphere, shapeId, impl_->spheres.size() - 1},
+                      "adding a sphere");
+    } catch (...) {
+        impl_->spheres.pop_back();
+        throw;
+    }
+    impl_->bounds.expand(center - Vec3(radius));
+    impl_->bounds.expand(center + Vec3(radius));
+}
+
+void Geometry::commit() {
+    TPB_CHECK(!impl_->committed);
+    rtcCommitScene(impl_->scene);
+    checkEmbree(impl_->device, "building the acceleration structure");
+    impl_->committed = true;
+}
+
+std::optional<SurfaceHit> Geometry::intersect(const Ray& ray) const {
+    TPB_CHECK(impl_->committed);
+    QueryContext qc;
+    RTCRayHit rh;
+    if (!setupRay(ray, qc, rh.ray)) return std::nullopt;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &qc.ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID >= impl_->geoms.size())
+        return std::nullopt;
+
+    const GeomInfo& info = impl_->geoms[rh.hit.geomID];
+    SurfaceHit h;
+    h.shape = info.shapeId;
+    if (info.kind == Kind::Sphere) {
+        const SphereData& s = impl_->spheres[info.index];
+        if (!std::isfinite(qc.sphereT)) return std::nullopt;  // cannot happen: callback sets it
+        h.t = qc.sphereT;
+        h.prim = 0;
+        h.p = ray.o + h.t * ray.d;
+        const Vec3 n = h.p - s.center;
+        const double len = glm::length(n);
+        h.ng = len > 0.0 ? n / len : -glm::normalize(ray.d);
+        h.ns = h.ng;
+        return h;
+    }
+
+    const MeshData& m = impl_->meshes[info.index];
+    const glm::uvec3 tri = m.triangles[rh.hit.primID];
+    h.prim = static_cast<int>(rh.hit.primID);
+    const Vec3& p0 = m.positions[tri.x];
+    const Vec3& p1 = m.positions[tri.y];
+    const Vec3& p2 = m.positions[tri.z];
+    Vec3 n = glm::cross(p1 - p0, p2 - p0);
+    double len = glm::length(n);
+    if (!(len > 0.0) || !std::isfinite(len)) {
+        // Needle triangle that Embree still hit: fall back to its normal (same orientation).
+        n = Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+        len = glm::length(n);
+        if (!(len > 0.0) || !std::isfinite(len)) { n = -ray.d; len = glm::length(n); }
+    }
+    h.ng = n / len;
+
+    // Embree's t comes from float arithmetic on a float ray. Refine it as the intersection of the
+    // double ray with the triangle's plane, unless that is ill-conditioned (grazing ray) or
+    // leaves the interval (tmin, tmax).
+    const double tE = rh.ray.tfar;
+    const double tRef = glm::dot(p0 - ray.o, h.ng) / glm::dot(ray.d, h.ng);
+    const double tol = 1e-4 * (tE + maxAbs(ray.o) + maxAbs(p0));
+    h.t = (std::isfinite(tRef) && tRef > qc.tmin && tRef < qc.tmax && std::abs(tRef - tE) <= tol)
+              ? tRef
+              : tE;
+    h.p = ray.o + h.t * ray.d;
+
+    h.ns = h.ng;
+    if (!m.normals.empty()) {
+        const double u = rh.hit.u, v = rh.hit.v;
+        const Vec3 s = (1.0 - u - v) * m.normals[tri.x] + u * m.normals[tri.y] + v * m.normals[tri.z];
+        const double sl = glm::length(s);
+        if (sl > 0.0 && std::isfinite(sl)) {
+            h.ns = s / sl;
+            if (glm::dot(h.ns, h.ng) < 0.0) h.ns = -h.ns;
+        }
+    }
+    return h;
+}
+
+bool Geometry::occluded(const Ray& ray) const {
+    TPB_CHECK(impl_->committed);
+    QueryContext qc;
+    RTCRay r;
+    if (!setupRay(ray, qc, r)) return false;
+    rtcOccluded1(impl_->scene, &qc.ctx, &r);
+    return r.tfar == -std::numeric_limits<float>::infinity();
+}
+
+Bounds3 Geometry::bounds() const { return impl_->bounds; }
+size_t Geometry::triangleCount() const { return impl_->triangles; }
+size_t Geometry::sphereCount() const { return impl_->spheres.size(); }
+
+}  // namespace tpb

@@ -1,0 +1,144 @@
+// Plain description of a scene, as read from a scene file (parse -> describe -> build).
+// No Embree, no render state: the loader (scene_loader.h) fills it, Scene (scene.h) builds from it.
+// Every value read from the file has its location recorded in `locs` under its key path
+// (e.g. "lights[0].power"), so the build step can report "scene.json:12: lights[0].power: ...".
+#pragma once
+#include "base/math.h"
+#include <map>
+#include <string>
+#include <vector>
+
+namespace tpb {
+
+// Largest coordinate (m) a scene may use: positions, corners, edges, sizes and radii in the scene
+// file, and mesh vertices after their transform, must lie within +-kMaxSceneCoordinateM. Far beyond
+// any scene tpb is meant for (a million km), and small enough that no length, squared length or
+// optical path length between two points of the scene can overflow (1e308 would: a camera there
+// used to be reported as "up parallel to the viewing direction").
+inline constexpr double kMaxSceneCoordinateM = 1e9;
+
+// Kernel radii against the scene's bounding diagonal. The cost of a pass grows with the radius
+// (every camera ray gathers the beams within it: at a radius of the order of the diagonal every ray
+// meets every beam, rays x beams, and the automatic-range pilot alone took minutes); typical radii
+// are 0.1% - 2% of the diagonal. Larger than kMaxRadiusFraction is refused, larger than
+// kSlowRadiusFraction warned about (render.radius(_relative), surface_radius(_relative), --radius).
+inline constexpr double kMaxRadiusFraction = 0.25;
+inline constexpr double kSlowRadiusFraction = 0.05;
+
+struct SourceLoc {
+    std::string file;
+    int line = 0;
+};
+
+struct CameraDesc {
+    Vec3 position{0.0, 0.0, 3.0};
+    Vec3 lookAt{0.0, 0.0, 0.0};
+    Vec3 up{0.0, 1.0, 0.0};
+    double fovYDeg = 40.0;  // vertical field of view, degrees
+    int width = 256;
+    int height = 256;
+};
+
+// Time axis of the transient film, always optical path length in meters internally.
+struct FilmDesc {
+    bool autoRange = true;      // fit [start, start + bins*binWidth] to the scene's bounds
+    double startOpl = 0.0;      // m of OPL
+    double binWidthOpl = 0.01;  // m of OPL (ignored when autoRange; derived from bins)
+    int bins = 256;
+};
+
+struct MediumDesc {
+    std::string name;
+    Color sigma_s{0.0};  // scattering coefficient, 1/m
+    Color sigma_a{0.0};  // absorption coefficient, 1/m
+    double ior = 1.0;    // index of refraction (slows light: OPL = ior * distance)
+    double g = 0.0;      // Henyey-Greenstein asymmetry, (-1, 1)
+};
+
+enum class MaterialType { Diffuse, Mirror, Dielectric, Null };
+
+struct MaterialDesc {
+    std::string name;
+    MaterialType type = MaterialType::Diffuse;
+    Color albedo{0.8};    // diffuse: Lambertian albedo
+    Color specular{1.0};  // mirror: reflectance; dielectric: transmission/reflection tint
+    double ior = 1.5;     // dielectric: index of refraction of the interior
+};
+
+enum class ShapeType { Mesh, Sphere, Quad, Box };
+
+struct ShapeDesc {
+    std::string name;
+    ShapeType type = ShapeType::Mesh;
+    int material = -1;        // index into SceneDesc::materials
+    int interiorMedium = -1;  // index into SceneDesc::media, -1 = none (vacuum / glass interior)
+    // Mesh
+    std::string meshPath;  // resolved path of the OBJ file
+    Mat4 transform{1.0};   // object to world
+    // Sphere
+    Vec3 center{0.0};
+    double radius = 1.0;
+    // Quad: corner + s*edgeU + t*edgeV, s,t in [0,1]; normal = normalize(cross(edgeU, edgeV))
+    Vec3 corner{0.0}, edgeU{1.0, 0.0, 0.0}, edgeV{0.0, 1.0, 0.0};
+    // Box: axis-aligned in object space, then `transform`
+    Vec3 boxMin{-0.5}, boxMax{0.5};
+    bool flipNormals = false;
+    int areaLight = -1;  // index into lights when this quad is the visible surface of an area light
+};
+
+enum class LightType { Point, Spot, AreaQuad, Laser };
+
+struct LightDesc {
+    std::string name;
+    LightType type = LightType::Point;
+    Color power{1.0};       // radiant flux, W (RGB)
+    double emitOpl = 0.0;   // pulse instant as OPL, m
+    Vec3 position{0.0};     // point, spot, laser origin
+    Vec3 direction{0.0, -1.0, 0.0};  // spot axis, laser direction (unit)
+    double spotCutoffDeg = 30.0;     // spot: half-angle of the cone
+    double spotFalloffDeg = 25.0;    // spot: half-angle where the smooth falloff starts
+    Vec3 corner{0.0}, edgeU{1.0, 0.0, 0.0}, edgeV{0.0, 0.0, 1.0};  // area quad; emits along cross(edgeU, edgeV)
+    double laserRadius = 0.0;  // laser: beam radius, m (0 = infinitely thin)
+};
+
+enum class EmissionMode { Delta, Continuous };
+enum class TimeProfile { Exact, Uniform };
+enum class BeamLength { Short, Long };
+
+struct RenderDesc {
+    int64_t photonsPerPass = 20000;
+    double radius = 0.01;         // initial kernel radius
+    bool radiusRelative = true;   // radius is a fraction of the scene's bounding diagonal
+    double surfaceRadius = 0.02;  // initial surface-photon kernel radius (same convention)
+    double alpha = 0.7;           // progressive shrink parameter, (0, 1]
+    int passes = 16;              // 0 = until the time budget
+    double timeBudgetSec = 0.0;   // 0 = no budget
+    int maxDepth = 16;
+    uint64_t seed = 1;
+    int threads = 0;  // 0 = all cores
+    EmissionMode emission = EmissionMode::Delta;
+    bool unwarp = false;
+    TimeProfile timeProfile = TimeProfile::Exact;
+    BeamLength beamLength = BeamLength::Short;
+};
+
+struct SceneDesc {
+    int version = 1;
+    std::string path;  // the scene file
+    std::string dir;   // its folder (relative mesh paths are resolved against it)
+    CameraDesc camera;
+    FilmDesc film;
+    int globalMedium = -1;  // index into media, -1 = vacuum
+    std::vector<MediumDesc> media;
+    std::vector<MaterialDesc> materials;
+    std::vector<ShapeDesc> shapes;
+    std::vector<LightDesc> lights;
+    RenderDesc render;
+    std::map<std::string, SourceLoc> locs;  // key path -> where it was written
+    std::vector<std::string> warnings;      // unused keys and other non-fatal remarks, "file:line: ..."
+
+    // "file:line: " for a key path, or "file: " when the key was not written in the file.
+    std::string where(const std::string& keyPath) const;
+};
+
+}  // namespace tpb

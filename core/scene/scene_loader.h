@@ -1,0 +1,22 @@
+// Scene file loader: JSON (see README "Scene format") -> SceneDesc. Parse and validate only; no
+// Embree or render state. Every error is a UserError "file:line: key: problem; allowed: ...".
+#pragma once
+#include "render/memory_budget.h"
+#include "scene/scene_desc.h"
+#include <string>
+
+namespace tpb {
+
+// Reads and validates a scene file. Relative mesh paths are resolved against the file's folder.
+SceneDesc loadScene(const std::string& path);
+// Same, from text (for tests and tools); `virtualPath` names it in messages and sets the folder.
+SceneDesc loadSceneFromString(const std::string& text, const std::string& virtualPath);
+// The loader refuses films and photon counts above the memory budget (memory_budget.h).
+
+// Worker threads beyond this are pointless (the workers never wait on I/O: more threads than cores
+// only add memory and contention; 1000 threads on 2 cores ran a thread per tile): 4 x the cores
+// std::thread reports. render.threads and --threads above it are capped, with a warning.
+inline constexpr int kThreadsPerCoreCap = 4;
+int maxUsefulThreads();
+
+}  // namespace tpb

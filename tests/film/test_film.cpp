@@ -1,0 +1,95 @@
+// TransientFilm (core/film/film.h): memory accounting, the energy it keeps outside its time range, and
+// the overflow guard of its float sums.
+#include "film/film.h"
+#include "render/memory_budget.h"
+
+#include <gtest/gtest.h>
+
+#include <cfloat>
+#include <cmath>
+
+using namespace tpb;
+
+namespace {
+
+// Adds one pass in which every pixel gets `L` spread uniformly over t in [t0, t1] (both axes).
+void addUniformPass(TransientFilm& film, const Color& L, double t0, double t1) {
+    PixelAccumulator acc(film.bins());
+    FilmTally tally;
+    for (int tile = 0; tile < film.tileCount(); ++tile) {
+        TransientFilm::TileWriter w(film, tile);
+        const TileRect r = film.tileRect(tile);
+        for (int y = r.y0; y < r.y0 + r.h; ++y)
+            for (int x = r.x0; x < r.x0 + r.w; ++x) {
+                splatSpread(film.time(), acc, tally, L, Color(0.0), 0.0, 1.0, t0, t1 - t0, t0, t1 - t0);
+                w.addPixel(x, y, acc);
+                acc.clearTouched();
+            }
+    }
+    tally.flushInto(film.stats);
+}
+
+}  // namespace
+
+// One formula for the film's memory (issue 12, item 16): the budget the loader checks and the CLI
+// prints is what the film allocates, for sizes that are and are not multiples of the tile size.
+TEST(Film, BytesFormulaIsWhatTheFilmAllocates) {
+    for (const auto& [w, h, bins] : {std::tuple{16, 16, 1}, {17, 5, 3}, {33, 47, 64}, {1, 1, 1000}}) {
+        const TransientFilm film(w, h, TimeBins{0.0, 0.1, bins});
+        EXPECT_EQ(film.bytes(), filmBytes(w, h, bins)) << w << "x" << h << "x" << bins;
+    }
+}
+
+// Continuous emission is the step response (issue 12, item 1): frame k = before + bins 0..k, and
+// the last continuous frame = steady - after, through every reader (frame, pixel profile, volume).
+TEST(Film, ContinuousFramesStartFromWhatArrivedBeforeTheFilm) {
+    TransientFilm film(20, 18, TimeBins{1.0, 0.5, 4});  // film [1, 3)
+    addUniformPass(film, Color(1.0, 2.0, 3.0), 0.0, 5.0);  // t in [0, 5]: 0.2 before, 0.4 inside, 0.4 after
+    addUniformPass(film, Color(1.0, 2.0, 3.0), 0.0, 5.0);
+    std::vector<float> before, after, steady, f0, f3, prof;
+    film.beforeImage(TimeAxis::Real, before);
+    film.afterImage(TimeAxis::Unwarped, after);
+    film.steadyImage(steady);
+    film.frame(0, TimeAxis::Real, EmissionMode::Continuous, f0);
+    film.frame(3, TimeAxis::Unwarped, EmissionMode::Continuous, f3);
+    std::vector<double> vol;
+    film.volume(TimeAxis::Real, EmissionMode::Continuous, vol);
+    film.pixelProfile(19, 17, TimeAxis::Real, EmissionMode::Continuous, prof);
+    for (size_t p = 0; p < steady.size() / 3; ++p)
+        for (int c = 0; c < 3; ++c) {
+            const double L = c + 1.0, i = p * 3 + c;
+            EXPECT_NEAR(before[i], 0.2 * L, 1e-6);
+            EXPECT_NEAR(after[i], 0.4 * L, 1e-6);
+            EXPECT_NEAR(steady[i], L, 1e-12);
+            EXPECT_NEAR(f0[i], 0.3 * L, 1e-6);             // before + bin 0
+            EXPECT_NEAR(f3[i], steady[i] - after[i], 1e-6);  // the last one: everything but what comes after
+            EXPECT_NEAR(vol[p * 4 * 3 + c], 0.3 * L, 1e-6);
+            EXPECT_NEAR(vol[(p * 4 + 3) * 3 + c], 0.6 * L, 1e-6);
+        }
+    for (int k = 0; k < 4; ++k) EXPECT_NEAR(prof[k * 3], 0.2 + 0.1 * (k + 1), 1e-6) << k;
+    // The counters split what fell outside into before and after, in luminance.
+    const double before0 = film.stats.before[0].load(), outside0 = film.stats.outside[0].load();
+    EXPECT_NEAR(before0 / outside0, 0.2 / 0.6, 1e-9);
+    film.clear();
+    film.beforeImage(TimeAxis::Real, before);
+    for (float v : before) EXPECT_EQ(v, 0.0f);
+}
+
+// Non-finite values never reach the film (issue 12, item 5): a pass that would push a float sum
+// past FLT_MAX is dropped for that pixel and counted; what was there stays finite and unchanged.
+TEST(Film, SumsThatWouldOverflowAreDroppedAndCounted) {
+    TransientFilm film(4, 4, TimeBins{0.0, 1.0, 2});
+    addUniformPass(film, Color(2e38), 0.0, 0.5);  // fits in a float
+    EXPECT_EQ(film.stats.overflowedPixels.load(), 0);
+    addUniformPass(film, Color(2e38), 0.0, 0.5);  // the sum 4e38 does not
+    EXPECT_EQ(film.stats.overflowedPixels.load(), 16);
+    std::vector<float> f;
+    film.frame(0, TimeAxis::Real, EmissionMode::Delta, f);
+    for (float v : f) {
+        EXPECT_TRUE(std::isfinite(v));
+        EXPECT_NEAR(v, 1e38, 1e32);  // one pass of 2e38, averaged over the tile's two passes
+    }
+    std::vector<float> steady;
+    film.steadyImage(steady);
+    for (float v : steady) EXPECT_TRUE(std::isfinite(v));
+}

@@ -1,0 +1,175 @@
+// Regression guard for refactors: every shipped scene rendered small, with a fixed seed, hashed.
+//
+// Each scene of scenes/ is rendered at 32x32 px, 24 bins, 1500 photons per pass, 2 passes, 2
+// threads, seed 7 (the automatic time range runs its pilot as `tpb render` does). The film (both
+// axes, delta emission, the steady image and what fell before/after the film) is hashed (FNV-1a 64
+// over the float bits) and summarised by sums that a refactor must keep. tests/data/film_hashes.txt
+// holds, per scene: the hash, then the sums.
+//   - The film depends on the build (optimisation level, sanitizers and compiler change the last
+//     bits, which can turn a path at a grazing hit): a build other than the one recorded (build
+//     type, compiler, sanitizer) skips the test, saying so. tools/test's Release build checks it.
+//   - Same build, same CPU model: the hash must match exactly (and the sums to 1e-5).
+//   - Same build on another CPU (Embree picks its SIMD kernels by CPU): the sums must match to 1e-3
+//     and a hash mismatch is a note. TPB_EXACT_HASHES=1 makes it exact everywhere.
+// A change that alters films on purpose re-records the file with TPB_UPDATE_HASHES=1 and says in
+// its commit message which scenes changed and why.
+#include "render/driver.h"
+#include "scene/scene_loader.h"
+#include "render/time_range.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <iomanip>
+#include <sstream>
+
+using namespace tpb;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kDataFile = std::string(TPB_SOURCE_DIR) + "/tests/data/film_hashes.txt";
+
+struct Signature {
+    std::string hash;
+    double sums[6] = {0, 0, 0, 0, 0, 0};  // real, unwarped, steady, before real, before unwarped, sum of squares (real)
+};
+
+std::string buildFingerprint() {
+    std::string b = std::string(TPB_BUILD_TYPE) + " " + __VERSION__;
+#if defined(__SANITIZE_ADDRESS__)
+    b += " asan";
+#endif
+#if defined(__SANITIZE_THREAD__)
+    b += " tsan";
+#endif
+    return b;
+}
+
+std::string cpuModel() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+    return "unknown";
+}
+
+struct Fnv {
+    uint64_t h = 1469598103934665603ull;
+    void add(const std::vector<float>& v) {
+        for (float f : v) {
+            uint32_t bits;
+            std::memcpy(&bits, &f, 4);
+            for (int i = 0; i < 4; ++i) {
+                h ^= (bits >> (8 * i)) & 0xffu;
+                h *= 1099511628211ull;
+            }
+        }
+    }
+};
+
+Signature renderSignature(const std::string& scenePath) {
+    SceneDesc d = loadScene(scenePath);
+    d.camera.width = d.camera.height = 32;
+    d.film.bins = 24;
+    d.render.photonsPerPass = 1500;
+    d.render.seed = 7;
+    auto scene = Scene::build(d);
+    fitTimeRange(*scene, 1500, 2);
+    DriverSettings ds = DriverSettings::fromScene(*scene);
+    ds.threads = 2;
+    Driver drv(*scene, ds);
+    for (int p = 1; p <= 2; ++p) EXPECT_TRUE(drv.runPass(p)) << scenePath;
+    const TransientFilm& film = drv.film();
+    Fnv fnv;
+    Signature sig;
+    std::vector<float> img;
+    for (TimeAxis axis : {TimeAxis::Real, TimeAxis::Unwarped}) {
+        for (int k = 0; k < film.bins(); ++k) {
+            film.frame(k, axis, EmissionMode::Delta, img);
+            fnv.add(img);
+            for (float v : img) {
+                sig.sums[static_cast<int>(axis)] += v;
+                if (axis == TimeAxis::Real) sig.sums[5] += static_cast<double>(v) * v;
+            }
+        }
+        film.beforeImage(axis, img);
+        fnv.add(img);
+        for (float v : img) sig.sums[3 + static_cast<int>(axis)] += v;
+        film.afterImage(axis, img);
+        fnv.add(img);
+    }
+    film.steadyImage(img);
+    fnv.add(img);
+    for (float v : img) sig.sums[2] += v;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv.h));
+    sig.hash = buf;
+    return sig;
+}
+
+std::vector<std::string> sceneFiles() {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(std::string(TPB_SOURCE_DIR) + "/scenes"))
+        if (e.path().extension() == ".json") out.push_back(e.path().filename().string());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
+TEST(FilmHashes, EveryShippedSceneRendersAsRecorded) {
+    std::map<std::string, Signature> got;
+    for (const std::string& name : sceneFiles()) got[name] = renderSignature(std::string(TPB_SOURCE_DIR) + "/scenes/" + name);
+
+    if (const char* u = std::getenv("TPB_UPDATE_HASHES"); u && std::string(u) == "1") {
+        std::ofstream out(kDataFile);
+        out << "# tests/regression/test_film_hashes.cpp: scene hash sum_real sum_unwarped sum_steady before_real before_unwarped sumsq_real\n";
+        out << "cpu " << cpuModel() << "\n";
+        out << "build " << buildFingerprint() << "\n";
+        for (const auto& [name, s] : got) {
+            out << name << " " << s.hash;
+            for (double v : s.sums) out << " " << std::setprecision(17) << v;
+            out << "\n";
+        }
+        GTEST_SKIP() << "recorded " << got.size() << " scenes into " << kDataFile;
+    }
+
+    std::ifstream in(kDataFile);
+    ASSERT_TRUE(in) << kDataFile << " is missing: record it with TPB_UPDATE_HASHES=1";
+    std::string line, recordedCpu, recordedBuild;
+    std::map<std::string, Signature> want;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        if (line.rfind("cpu ", 0) == 0) { recordedCpu = line.substr(4); continue; }
+        if (line.rfind("build ", 0) == 0) { recordedBuild = line.substr(6); continue; }
+        std::istringstream ss(line);
+        std::string name;
+        Signature s;
+        ss >> name >> s.hash;
+        for (double& v : s.sums) ss >> v;
+        want[name] = s;
+    }
+    if (recordedBuild != buildFingerprint())
+        GTEST_SKIP() << "the hashes were recorded with the build \"" << recordedBuild << "\"; this is \""
+                     << buildFingerprint() << "\" (the Release build of tools/test checks them)";
+    const char* exactEnv = std::getenv("TPB_EXACT_HASHES");
+    const bool exact = (exactEnv && std::string(exactEnv) == "1") || recordedCpu == cpuModel();
+    for (const auto& [name, s] : got) {
+        ASSERT_TRUE(want.count(name)) << name << " has no recorded signature: re-record with TPB_UPDATE_HASHES=1";
+        const Signature& w = want[name];
+        const double tol = exact ? 1e-5 : 1e-3;
+        for (int i = 0; i < 6; ++i)
+            EXPECT_NEAR(s.sums[i], w.sums[i], tol * std::abs(w.sums[i]) + 1e-30) << name << " sum " << i;
+        if (exact) EXPECT_EQ(s.hash, w.hash) << name << ": the film changed (same CPU model as recorded)";
+        else if (s.hash != w.hash)
+            std::printf("note: %s hash %s differs from the recorded %s (recorded on another CPU: %s)\n", name.c_str(),
+                        s.hash.c_str(), w.hash.c_str(), recordedCpu.c_str());
+    }
+    EXPECT_EQ(got.size(), want.size()) << "scenes were added or removed: re-record with TPB_UPDATE_HASHES=1";
+}

@@ -1,0 +1,684 @@
+// Viewer (`tpb view`) tests: the binary runs headless under xvfb-run (Mesa llvmpipe) on a tiny
+// scene with --screenshot, and the tests check the PNG it saves against the film (read back from
+// the EXRs that --export writes through the Export buttons' code path), against an independent
+// `tpb render` of the same scene, seed, passes and threads, and across the time-axis and emission
+// toggles. Skipped only when xvfb-run is missing or cannot start an X server.
+#include "io/image_io.h"
+
+#include <gtest/gtest.h>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wunused-but-set-variable"
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#include <stb/stb_image.h>
+#pragma GCC diagnostic pop
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A small Cornell-like box filled with fog, lit by a point light pulse: 64x64, 32 bins.
+const char* kScene = R"({
+  "version": 1,
+  "camera": {"position": [0, 1, 3.9], "look_at": [0, 1, 0], "up": [0, 1, 0], "fov": 38, "resolution": [64, 64]},
+  "film": {"bins": 32, "range": "auto"},
+  "media": {"fog": {"sigma_s": 0.3, "sigma_a": 0.02, "g": 0.3}},
+  "global_medium": "fog",
+  "materials": {
+    "white": {"type": "diffuse", "albedo": 0.75},
+    "red":   {"type": "diffuse", "albedo": [0.63, 0.065, 0.05]},
+    "green": {"type": "diffuse", "albedo": [0.14, 0.45, 0.091]}
+  },
+  "shapes": [
+    {"name": "floor",   "type": "quad", "corner": [-1, 0, -1], "edge_u": [0, 0, 2], "edge_v": [2, 0, 0], "material": "white"},
+    {"name": "ceiling", "type": "quad", "corner": [-1, 2, -1], "edge_u": [2, 0, 0], "edge_v": [0, 0, 2], "material": "white"},
+    {"name": "back",    "type": "quad", "corner": [-1, 0, -1], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"},
+    {"name": "left",    "type": "quad", "corner": [-1, 0, -1], "edge_u": [0, 2, 0], "edge_v": [0, 0, 2], "material": "red"},
+    {"name": "right",   "type": "quad", "corner": [1, 0, -1],  "edge_u": [0, 0, 2], "edge_v": [0, 2, 0], "material": "green"}
+  ],
+  "lights": [{"type": "point", "position": [0, 1.6, 0], "power": 50, "emit_time_ns": 0}],
+  "render": {"photons_per_pass": 2000, "radius_relative": 0.01, "surface_radius_relative": 0.02, "alpha": 0.7, "passes": 2}
+})";
+
+constexpr int kFilm = 64, kBins = 32;
+constexpr int kWinW = 1280, kWinH = 800;
+const std::string kRenderArgs = " --passes 2 --seed 7 --threads 2";
+const std::string kXvfb = "env LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s '-screen 0 1280x900x24' ";
+
+struct Proc {
+    int code = -1;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+Proc runShell(const std::string& cmd, const fs::path& logBase) {
+    const fs::path out = logBase.string() + ".out", err = logBase.string() + ".err";
+    const int st = std::system((cmd + " >" + q(out) + " 2>" + q(err)).c_str());
+    Proc r;
+    r.code = (st != -1 && WIFEXITED(st)) ? WEXITSTATUS(st) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+}
+
+struct Image8 {
+    int w = 0, h = 0;
+    std::vector<unsigned char> px;  // RGB
+    const unsigned char* at(int x, int y) const { return &px[(static_cast<size_t>(y) * w + x) * 3]; }
+};
+
+Image8 readPng(const fs::path& p) {
+    Image8 img;
+    int n = 0;
+    unsigned char* data = stbi_load(p.string().c_str(), &img.w, &img.h, &n, 3);
+    if (!data) return Image8{};
+    img.px.assign(data, data + static_cast<size_t>(img.w) * img.h * 3);
+    stbi_image_free(data);
+    return img;
+}
+
+struct Exr {
+    int w = 0, h = 0;
+    std::vector<float> rgb;
+    float lum(int x, int y) const {
+        const float* p = &rgb[(static_cast<size_t>(y) * w + x) * 3];
+        return 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];
+    }
+};
+
+Exr readExrFile(const fs::path& p) {
+    Exr e;
+    tpb::readExr(p.string(), e.w, e.h, e.rgb);
+    return e;
+}
+
+// The viewer's machine-readable report line.
+struct Area {
+    bool ok = false;
+    double x = 0, y = 0, w = 0, h = 0, zoom = 0, ev = 0;
+    int bin = -1, steady = -1;
+};
+
+Area parseArea(const std::string& out) {
+    Area a;
+    const size_t pos = out.find("image_area ");
+    if (pos == std::string::npos) return a;
+    a.ok = std::sscanf(out.c_str() + pos, "image_area %lf %lf %lf %lf zoom %lf exposure_ev %lf bin %d steady %d", &a.x,
+                       &a.y, &a.w, &a.h, &a.zoom, &a.ev, &a.bin, &a.steady) == 8;
+    return a;
+}
+
+// The viewer's controls as reported with the screenshot: "<tag> x y w h Section/label" lines
+// (tag "control": the last frame, "control_first": the first frame, drawn while pass 1 rendered).
+struct Rect {
+    double x = 0, y = 0, w = 0, h = 0;
+    bool operator==(const Rect&) const = default;
+};
+
+std::map<std::string, Rect> parseControls(const std::string& out, const std::string& tag) {
+    std::map<std::string, Rect> m;
+    std::istringstream in(out);
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.rfind(tag + " ", 0) != 0) continue;
+        Rect r;
+        int used = 0;
+        if (std::sscanf(line.c_str() + tag.size(), " %lf %lf %lf %lf %n", &r.x, &r.y, &r.w, &r.h, &used) == 4)
+            m[line.substr(tag.size() + static_cast<size_t>(used))] = r;
+    }
+    return m;
+}
+
+// What display.frag + an 8-bit framebuffer make of a linear value.
+int expected8(float v, double ev) {
+    double c = std::clamp(static_cast<double>(v) * std::exp2(ev), 0.0, 1.0);
+    c = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
+    return static_cast<int>(std::lround(255.0 * c));
+}
+
+// Screenshot pixel at the centre of film pixel (x, y).
+const unsigned char* cell(const Image8& shot, const Area& a, int x, int y) {
+    const int sx = static_cast<int>(std::floor(a.x + (x + 0.5) * a.zoom));
+    const int sy = static_cast<int>(std::floor(a.y + (y + 0.5) * a.zoom));
+    return shot.at(std::clamp(sx, 0, shot.w - 1), std::clamp(sy, 0, shot.h - 1));
+}
+
+// Max relative difference between two images of the same size (scaled by the larger magnitude,
+// with a floor of 1e-6 of the image's peak for pixels that are ~0 in both).
+double maxRelDiff(const Exr& a, const Exr& b) {
+    float peak = 0.0f;
+    for (float v : b.rgb) peak = std::max(peak, std::fabs(v));
+    double worst = 0.0;
+    for (size_t i = 0; i < a.rgb.size(); ++i) {
+        const double d = std::fabs(static_cast<double>(a.rgb[i]) - b.rgb[i]);
+        const double s = std::max({std::fabs(static_cast<double>(a.rgb[i])), std::fabs(static_cast<double>(b.rgb[i])),
+                                   1e-6 * static_cast<double>(peak), 1e-30});
+        worst = std::max(worst, d / s);
+    }
+    return worst;
+}
+
+// How much of the image area is black (no light shown) or clipped to white (blown out).
+// An exposure fitted to the picture also uses the range: its brightest pixels come near white.
+struct Tones {
+    double black = 0.0, white = 0.0;  // fractions of the film's pixels
+    int bright = 0;                   // 98th percentile of the pixels' largest 8-bit channel
+};
+
+Tones tones(const Image8& shot, const Area& a) {
+    int black = 0, white = 0;
+    std::vector<int> peaks;
+    for (int y = 0; y < kFilm; ++y)
+        for (int x = 0; x < kFilm; ++x) {
+            if (std::abs(x - kFilm / 2) <= 1 && std::abs(y - kFilm / 2) <= 1) continue;  // selection marker
+            const unsigned char* p = cell(shot, a, x, y);
+            black += std::max({p[0], p[1], p[2]}) <= 8;
+            white += std::min({p[0], p[1], p[2]}) >= 250;
+            peaks.push_back(std::max({p[0], p[1], p[2]}));
+        }
+    const size_t k = peaks.size() * 98 / 100;
+    std::nth_element(peaks.begin(), peaks.begin() + static_cast<std::ptrdiff_t>(k), peaks.end());
+    const double n = static_cast<double>(peaks.size());
+    return {black / n, white / n, peaks[k]};
+}
+
+std::string frameName(int bin) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "frame_%05d.exr", bin);
+    return buf;
+}
+
+std::string viewerFrameName(int bin, const std::string& tag) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "frame_%05d_%s.exr", bin, tag.c_str());
+    return buf;
+}
+
+fs::path makeTempDir(const std::string& what) {
+    const fs::path d = fs::temp_directory_path() / ("tpb_test_viewer_" + what + "_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+// One viewer run per mode (real/delta, unwarped, continuous), each with --export, shared by the tests.
+struct Mode {
+    std::string name, flags, tag;
+};
+const std::vector<Mode> kModes = {{"real_delta", "", "real_delta"},
+                                  {"unwarped", " --unwarp", "unwarped_delta"},
+                                  {"continuous", " --continuous", "real_continuous"}};
+
+// Runs a command under xvfb-run, again if the X server failed to start (two `xvfb-run -a` started
+// at once, e.g. under `ctest -j`, can pick the same display number).
+Proc runXvfb(const std::string& cmd, const fs::path& logBase) {
+    Proc r;
+    for (int attempt = 0; attempt < 4; ++attempt) {
+        r = runShell(kXvfb + cmd, logBase);
+        if (r.err.find("Xvfb failed to start") == std::string::npos) break;
+        ::usleep(300000u * (attempt + 1) + 1000u * static_cast<unsigned>(::getpid() % 300));
+    }
+    return r;
+}
+
+// Each test process (CTest runs each test on its own) renders only what its test needs, once.
+class ViewerTest : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) {
+            skip_ = "xvfb-run is not installed (apt-get install xvfb xauth): cannot run the viewer headless";
+            return;
+        }
+        dir_ = makeTempDir("xvfb");
+        std::ofstream(dir_ / "scene.json") << kScene;
+        const Proc probe = runXvfb("true", dir_ / "probe");
+        if (probe.code != 0) skip_ = "xvfb-run cannot start an X server: " + probe.err;
+    }
+    static void TearDownTestSuite() {
+        if (!dir_.empty() && !std::getenv("TPB_KEEP_TEST_FILES")) fs::remove_all(dir_);
+    }
+    void SetUp() override {
+        if (!skip_.empty()) GTEST_SKIP() << skip_;
+    }
+
+    // Independent reference render (no GL involved) in a mode; its folder.
+    static fs::path reference(const Mode& m) {
+        const fs::path out = dir_ / ("ref_" + m.name);
+        if (!refs_.count(m.name)) {
+            refs_[m.name] = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs +
+                                         m.flags + " -q -o " + q(out),
+                                     out);
+        }
+        EXPECT_EQ(refs_[m.name].code, 0) << "tpb render failed: " << refs_[m.name].err;
+        return out;
+    }
+
+    // The bin shown: much energy, some bins after the first light reaches the camera (so that
+    // continuous emission, the running sum, differs from the delta pulse response).
+    static int bin() {
+        if (bin_ >= 0) return bin_;
+        const std::vector<double> energy = binEnergy();
+        const double peak = *std::max_element(energy.begin(), energy.end());
+        int first = 0;
+        while (first < kBins - 1 && energy[first] <= 0.01 * peak) ++first;
+        bin_ = static_cast<int>(std::max_element(energy.begin() + std::min(first + 2, kBins - 1), energy.end()) -
+                                energy.begin());
+        return bin_;
+    }
+
+    // The viewer with --screenshot view_<mode>.png and --export view_<mode>/.
+    static const Proc& view(const Mode& m) {
+        if (!views_.count(m.name)) {
+            const fs::path base = dir_ / ("view_" + m.name);
+            views_[m.name] = runXvfb(std::string(TPB_BINARY) + " view " + q(dir_ / "scene.json") + kRenderArgs + m.flags +
+                                         " --bin " + std::to_string(bin()) + " --after-passes 2 --window-size 1280 800" +
+                                         " --screenshot " + q(base.string() + ".png") + " --export " + q(base),
+                                     base);
+        }
+        return views_[m.name];
+    }
+    static Image8 shot(const Mode& m) { return readPng(dir_ / ("view_" + m.name + ".png")); }
+
+    // A viewer run of its own: `tpb view scene.json <args> --screenshot <name>.png`.
+    static Proc viewRun(const std::string& name, const std::string& args) {
+        const fs::path base = dir_ / name;
+        return runXvfb(std::string(TPB_BINARY) + " view " + q(dir_ / "scene.json") + " " + args +
+                           " --window-size 1280 800 --screenshot " + q(base.string() + ".png"),
+                       base);
+    }
+    static Image8 shotOf(const std::string& name) { return readPng(dir_ / (name + ".png")); }
+
+    // Energy (luminance summed over the image) of each bin of the independent real/delta render.
+    static std::vector<double> binEnergy() {
+        const fs::path ref = reference(kModes[0]);
+        std::vector<double> energy(kBins, 0.0);
+        for (int k = 0; k < kBins; ++k) {
+            const Exr f = readExrFile(ref / "frames" / frameName(k));
+            for (int y = 0; y < f.h; ++y)
+                for (int x = 0; x < f.w; ++x) energy[k] += f.lum(x, y);
+        }
+        return energy;
+    }
+
+    static inline std::string skip_;
+    static inline fs::path dir_;
+    static inline int bin_ = -1;
+    static inline std::map<std::string, Proc> refs_, views_;
+};
+
+// The viewer exits 0 after N passes with a PNG of the whole window, and its image area shows the
+// frame: where the independent render's frame has energy the screenshot is not black, and every
+// film pixel is shown with the reported exposure + sRGB (within 8-bit rounding), so the display
+// chain (upload, shader, FBO, ImGui) neither moves, flips nor distorts pixels.
+TEST_F(ViewerTest, ScreenshotShowsTheRenderedFrame) {
+    const Mode& m = kModes[0];
+    const Proc& r = view(m);
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const Image8 img = shot(m);
+    ASSERT_EQ(img.w, kWinW);
+    ASSERT_EQ(img.h, kWinH);
+    const Area a = parseArea(r.out);
+    ASSERT_TRUE(a.ok) << r.out;
+    EXPECT_EQ(a.bin, bin());
+    EXPECT_EQ(a.steady, 0);
+    ASSERT_GE(a.zoom, 1.0);
+    EXPECT_NEAR(a.w, kFilm * a.zoom, 1e-3);
+    EXPECT_NEAR(a.h, kFilm * a.zoom, 1e-3);
+    ASSERT_GE(a.x, 0.0);
+    ASSERT_GE(a.y, 0.0);
+    ASSERT_LE(a.x + a.w, kWinW);
+    ASSERT_LE(a.y + a.h, kWinH);
+
+    const Exr ref = readExrFile(reference(m) / "frames" / frameName(bin()));
+    ASSERT_EQ(ref.w, kFilm);
+    float peak = 0.0f;
+    for (int y = 0; y < kFilm; ++y)
+        for (int x = 0; x < kFilm; ++x) peak = std::max(peak, ref.lum(x, y));
+    ASSERT_GT(peak, 0.0f) << "the reference frame is black: bad test scene";
+
+    int lit = 0, litBlack = 0, close = 0, total = 0;
+    for (int y = 0; y < kFilm; ++y)
+        for (int x = 0; x < kFilm; ++x) {
+            if (std::abs(x - kFilm / 2) <= 1 && std::abs(y - kFilm / 2) <= 1) continue;  // selection marker
+            const unsigned char* p = cell(img, a, x, y);
+            if (ref.lum(x, y) > 0.02f * peak) {
+                ++lit;
+                if (std::max({p[0], p[1], p[2]}) <= 8) ++litBlack;
+            }
+            const float* v = &ref.rgb[(static_cast<size_t>(y) * kFilm + x) * 3];
+            bool ok = true;
+            for (int c = 0; c < 3; ++c) ok &= std::abs(static_cast<int>(p[c]) - expected8(v[c], a.ev)) <= 3;
+            close += ok;
+            ++total;
+        }
+    EXPECT_GT(lit, kFilm * kFilm / 10) << "too few lit pixels to judge";
+    EXPECT_EQ(litBlack, 0) << "pixels with energy shown black";
+    EXPECT_GE(close, total * 99 / 100) << close << " of " << total << " pixels match exposure+sRGB of the film";
+}
+
+// --export goes through the Export buttons' code path; the EXRs must hold exactly the film that an
+// independent `tpb render` (same seed, passes, threads) produces, in each axis/emission mode.
+TEST_F(ViewerTest, ExportEqualsIndependentRender) {
+    for (const Mode& m : kModes) {
+        SCOPED_TRACE(m.name);
+        const Proc& r = view(m);
+        ASSERT_EQ(r.code, 0) << r.out << r.err;
+        const fs::path exp = dir_ / ("view_" + m.name);
+        const fs::path frame = exp / viewerFrameName(bin(), m.tag);
+        ASSERT_TRUE(fs::exists(frame)) << r.out;
+        EXPECT_NE(r.out.find("exported: " + frame.string()), std::string::npos) << r.out;
+        const fs::path ref = reference(m);
+        const Exr got = readExrFile(frame);
+        const Exr want = readExrFile(ref / "frames" / frameName(bin()));
+        ASSERT_EQ(got.w, want.w);
+        ASSERT_EQ(got.h, want.h);
+        EXPECT_LE(maxRelDiff(got, want), 1e-6);
+
+        const Exr steady = readExrFile(exp / "steady.exr");
+        const Exr steadyRef = readExrFile(ref / "steady.exr");
+        ASSERT_EQ(steady.rgb.size(), steadyRef.rgb.size());
+        EXPECT_LE(maxRelDiff(steady, steadyRef), 1e-6);
+    }
+}
+
+// The unwarping and emission toggles change the picture (same film, another view of it).
+TEST_F(ViewerTest, TogglesChangeThePicture) {
+    const Proc& r0 = view(kModes[0]);
+    ASSERT_EQ(r0.code, 0) << r0.err;
+    const Area a = parseArea(r0.out);
+    ASSERT_TRUE(a.ok);
+    const Image8 base = shot(kModes[0]);
+    ASSERT_EQ(base.w, kWinW);
+    for (size_t i = 1; i < kModes.size(); ++i) {
+        SCOPED_TRACE(kModes[i].name);
+        const Proc& r = view(kModes[i]);
+        ASSERT_EQ(r.code, 0) << r.err;
+        const Area b = parseArea(r.out);
+        ASSERT_TRUE(b.ok);
+        EXPECT_DOUBLE_EQ(b.x, a.x);  // same layout, so the areas compare pixel for pixel
+        EXPECT_DOUBLE_EQ(b.zoom, a.zoom);
+        const Image8 img = shot(kModes[i]);
+        ASSERT_EQ(img.w, base.w);
+        double diff = 0.0;
+        int changed = 0;
+        for (int y = 0; y < kFilm; ++y)
+            for (int x = 0; x < kFilm; ++x) {
+                const unsigned char* p = cell(base, a, x, y);
+                const unsigned char* o = cell(img, b, x, y);
+                int d = 0;
+                for (int c = 0; c < 3; ++c) d += std::abs(static_cast<int>(p[c]) - static_cast<int>(o[c]));
+                diff += d / 3.0;
+                changed += d > 6;
+            }
+        EXPECT_GT(diff / (kFilm * kFilm), 5.0) << "mean 8-bit difference of the image area";
+        EXPECT_GT(changed, kFilm * kFilm / 4);
+    }
+}
+
+// Closing while a pass is in progress (Ctrl-C, same path as the close button) stops the driver,
+// tears down GL/ImGui/GLFW and exits 0 without waiting for the render to finish.
+TEST_F(ViewerTest, ClosingDuringRenderExitsZero) {
+    const fs::path script = dir_ / "close.sh";
+    std::ofstream(script) << std::string(TPB_BINARY) << " view " << q(dir_ / "scene.json")
+                          << " --passes 0 --photons 20000 --threads 2 &\n"
+                          << "pid=$!\nsleep 3\nkill -INT $pid\nwait $pid\necho \"viewer_exit=$?\"\n";
+    const Proc r = runXvfb("timeout 60 sh " + q(script), dir_ / "close");
+    EXPECT_NE(r.out.find("viewer_exit=0"), std::string::npos) << r.out << r.err;
+}
+
+// The "Steady state" export button writes steady.exr. It shared its label, and so its ImGui ID, with
+// the "Steady state" view radio button drawn above it, which took the click: nothing was written.
+// The click goes through ImGui's hit test and IDs like a user's (--click).
+TEST_F(ViewerTest, SteadyStateExportButtonWritesSteadyExr) {
+    const fs::path out = dir_ / "steady_button";
+    const Proc r = viewRun("steady_button", kRenderArgs + " --after-passes 2 --export-folder " + q(out) +
+                                                " --click 'Export/Steady state'");
+    EXPECT_NE(r.out.find("click: Export (EXR)/Steady state"), std::string::npos) << r.out;
+    ASSERT_TRUE(fs::exists(out / "steady.exr")) << r.out << r.err;
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("exported: " + (out / "steady.exr").string()), std::string::npos) << r.out;
+    const Exr steady = readExrFile(out / "steady.exr");
+    const Exr steadyRef = readExrFile(reference(kModes[0]) / "steady.exr");
+    ASSERT_EQ(steady.rgb.size(), steadyRef.rgb.size());
+    EXPECT_LE(maxRelDiff(steady, steadyRef), 1e-6);
+    // That button only: no frame, streak or profile.
+    int files = 0;
+    for (const auto& e : fs::directory_iterator(out)) files += e.is_regular_file();
+    EXPECT_EQ(files, 1);
+}
+
+// Audit of the ImGui IDs: the viewer checks every control it draws against the others of the frame
+// and reports a clash on stderr (exit 1 in screenshot mode). With every optional control shown -
+// render settings open, false colour on, playback running (its button then reads "Pause", as the
+// render's Pause button does) - no two controls share an ID.
+TEST_F(ViewerTest, NoTwoControlsShareAnImGuiId) {
+    const Proc r = viewRun("ids", kRenderArgs + " --after-passes 1 --bin 3 --click 'Render settings' --click "
+                                                "'Display/False colour' --click 'Time/Play'");
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_EQ(r.err.find("share an ImGui ID"), std::string::npos) << r.err;
+    const std::map<std::string, Rect> controls = parseControls(r.out, "control");
+    for (const char* name : {"Time/Pause", "Progress/Pause", "View/Steady state", "Export (EXR)/Steady state",
+                             "Render settings/alpha", "Display/decades"})
+        EXPECT_TRUE(controls.count(name)) << name << " not drawn:\n" << r.out;
+}
+
+// The first picture shows light: without --bin the viewer opens on the bin of peak energy (not bin
+// 0, before any light arrives) with the exposure fitted to it, in both emission modes.
+TEST_F(ViewerTest, FirstPictureShowsLightInBothEmissionModes) {
+    const std::vector<double> energy = binEnergy();
+    const double peak = *std::max_element(energy.begin(), energy.end());
+    for (const Mode& m : {kModes[0], kModes[2]}) {
+        SCOPED_TRACE(m.name);
+        const Proc r = viewRun("first_" + m.name, kRenderArgs + m.flags + " --after-passes 1");
+        ASSERT_EQ(r.code, 0) << r.out << r.err;
+        const Area a = parseArea(r.out);
+        ASSERT_TRUE(a.ok) << r.out;
+        ASSERT_GE(a.bin, 0);
+        ASSERT_LT(a.bin, kBins);
+        EXPECT_GE(energy[a.bin], 0.5 * peak) << "bin " << a.bin << " holds little light";
+        const Tones t = tones(shotOf("first_" + m.name), a);
+        std::printf("%s: bin %d, %.3g EV: black %.3f, white %.3f, bright %d\n", m.name.c_str(), a.bin, a.ev, t.black,
+                    t.white, t.bright);
+        EXPECT_LT(t.black, 0.5) << "black: " << t.black << ", exposure " << a.ev << " EV, bin " << a.bin;
+        EXPECT_LT(t.white, 0.05) << "blown out: " << t.white << ", exposure " << a.ev << " EV, bin " << a.bin;
+        EXPECT_GE(t.bright, 180) << "too dark: exposure " << a.ev << " EV, bin " << a.bin;
+    }
+}
+
+// Switching delta <-> continuous fits the exposure again (a running sum is orders of magnitude
+// brighter than the pulse response: continuous was shown blown out to white, delta then black).
+TEST_F(ViewerTest, SwitchingEmissionModeRefitsTheExposure) {
+    for (const Mode& m : {kModes[0], kModes[2]}) {
+        SCOPED_TRACE("starting in " + m.name);
+        const std::string name = "switch_" + m.name;
+        const Proc r = viewRun(name, kRenderArgs + m.flags + " --after-passes 1 --bin " + std::to_string(bin()) +
+                                         " --click 'View/Continuous emission'");
+        ASSERT_EQ(r.code, 0) << r.out << r.err;
+        const Area a = parseArea(r.out);
+        ASSERT_TRUE(a.ok) << r.out;
+        EXPECT_NE(r.out.find(m.flags.empty() ? "mode continuous" : "mode delta"), std::string::npos) << r.out;
+        const Tones t = tones(shotOf(name), a);
+        std::printf("%s, then switched: %.3g EV: black %.3f, white %.3f, bright %d\n", m.name.c_str(), a.ev, t.black,
+                    t.white, t.bright);
+        EXPECT_LT(t.black, 0.5) << "black: " << t.black << ", exposure " << a.ev << " EV";
+        EXPECT_LT(t.white, 0.05) << "blown out: " << t.white << ", exposure " << a.ev << " EV";
+        EXPECT_GE(t.bright, 180) << "too dark: exposure " << a.ev << " EV";
+    }
+}
+
+// Auto exposure is fitted to the tiles already finished, during the first pass, not after it (a
+// first pass can take many seconds). The first pass here gathers for a few seconds (more photons);
+// the viewer reports each fit with the passes completed at that moment.
+TEST_F(ViewerTest, AutoExposureFitsTheTilesFinishedDuringTheFirstPass) {
+    const Proc r = viewRun("midpass", "--seed 7 --threads 2 --photons 4000 --passes 1 --after-passes 1");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    std::istringstream in(r.out);
+    std::string line;
+    int during = 0, final = 0;
+    while (std::getline(in, line)) {
+        double ev = 0;
+        size_t lit = 0;
+        unsigned long long passes = 0;
+        int complete = 0, fin = 0, bin = 0, steady = 0;
+        if (std::sscanf(line.c_str(), "auto_exposure ev %lf lit_pixels %zu passes %llu complete %d final %d bin %d steady %d",
+                        &ev, &lit, &passes, &complete, &fin, &bin, &steady) != 7)
+            continue;
+        EXPECT_GT(lit, 0u);
+        during += passes == 0;
+        final += fin;
+    }
+    EXPECT_GT(during, 0) << "no exposure fitted before the first pass ended:\n" << r.out;
+    EXPECT_EQ(final, 1) << r.out;
+}
+
+// The controls keep their place when the render finishes (and when the first pass completes): a
+// click aimed while it renders lands on the same control after. (The Pause row went away at the
+// end and the statistics rows came in after pass 1, moving the Export buttons by rows.)
+TEST_F(ViewerTest, ControlsKeepTheirPlaceWhenTheRenderFinishes) {
+    const Proc& r = view(kModes[0]);
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("layout_first passes 0 running 1"), std::string::npos) << r.out;
+    const std::map<std::string, Rect> first = parseControls(r.out, "control_first");
+    const std::map<std::string, Rect> last = parseControls(r.out, "control");
+    int exportButtons = 0;
+    for (const auto& [name, rect] : last) {
+        if (name.rfind("Export", 0) == 0) ++exportButtons;
+        if (name.rfind("Messages/", 0) == 0) continue;  // below every control, free to grow
+        const auto f = first.find(name);
+        ASSERT_NE(f, first.end()) << name << " was not there while rendering";
+        EXPECT_EQ(f->second, rect) << name << " moved from y " << f->second.y << " to y " << rect.y;
+    }
+    EXPECT_GE(exportButtons, 8);  // the section, folder, 6 buttons, Cancel
+}
+
+// A long status line wraps inside the controls panel (it was cut off at the panel's edge).
+TEST_F(ViewerTest, LongStatusLinesWrap) {
+    const fs::path out = dir_ / ("a_folder_with_a_long_name_so_that_the_status_line_is_longer_than_the_panel_"
+                                 "is_wide_" + std::string(40, 'x'));
+    const Proc r = viewRun("status", kRenderArgs + " --after-passes 1 --export-folder " + q(out) +
+                                         " --click 'Export/Window screenshot (F12)'");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_TRUE(fs::exists(out / "window_001.png")) << r.out;
+    const std::map<std::string, Rect> controls = parseControls(r.out, "control");
+    ASSERT_TRUE(controls.count("Messages/status")) << r.out;
+    const Rect st = controls.at("Messages/status");
+    double left = 0, right = 0;
+    const size_t pos = r.out.find("messages_area ");
+    ASSERT_NE(pos, std::string::npos);
+    ASSERT_EQ(std::sscanf(r.out.c_str() + pos, "messages_area %lf %lf", &left, &right), 2);
+    EXPECT_LE(st.x + st.w, right + 1.0) << "the status line runs past the panel";
+    EXPECT_GE(st.h, 3 * 13.0) << "a " << ("saved " + out.string()).size() << "-character status line on "
+                              << st.h / 13.0 << " lines";
+}
+
+// Without a display: a clear message and exit code 2 (needs no X server).
+TEST(ViewerCli, NoDisplayExitsWithCode2) {
+    const fs::path dir = makeTempDir("nodisplay");
+    std::ofstream(dir / "scene.json") << kScene;
+    const Proc r = runShell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(TPB_BINARY) + " view " +
+                               q(dir / "scene.json") + " --screenshot " + q(dir / "x.png"),
+                           dir / "run");
+    EXPECT_EQ(r.code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("cannot open a window"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("xvfb-run"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "x.png"));
+
+    // Flag mistakes are user errors too.
+    const Proc bad1 = runShell(std::string(TPB_BINARY) + " view " + q(dir / "scene.json") + " --export out", dir / "bad1");
+    EXPECT_EQ(bad1.code, 2) << bad1.err;
+    const Proc bad2 = runShell(std::string(TPB_BINARY) + " view " + q(dir / "scene.json") + " --bin 3 --time 2",
+                              dir / "bad2");
+    EXPECT_EQ(bad2.code, 2) << bad2.err;
+    fs::remove_all(dir);
+}
+
+// --bin and --time outside the film are refused alike (--bin 999 was silently clamped while --time
+// 1e9 warned), naming the flag and the film's range, before a window opens (so with no display).
+TEST(ViewerCli, BinOrTimeOutsideTheFilmIsRefusedWithTheRange) {
+    const fs::path dir = makeTempDir("range");
+    std::ofstream(dir / "scene.json") << kScene;
+    struct Case {
+        std::string flags, says;
+    };
+    const std::vector<Case> cases = {{"--bin 999", "--bin 999 is outside the film: its bins are 0 to 31"},
+                                     {"--bin -1", "--bin -1 is outside the film: its bins are 0 to 31"},
+                                     {"--time 1e9", "--time 1e+09 ns is outside the film (0 to "},
+                                     {"--time -2", "--time -2 ns is outside the film (0 to "},
+                                     {"--time nan", "--time must be a time in ns within the film: 0 to "},
+                                     {"--exposure nan", "--exposure: must be a number in [-40, 40] (EV"},
+                                     {"--unwarp --real-time", "excludes"},
+                                     {"--continuous --delta", "excludes"}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.flags);
+        const Proc r = runShell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(TPB_BINARY) + " view " +
+                                    q(dir / "scene.json") + " " + c.flags + " --screenshot " + q(dir / "x.png"),
+                                dir / "run");
+        EXPECT_EQ(r.code, 2) << r.out << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+        EXPECT_EQ(r.err.find("cannot open a window"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "x.png"));
+    }
+    fs::remove_all(dir);
+}
+
+// Every `view` flag is checked like `tpb render`'s, while parsing: a bad value is refused with exit
+// code 2 and a short message naming the flag and its range, before any window (so with no
+// display). --after-passes printed a 309-digit range (CLI::PositiveNumber) and --time-budget took
+// NaN, negatives and inf (NaN was then blamed on --time, a flag view does not have).
+TEST(ViewerCli, BadFlagValuesAreRefusedNamingTheFlag) {
+    const fs::path dir = makeTempDir("flags");
+    std::ofstream(dir / "scene.json") << kScene;
+    struct Case {
+        std::string flags, says;
+    };
+    const std::vector<Case> cases = {
+        {"--after-passes 0", "--after-passes: must be an integer >= 1 (passes rendered before the screenshot); got 0"},
+        {"--after-passes -3", "--after-passes: must be an integer >= 1"},
+        {"--after-passes 1e400", "--after-passes: must be an integer >= 1"},
+        {"--time-budget nan", "--time-budget: must be a finite number >= 0 (seconds; 0 = no time budget); got nan"},
+        {"--time-budget -1", "--time-budget: must be a finite number >= 0"},
+        {"--time-budget inf", "--time-budget: must be a finite number >= 0"},
+        {"--exposure 1e300", "--exposure: must be a number in [-40, 40]"},
+        {"--window-size 10 800", "--window-size: must be an integer in [64, 16384]"}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.flags);
+        const Proc r = runShell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(TPB_BINARY) + " view " +
+                                    q(dir / "scene.json") + " --screenshot " + q(dir / "x.png") + " " + c.flags,
+                                dir / "run");
+        EXPECT_EQ(r.code, 2) << r.out << r.err;
+        EXPECT_NE(r.err.find(c.says), std::string::npos) << r.err;
+        EXPECT_LT(r.err.size(), 300u) << "a short message: " << r.err;
+        EXPECT_EQ(r.err.find("cannot open a window"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "x.png"));
+    }
+    fs::remove_all(dir);
+}
+
+}  // namespace
