@@ -1,6 +1,7 @@
 // Regression guard for refactors: every shipped scene rendered small, with a fixed seed, hashed.
 //
-// Each scene of scenes/ is rendered at 32x32 px, 24 bins, 1500 photons per pass, 2 passes, 2
+// Each scene of scenes/ is rendered by the photon beams and by the path tracer (+ the geometry
+// preview; entries "pt:<scene>") at 32x32 px, 24 bins, 1500 photons per pass, 2 passes, 2
 // threads, seed 7 (the automatic time range runs its pilot as `tpb render` does). The film (both
 // axes, delta emission, the steady image and what fell before/after the film) is hashed (FNV-1a 64
 // over the float bits) and summarised by sums that a refactor must keep. tests/data/film_hashes.txt
@@ -13,6 +14,8 @@
 //     and a hash mismatch is a note. TPB_EXACT_HASHES=1 makes it exact everywhere.
 // A change that alters films on purpose re-records the file with TPB_UPDATE_HASHES=1 and says in
 // its commit message which scenes changed and why.
+#include "integrators/path_tracer.h"
+#include "integrators/preview.h"
 #include "render/driver.h"
 #include "scene/scene_loader.h"
 #include "render/time_range.h"
@@ -73,6 +76,8 @@ struct Fnv {
     }
 };
 
+Signature filmSignature(const TransientFilm& film);
+
 Signature renderSignature(const std::string& scenePath) {
     SceneDesc d = loadScene(scenePath);
     d.camera.width = d.camera.height = 32;
@@ -85,7 +90,36 @@ Signature renderSignature(const std::string& scenePath) {
     ds.threads = 2;
     Driver drv(*scene, ds);
     for (int p = 1; p <= 2; ++p) EXPECT_TRUE(drv.runPass(p)) << scenePath;
-    const TransientFilm& film = drv.film();
+    return filmSignature(drv.film());
+}
+
+// The path tracer on the same scene and film (1 sample per pixel, 2 passes, max depth 8), and the
+// geometry preview (steady only): every renderer is guarded, not only the photon beams.
+Signature pathTracerSignature(const std::string& scenePath) {
+    SceneDesc d = loadScene(scenePath);
+    d.camera.width = d.camera.height = 32;
+    d.film.bins = 24;
+    d.render.seed = 7;
+    auto scene = Scene::build(d);
+    fitTimeRange(*scene, 1500, 2);
+    PathTracerSettings ps;
+    ps.seed = 7;
+    ps.samplesPerPixel = 1;
+    ps.maxDepth = 8;
+    ps.threads = 2;
+    TransientFilm film(scene->camera.width, scene->camera.height, scene->time);
+    EXPECT_EQ(renderPathTracer(*scene, ps, 1, 2, film), 2) << scenePath;
+    Signature sig = filmSignature(film);
+    Fnv fnv;
+    fnv.h = std::stoull(sig.hash, nullptr, 16);
+    fnv.add(renderPreview(*scene, 2));
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(fnv.h));
+    sig.hash = buf;
+    return sig;
+}
+
+Signature filmSignature(const TransientFilm& film) {
     Fnv fnv;
     Signature sig;
     std::vector<float> img;
@@ -125,7 +159,10 @@ std::vector<std::string> sceneFiles() {
 
 TEST(FilmHashes, EveryShippedSceneRendersAsRecorded) {
     std::map<std::string, Signature> got;
-    for (const std::string& name : sceneFiles()) got[name] = renderSignature(std::string(TPB_SOURCE_DIR) + "/scenes/" + name);
+    for (const std::string& name : sceneFiles()) {
+        got[name] = renderSignature(std::string(TPB_SOURCE_DIR) + "/scenes/" + name);
+        got["pt:" + name] = pathTracerSignature(std::string(TPB_SOURCE_DIR) + "/scenes/" + name);
+    }
 
     if (const char* u = std::getenv("TPB_UPDATE_HASHES"); u && std::string(u) == "1") {
         std::ofstream out(kDataFile);
