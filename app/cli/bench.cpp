@@ -39,7 +39,7 @@ void run(BenchCmd& c) {
         RenderOverrides ov = c.ov;
         ov.bins = bins;
         std::unique_ptr<Scene> scene = loadAndBuild(c.scene, ov);
-        DriverSettings ds = DriverSettings::fromScene(*scene);
+        RenderSettings ds = RenderSettings::fromScene(*scene);
         ov.applyToSettings(ds);
         Driver drv(*scene, ds);
         std::vector<double> passSec, photonSec, cameraSec, beamsPerSec, estPerSec;

@@ -181,7 +181,7 @@ void RenderOverrides::applyToDesc(SceneDesc& d) const {
                         " pixels, more than " + std::to_string(INT_MAX) + "; lower --width/--height");
 }
 
-void RenderOverrides::applyToSettings(DriverSettings& s) const {
+void RenderOverrides::applyToSettings(RenderSettings& s) const {
     if (passes) s.passes = *passes;
     if (timeBudget) {
         s.timeBudgetSec = *timeBudget;
@@ -197,7 +197,7 @@ void RenderOverrides::applyToSettings(DriverSettings& s) const {
     if (profile == "uniform") s.profile = TimeProfile::Uniform;
     if (beamLength == "short") s.beamLength = BeamLength::Short;
     if (beamLength == "long") s.beamLength = BeamLength::Long;
-    s.accel = accel == "brute" ? BeamAccel::Kind::BruteForce : BeamAccel::Kind::Embree;
+    s.accel = accel == "brute" ? AccelBackend::BruteForce : AccelBackend::Embree;
     // The flags were validated when parsed (flags::); these hold for the scene's values too.
     if (s.photonsPerPass < 1) throw UserError("--photons must be >= 1");
     if (photonMapBytes(s.photonsPerPass) > maxFilmBytes())

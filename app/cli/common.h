@@ -47,7 +47,7 @@ struct RenderOverrides {
     // Applies the overrides that change the scene description (resolution, bins).
     void applyToDesc(SceneDesc& desc) const;
     // Applies the rest to the driver settings.
-    void applyToSettings(DriverSettings& s) const;
+    void applyToSettings(RenderSettings& s) const;
 };
 
 struct LoadOptions {

@@ -51,8 +51,8 @@ std::string fmt(const char* f, double v) {
 std::string csvNum(double v) { return std::isfinite(v) ? fmt("%.6g", v) : std::string(); }
 json jnum(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
-PathTracerSettings ptSettings(const Scene& scene, const RenderOverrides& ov, int spp) {
-    PathTracerSettings ps;
+RenderSettings ptSettings(const Scene& scene, const RenderOverrides& ov, int spp) {
+    RenderSettings ps;
     ps.seed = ov.seed.value_or(scene.desc.render.seed);
     ps.maxDepth = scene.desc.render.maxDepth;  // --max-depth is applied to the description
     ps.threads = ov.threads.value_or(scene.desc.render.threads);
@@ -102,7 +102,7 @@ void referenceFrame(const ReferenceVolume& ref, TimeAxis axis, int k, std::vecto
 // tpb render --method pt
 // ============================================================================================
 
-json ptSummary(const Scene& scene, const PathTracerSettings& ps, const TransientFilm& film, const ExportOptions& opt,
+json ptSummary(const Scene& scene, const RenderSettings& ps, const TransientFilm& film, const ExportOptions& opt,
                const PathTracerStats& st, const std::vector<std::pair<double, double>>& passTimes, double wall) {
     json j = summaryHeader(scene, "pt", passTimes.size(), wall, film, opt);
     j["settings"] = {{"samples_per_pixel", ps.samplesPerPixel}, {"max_depth", ps.maxDepth}, {"seed", ps.seed},
@@ -140,7 +140,7 @@ void checkPathTracedRequest(const Scene& scene, const RenderOverrides& ov, const
 
 void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req) {
     checkPathTracedRequest(scene, ov, req);
-    const PathTracerSettings ps = ptSettings(scene, ov, req.spp);
+    const RenderSettings ps = ptSettings(scene, ov, req.spp);
     const int64_t passes = ov.passes ? *ov.passes : (ov.timeBudget ? 0 : scene.desc.render.passes);
     const double budget = ov.timeBudget.value_or(scene.desc.render.timeBudgetSec);
     if (passes == 0 && budget == 0.0) std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
@@ -253,7 +253,7 @@ void runReference(ReferenceCmd& c) {
             want.seed = job.pt.seed;
             want.samplesPerPixel = job.pt.samplesPerPixel;
         } else {
-            job.beams = DriverSettings::fromScene(*scene);
+            job.beams = RenderSettings::fromScene(*scene);
             c.ov.applyToSettings(job.beams);
             want.seed = job.beams.seed;
             want.photonsPerPass = job.beams.photonsPerPass;
@@ -381,9 +381,9 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
     const ConvergeCmd& c = cx.cmd;
     MethodResult res;
     res.method = method;
-    PathTracerSettings ps = ptSettings(cx.scene, c.ov, c.spp);
+    RenderSettings ps = ptSettings(cx.scene, c.ov, c.spp);
     if (method == "beams") {
-        DriverSettings ds = DriverSettings::fromScene(cx.scene);
+        RenderSettings ds = RenderSettings::fromScene(cx.scene);
         c.ov.applyToSettings(ds);
         res.driver = std::make_unique<Driver>(cx.scene, ds);
     } else {
@@ -633,7 +633,7 @@ void runConverge(ConvergeCmd& c) {
     }
     // Every method's settings are checked before the folder is touched.
     if (c.method != "pt") {
-        DriverSettings ds = DriverSettings::fromScene(*scene);
+        RenderSettings ds = RenderSettings::fromScene(*scene);
         c.ov.applyToSettings(ds);
     }
     OutputFiles files;

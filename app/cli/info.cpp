@@ -31,7 +31,7 @@ const char* lightName(LightType t) {
 void run(const std::string& path, const RenderOverrides& ov) {
     InterruptScope interrupts;  // the pilot of an automatic range polls Ctrl-C/SIGTERM
     std::unique_ptr<Scene> s = loadAndBuild(path, ov);
-    DriverSettings ds = DriverSettings::fromScene(*s);
+    RenderSettings ds = RenderSettings::fromScene(*s);
     ov.applyToSettings(ds);
     const Camera& cam = s->camera;
     std::printf("scene      %s (version %d)\n", path.c_str(), s->desc.version);

@@ -37,12 +37,12 @@ nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOp
     json stages = json::array();
     for (const auto& r : scene.stages.reasons) stages.push_back(r);
     j["stages"] = stages;
-    const DriverSettings& s = drv.settings();
+    const RenderSettings& s = drv.settings();
     j["settings"] = {{"photons_per_pass", s.photonsPerPass}, {"beam_radius0_m", s.beamRadius0},
                      {"surface_radius0_m", s.surfaceRadius0}, {"alpha", s.alpha}, {"seed", s.seed},
                      {"threads", s.threads}, {"time_profile", s.profile == TimeProfile::Exact ? "exact" : "uniform"},
                      {"beam_length", s.beamLength == BeamLength::Short ? "short" : "long"},
-                     {"accel", s.accel == BeamAccel::Kind::Embree ? "embree" : "brute-force"}};
+                     {"accel", s.accel == AccelBackend::Embree ? "embree" : "brute-force"}};
     json per = json::array();
     int64_t beams = 0, estimates = 0, photonEst = 0;
     double passSec = 0.0;
@@ -113,7 +113,7 @@ void run(RenderCmd& c) {
 
     // Every setting is resolved and checked before the first file is written (no preview.exr is left
     // behind by a bad --alpha or by photons that would not fit in memory).
-    DriverSettings ds = DriverSettings::fromScene(*scene);
+    RenderSettings ds = RenderSettings::fromScene(*scene);
     c.ov.applyToSettings(ds);
     if (c.method == "pt") checkPathTracedRequest(*scene, c.ov, outputs);
 

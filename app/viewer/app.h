@@ -102,13 +102,13 @@ ExposureFit fitExposure(const std::vector<float>& rgb);
 
 class Viewer {
 public:
-    Viewer(const Scene& scene, const DriverSettings& settings, const ViewOptions& opt, GLFWwindow* window);
+    Viewer(const Scene& scene, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window);
     ~Viewer();  // stops the driver and joins the helper threads (GL objects go with the members)
     void run();
 
 private:
     // session (view_data.cpp)
-    void restart(const DriverSettings& s, const std::string& why);
+    void restart(const RenderSettings& s, const std::string& why);
     void updateFrame();
     void updateProfile();
     void updateBinEnergy();
@@ -151,7 +151,7 @@ private:
 
     std::shared_ptr<Driver> driver_;
     uint64_t generation_ = 0;
-    DriverSettings edit_;  // the settings panel's copy
+    RenderSettings edit_;  // the settings panel's copy
     std::string status_;
 
     DisplayProgram program_;

@@ -42,7 +42,7 @@ int peakEnergyBin(const std::vector<double>& energy) {
     return best;
 }
 
-void Viewer::restart(const DriverSettings& s, const std::string& why) {
+void Viewer::restart(const RenderSettings& s, const std::string& why) {
     if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
     driver_ = std::make_shared<Driver>(scene_, s);
     ++generation_;

@@ -297,7 +297,7 @@ void drawFilmStats(const FilmStats& fs, TimeAxis shownAxis) {
 
 void Viewer::drawProgressSection() {
     if (!section("Progress", ImGuiTreeNodeFlags_DefaultOpen)) return;
-    const DriverSettings& s = driver_->settings();
+    const RenderSettings& s = driver_->settings();
     const uint64_t done = driver_->completedPasses();
     const PassStats last = driver_->lastPass();
     const bool running = driver_->running();
@@ -365,7 +365,7 @@ void Viewer::drawSettingsSection() {
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     track("pass limit (0: none)");
     if (!apply) return;
-    const DriverSettings& cur = driver_->settings();
+    const RenderSettings& cur = driver_->settings();
     if (edit_.photonsPerPass < 1 || !(edit_.alpha > 0.0 && edit_.alpha <= 1.0) || !(edit_.beamRadius0 > 0.0) ||
         edit_.passes < 0) {
         status_ = "invalid setting (photons >= 1, alpha in (0, 1], radius > 0, passes >= 0): not applied";
@@ -375,7 +375,7 @@ void Viewer::drawSettingsSection() {
     if (edit_.photonsPerPass == cur.photonsPerPass && edit_.alpha == cur.alpha &&
         edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
         return;
-    DriverSettings s = cur;  // everything else (seed, threads, radii ratio...) as before
+    RenderSettings s = cur;  // everything else (seed, threads, radii ratio...) as before
     s.photonsPerPass = edit_.photonsPerPass;
     s.alpha = edit_.alpha;
     s.beamRadius0 = edit_.beamRadius0;

@@ -107,7 +107,7 @@ public:
 
 }  // namespace
 
-Viewer::Viewer(const Scene& scene, const DriverSettings& settings, const ViewOptions& opt, GLFWwindow* window)
+Viewer::Viewer(const Scene& scene, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window)
     : scene_(scene), opt_(opt), window_(window) {
     program_.load(TPB_SHADER_DIR);
     const int maxTex = maxTextureSize();
@@ -376,7 +376,7 @@ void checkShownTime(const ViewOptions& o, const TimeBins& tb) {
 
 void runView(const ViewOptions& o) {
     std::unique_ptr<Scene> scene = loadAndBuild(o.scene, o.ov);
-    DriverSettings ds = DriverSettings::fromScene(*scene);
+    RenderSettings ds = RenderSettings::fromScene(*scene);
     o.ov.applyToSettings(ds);
     const bool shot = !o.screenshot.empty();
     if (shot) {  // run exactly N passes, then take the picture

@@ -185,8 +185,8 @@ private:
 
 }  // namespace
 
-std::unique_ptr<BeamAccel> BeamAccel::create(Kind kind) {
-    if (kind == Kind::BruteForce) return std::make_unique<BruteForceBeams>();
+std::unique_ptr<BeamAccel> BeamAccel::create(AccelBackend kind) {
+    if (kind == AccelBackend::BruteForce) return std::make_unique<BruteForceBeams>();
     return std::make_unique<EmbreeBeams>();
 }
 

@@ -5,6 +5,7 @@
 //   EmbreeBeams:     Embree user geometry over the pieces (Embree's BVH), in beam_accel.cpp only.
 // Hits are returned sorted by (beam, piece), so sums over hits do not depend on traversal order.
 #pragma once
+#include "accel/accel_backend.h"
 #include "estimators/beam_kernel.h"
 #include "photons/photon_tracer.h"
 
@@ -39,8 +40,7 @@ public:
     virtual std::string name() const = 0;
     virtual size_t pieceCount() const = 0;
 
-    enum class Kind { Embree, BruteForce };
-    static std::unique_ptr<BeamAccel> create(Kind kind);
+    static std::unique_ptr<BeamAccel> create(AccelBackend kind);
 };
 
 void sortBeamHits(std::vector<BeamHit>& hits, size_t from);

@@ -419,7 +419,7 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
     r.steady.assign(P * 3, 0.0f);
 
     if (job.method == "beams") {
-        DriverSettings ds = job.beams;
+        RenderSettings ds = job.beams;
         ds.passes = 0;
         ds.timeBudgetSec = 0.0;
         info.seed = ds.seed;
@@ -447,7 +447,7 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
         drv.film().steadyImage(r.steady);
         info.selfErrorEstimate = "unknown (photon beams: the error is mostly kernel bias)";
     } else {
-        PathTracerSettings ps = job.pt;
+        RenderSettings ps = job.pt;
         info.seed = ps.seed;
         info.maxDepth = ps.maxDepth;
         info.samplesPerPixel = std::max(1, ps.samplesPerPixel);

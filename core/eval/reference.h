@@ -100,8 +100,8 @@ ReferenceInfo describeScene(const Scene& scene);
 
 struct ReferenceJob {
     std::string method = "pt";  // "pt" or "beams"
-    PathTracerSettings pt;      // method pt
-    DriverSettings beams;       // method beams (its passes/time budget are ignored: see below)
+    RenderSettings pt;      // method pt
+    RenderSettings beams;       // method beams (its passes/time budget are ignored: see below)
     int64_t passes = 0;         // 0 = until timeBudgetSec
     double timeBudgetSec = 0.0; // 0 = until passes
 };

@@ -231,7 +231,7 @@ bool roulette(Rng& rng, Color& beta, int depth) {
     return true;
 }
 
-void tracePath(PathContext& ctx, const PathTracerSettings& s, Ray ray, Rng& rng) {
+void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
     const Scene& scene = ctx.scene;
     Color beta(1.0);
     double oplCam = 0.0, oplUnw = 0.0;
@@ -362,7 +362,7 @@ PathTracerStats& PathTracerStats::operator+=(const PathTracerStats& o) {
     return *this;
 }
 
-void pathTracePixel(const Scene& scene, const PathTracerSettings& s, uint64_t pass, const TimeBins& time, int x,
+void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, const TimeBins& time, int x,
                     int y, PixelAccumulator& acc, PathTracerStats& stats) {
     const int spp = std::max(1, s.samplesPerPixel);
     const uint64_t pixelIndex = static_cast<uint64_t>(y) * static_cast<uint64_t>(scene.camera.width) + x;
@@ -374,7 +374,7 @@ void pathTracePixel(const Scene& scene, const PathTracerSettings& s, uint64_t pa
     }
 }
 
-void renderPathTracerPass(const Scene& scene, const PathTracerSettings& s, uint64_t pass, TransientFilm& film,
+void renderPathTracerPass(const Scene& scene, const RenderSettings& s, uint64_t pass, TransientFilm& film,
                           PathTracerStats* stats, const std::atomic<bool>* abort) {
     TPB_CHECK(film.width() == scene.camera.width && film.height() == scene.camera.height);
     const int threads = resolveThreads(s.threads);
@@ -399,7 +399,7 @@ void renderPathTracerPass(const Scene& scene, const PathTracerSettings& s, uint6
     if (stats) *stats += total;
 }
 
-int64_t renderPathTracer(const Scene& scene, const PathTracerSettings& s, uint64_t firstPass, int64_t passes,
+int64_t renderPathTracer(const Scene& scene, const RenderSettings& s, uint64_t firstPass, int64_t passes,
                          TransientFilm& film, PathTracerStats* stats, const std::atomic<bool>* abort) {
     int64_t done = 0;
     for (int64_t i = 0; i < passes; ++i) {

@@ -52,23 +52,13 @@
 // last allowed vertex, so maxDepth = 1 gives exactly single scattering / direct lighting.
 #pragma once
 #include "film/film.h"
+#include "render/render_settings.h"
 #include "scene/scene.h"
 
 #include <atomic>
 #include <cstdint>
 
 namespace tpb {
-
-struct PathTracerSettings {
-    uint64_t seed = 1;
-    int samplesPerPixel = 1;
-    int maxDepth = 64;
-    int threads = 0;  // 0 = all cores
-    // Point and spot lights seen from media: equiangular sampling along each medium segment
-    // (path_tracer.cpp, equiangularSegment) instead of next-event estimation at free-flight
-    // vertices, whose variance is infinite next to the light. Both are unbiased.
-    bool equiangular = true;
-};
 
 struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or throughputs) dropped
     int64_t cameraPaths = 0;
@@ -83,19 +73,19 @@ struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or 
 
 // One pixel's estimate for this pass (mean of samplesPerPixel camera paths) added into `acc`
 // with the bins of `time`; the caller clears `acc` (no film access; for tests and tools).
-void pathTracePixel(const Scene& scene, const PathTracerSettings& s, uint64_t pass, const TimeBins& time, int x,
+void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, const TimeBins& time, int x,
                     int y, PixelAccumulator& acc, PathTracerStats& stats);
 
 // Renders one pass (samplesPerPixel samples per pixel, `pass` keys the RNG) into the film, whole
 // tiles per thread (TransientFilm::TileWriter), both time axes and the steady state. The film must
 // have the camera's resolution. Its stats receive the pass's tallies; `stats` (optional) too.
 // The film does not depend on the number of threads. A set `abort` stops handing out tiles.
-void renderPathTracerPass(const Scene& scene, const PathTracerSettings& s, uint64_t pass, TransientFilm& film,
+void renderPathTracerPass(const Scene& scene, const RenderSettings& s, uint64_t pass, TransientFilm& film,
                           PathTracerStats* stats = nullptr, const std::atomic<bool>* abort = nullptr);
 
 // Passes firstPass, firstPass + 1, ..., firstPass + passes - 1 into the film (accumulating; the
 // film shows the average over passes). Returns the number of passes completed.
-int64_t renderPathTracer(const Scene& scene, const PathTracerSettings& s, uint64_t firstPass, int64_t passes,
+int64_t renderPathTracer(const Scene& scene, const RenderSettings& s, uint64_t firstPass, int64_t passes,
                          TransientFilm& film, PathTracerStats* stats = nullptr,
                          const std::atomic<bool>* abort = nullptr);
 

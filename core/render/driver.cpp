@@ -16,26 +16,9 @@ double nowSec() {
     return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
-DriverSettings DriverSettings::fromScene(const Scene& scene) {
-    const RenderDesc& r = scene.desc.render;
-    DriverSettings s;
-    s.photonsPerPass = r.photonsPerPass;
-    s.beamRadius0 = scene.beamRadius0;
-    s.surfaceRadius0 = scene.surfaceRadius0;
-    s.alpha = r.alpha;
-    s.passes = r.passes;
-    s.timeBudgetSec = r.timeBudgetSec;
-    s.maxDepth = r.maxDepth;
-    s.seed = r.seed;
-    s.threads = r.threads;
-    s.profile = r.timeProfile;
-    s.beamLength = r.beamLength;
-    return s;
-}
-
-Driver::Driver(const Scene& scene, const DriverSettings& settings)
+Driver::Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time)
     : scene_(scene), settings_(settings),
-      film_(std::make_unique<TransientFilm>(scene.camera.width, scene.camera.height, scene.time)) {
+      film_(std::make_unique<TransientFilm>(scene.camera.width, scene.camera.height, time)) {
     settings_.threads = resolveThreads(settings_.threads);
     startTime_ = nowSec();
 }

@@ -10,6 +10,7 @@
 #include "integrators/camera_pass.h"
 #include "film/film.h"
 #include "render/memory_budget.h"
+#include "render/render_settings.h"
 #include "base/pause_gate.h"
 #include "scene/scene.h"
 
@@ -24,24 +25,6 @@
 #include <vector>
 
 namespace tpb {
-
-struct DriverSettings {
-    int64_t photonsPerPass = 20000;
-    double beamRadius0 = 0.01;     // m
-    double surfaceRadius0 = 0.02;  // m
-    double alpha = 0.7;
-    int64_t passes = 16;           // 0 = unlimited
-    double timeBudgetSec = 0.0;    // 0 = unlimited
-    int maxDepth = 16;
-    uint64_t seed = 1;
-    int threads = 0;
-    TimeProfile profile = TimeProfile::Exact;
-    BeamLength beamLength = BeamLength::Short;
-    BeamAccel::Kind accel = BeamAccel::Kind::Embree;
-    uint64_t maxPhotonMapBytes = 0;  // per pass; 0 = maxFilmBytes() (memory_budget.h)
-
-    static DriverSettings fromScene(const Scene& scene);
-};
 
 struct PassStats {
     uint64_t pass = 0;  // 1-based
@@ -59,7 +42,10 @@ struct PassStats {
 
 class Driver {
 public:
-    Driver(const Scene& scene, const DriverSettings& settings);
+    // The film gets `time` as its time axis (decided once, before the film exists: time_range.h).
+    Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time);
+    // Transitional: the scene's own time axis.
+    Driver(const Scene& scene, const RenderSettings& settings) : Driver(scene, settings, scene.time) {}
     ~Driver();
 
     // Runs one pass synchronously (all threads). Returns false if aborted midway (film untouched
@@ -85,7 +71,7 @@ public:
     const TransientFilm& film() const { return *film_; }
     TransientFilm& film() { return *film_; }
     const Scene& scene() const { return scene_; }
-    const DriverSettings& settings() const { return settings_; }
+    const RenderSettings& settings() const { return settings_; }
     uint64_t completedPasses() const { return completed_.load(); }
     std::vector<PassStats> history() const;
     PassStats lastPass() const;
@@ -94,7 +80,7 @@ private:
     void loop(std::function<void(const PassStats&)> onPass);
 
     const Scene& scene_;
-    DriverSettings settings_;
+    RenderSettings settings_;
     std::unique_ptr<TransientFilm> film_;
     std::thread thread_;
     std::atomic<bool> running_{false}, stopRequested_{false}, abort_{false};

@@ -58,7 +58,7 @@ TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int t
     cs.maxDepth = scene.desc.render.maxDepth;
     std::unique_ptr<BeamAccel> accel;
     if (scene.stages.beams && !map.beams.empty()) {
-        accel = BeamAccel::create(BeamAccel::Kind::Embree);
+        accel = BeamAccel::create(AccelBackend::Embree);
         accel->build(map.beams, cs.beamRadius, threads);
     }
     std::unique_ptr<PhotonGrid> grid;

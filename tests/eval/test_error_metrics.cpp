@@ -577,7 +577,8 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
     ASSERT_TRUE(scene->stages.beams && scene->stages.surfacePhotons);
 
     // Path tracer: every pass is an independent estimate of every pixel.
-    PathTracerSettings ps;
+    RenderSettings ps;
+    ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.seed = 3;
     ps.samplesPerPixel = 16;
     ps.maxDepth = scene->desc.render.maxDepth;
@@ -608,7 +609,7 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
     std::vector<double> vol[2];
     std::vector<float> steady;
     for (int run = 0; run < runs; ++run) {
-        DriverSettings ds = DriverSettings::fromScene(*scene);
+        RenderSettings ds = RenderSettings::fromScene(*scene);
         ds.seed = 100 + run;
         ds.threads = threads;
         Driver drv(*scene, ds);

@@ -167,7 +167,7 @@ struct Estimates {
     }
 };
 
-Estimates estimate(const Scene& scene, const PathTracerSettings& s, int passes, PathTracerStats& st) {
+Estimates estimate(const Scene& scene, const RenderSettings& s, int passes, PathTracerStats& st) {
     const TimeBins& tb = scene.time;
     Estimates e;
     e.pixels = scene.camera.width * scene.camera.height;
@@ -345,7 +345,8 @@ TEST(PathTracer, SingleScatteringMatchesQuadrature) {
     d.lights.push_back(pointLight(im.light, im.power, im.emit));
     auto scene = Scene::build(d);
 
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 7;
     s.samplesPerPixel = 16;
     s.maxDepth = 1;  // single scattering exactly
@@ -455,7 +456,8 @@ TEST(PathTracer, EquiangularAgreesWithFreeFlightAndCutsTheVarianceNearThePointLi
 
     for (int depth : {1, 4}) {
         SCOPED_TRACE("max depth " + std::to_string(depth));
-        PathTracerSettings s;
+        RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
         s.seed = 11;
         s.samplesPerPixel = 8;
         s.maxDepth = depth;
@@ -540,7 +542,8 @@ TEST(PathTracer, FirstArrivalIsGeometricPathLengthWithMirror) {
     d.lights.push_back(pointLight(L, Color(10.0), emit));
     auto scene = Scene::build(d);
 
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 3;
     s.samplesPerPixel = 16;
     s.threads = 2;
@@ -609,7 +612,8 @@ TEST(PathTracer, FirstArrivalThroughGlassSlab) {
     d.lights.push_back(pointLight(L, Color(5.0), emit));
     auto scene = Scene::build(d);
 
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 11;
     s.samplesPerPixel = 24;
     TransientFilm film(W, H, scene->time);
@@ -721,7 +725,8 @@ void filmTotals(const TransientFilm& film, double& steady, double binned[2]) {
 
 TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
     const int passes = 2;
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 5;
     s.samplesPerPixel = 4;
     s.threads = 2;
@@ -751,7 +756,7 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
         SceneDesc d = cornellDesc(16);
         setFilm(d, 0.0, 2.0, 60);
         auto scene = Scene::build(d);
-        PathTracerSettings s2 = s;
+        RenderSettings s2 = s;
         s2.maxDepth = 6;  // OPL < 8 segments * 1.5 * box diagonal + camera distance < 120
         TransientFilm film(16, 16, scene->time);
         PathTracerStats st;
@@ -796,7 +801,8 @@ TEST(PathTracer, DiffuseSphereFurnace) {
     auto scene = Scene::build(d);
     const Color expected = a * power / (4.0 * kPiT * R * R) / (kPiT * (1.0 - a));
 
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 9;
     s.samplesPerPixel = 8;
     const int passes = 16;
@@ -861,7 +867,8 @@ TEST(PathTracer, AreaLightDirectAndNextEventMatchQuadrature) {
     auto scene = Scene::build(d);
     const Color Le = area.power / (kPiT * 4.0 * half * half);
 
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 13;
     s.samplesPerPixel = 8;
     s.maxDepth = 1;  // direct lighting only
@@ -989,7 +996,8 @@ TEST(PathTracer, SpotAndPointLightsMatchAnalyticIrradiance) {
         return (Es + Ep) * (albedo / kPiT);
     };
 
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 23;
     s.samplesPerPixel = 64;  // the point light is picked for 1 NEE in 4: enough picks per pixel
     s.maxDepth = 1;
@@ -1039,7 +1047,8 @@ TEST(PathTracer, NullBoundedMediumSingleScattering) {
     d.lights.push_back(pointLight(L, power, emit));
     auto scene = Scene::build(d);
 
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 21;
     s.samplesPerPixel = 16;
     s.maxDepth = 1;
@@ -1131,7 +1140,8 @@ TEST(PathTracer, OneAndTwoThreadsGiveIdenticalFilms) {
     SceneDesc d = cornellDesc(32);  // 4 tiles
     setFilm(d, 2.0, 0.25, 24);
     auto scene = Scene::build(d);
-    PathTracerSettings s;
+    RenderSettings s;
+    s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 17;
     s.samplesPerPixel = 2;
     TransientFilm f1(32, 32, scene->time), f2(32, 32, scene->time);

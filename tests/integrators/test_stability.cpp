@@ -233,10 +233,10 @@ struct Rendered {
 };
 
 Rendered renderScene(const std::string& json, int passes, int threads = 2,
-                     const std::function<void(DriverSettings&)>& tweak = {}) {
+                     const std::function<void(RenderSettings&)>& tweak = {}) {
     Rendered r;
     r.scene = sceneFrom(json);
-    DriverSettings ds = DriverSettings::fromScene(*r.scene);
+    RenderSettings ds = RenderSettings::fromScene(*r.scene);
     ds.threads = threads;
     if (tweak) tweak(ds);
     r.driver = std::make_unique<Driver>(*r.scene, ds);
@@ -268,7 +268,7 @@ struct PassRunner {
         pt.threads = threads;
         const PhotonMap map = tracePhotons(scene, pt);
         beams += static_cast<int64_t>(map.beams.size());
-        std::unique_ptr<BeamAccel> accel = BeamAccel::create(BeamAccel::Kind::Embree);
+        std::unique_ptr<BeamAccel> accel = BeamAccel::create(AccelBackend::Embree);
         accel->build(map.beams, radius, threads);
         CameraPassSettings cs;
         cs.seed = seed;
@@ -356,7 +356,7 @@ TEST(StabilityOrientation, LaserPointingAtTheCameraFillsOneBinPerPixel) {
     const ImageIntegral got = checkLaserBox(c, "toward", 0.02, 0.004);
     // The Driver with the scene's own max_depth 1: crossing the null boundary is not an event, so
     // the camera still sees single scattering in the box (same camera samples: same image).
-    Rendered d = renderScene(c.json(), c.passes, 2, [&](DriverSettings& ds) { ds.beamLength = c.beamLength; });
+    Rendered d = renderScene(c.json(), c.passes, 2, [&](RenderSettings& ds) { ds.beamLength = c.beamLength; });
     expectFiniteFilm(d.driver->film(), "toward, driver");
     EXPECT_NEAR(imageIntegral(d.driver->film(), d.scene->camera).steady, got.steady, 1e-6 * got.steady);
 }
@@ -795,7 +795,7 @@ TEST(StabilityManyPasses, PassOneMillionKeepsTheFilmFiniteAndNormalised) {
       "lights": [{"type": "point", "position": [0, 0, 0], "power": 10}],
       "render": {"photons_per_pass": 6000, "radius": 0.06, "surface_radius": 0.1, "max_depth": 4, "seed": 3}})";
     for (double alpha : {0.7, 0.01}) {
-        Rendered r = renderScene(json, 0, 2, [&](DriverSettings& ds) { ds.alpha = alpha; });
+        Rendered r = renderScene(json, 0, 2, [&](RenderSettings& ds) { ds.alpha = alpha; });
         Driver& drv = *r.driver;
         for (uint64_t p : {1ull, 2ull, 3ull, 4ull}) ASSERT_TRUE(drv.runPass(p));
         std::vector<float> before;
@@ -1044,7 +1044,7 @@ TEST(StabilityAlbedoOne, PhotonMapOverTheMemoryBudgetStopsTheRenderWithAMessage)
       "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
       "render": {"photons_per_pass": 2000, "max_depth": 100000000, "passes": 3, "seed": 8}})";
     auto sc = sceneFrom(json);
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     ds.maxPhotonMapBytes = 4u << 20;  // 4 MiB: about 40k beams, while one photon alone would store 1e8
     Driver drv(*sc, ds);
@@ -1276,7 +1276,7 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
       "media": {"m": {"sigma_s": 0.5, "sigma_a": 0.1}}, "global_medium": "m",
       "lights": [{"type": "point", "position": [0, 0, -2], "power": 1}]})";
     auto sc = sceneFrom(json);
-    const auto render = [&](const std::vector<Beam>& beams, BeamAccel::Kind kind, std::vector<double>& vol) {
+    const auto render = [&](const std::vector<Beam>& beams, AccelBackend kind, std::vector<double>& vol) {
         PhotonMap map;
         map.beams = beams;
         auto accel = BeamAccel::create(kind);
@@ -1303,7 +1303,7 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
     all.push_back({Vec3(0.0, 0.0, -2.0), Vec3(0, 0, 1), 1e-300, P, 0.0, 0, 1});        // 1e-300 m
     all.push_back({Vec3(0.0, 0.0, -2.5), Vec3(0, 1, 0), 1.0, Color(0.0), 0.0, 0, 1});  // zero power
     all.push_back({Vec3(0.0, -0.5, -2.5), Vec3(0, 1, 0), 1.0, Color(1e-300), 0.0, 0, 1});  // denormal result
-    for (BeamAccel::Kind kind : {BeamAccel::Kind::Embree, BeamAccel::Kind::BruteForce}) {
+    for (AccelBackend kind : {AccelBackend::Embree, AccelBackend::BruteForce}) {
         std::vector<double> a, b;
         render(good, kind, a);
         render(all, kind, b);
@@ -1331,7 +1331,7 @@ TEST(StabilityConcurrent, ViewerReadsWhileTheDriverRenders) {
       "lights": [{"type": "point", "position": [0, 1.8, 0], "power": 20}],
       "render": {"photons_per_pass": 1500, "radius_relative": 0.01, "surface_radius_relative": 0.03, "seed": 9}})";
     auto sc = sceneFrom(json);
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     ds.passes = 0;  // until stopped
     Driver drv(*sc, ds);

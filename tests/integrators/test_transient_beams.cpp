@@ -62,7 +62,7 @@ struct Rendered {
     std::vector<float> steady;
 };
 
-Rendered render(const Scene& sc, DriverSettings ds, int passes, TimeAxis axis = TimeAxis::Real) {
+Rendered render(const Scene& sc, RenderSettings ds, int passes, TimeAxis axis = TimeAxis::Real) {
     Driver drv(sc, ds);
     for (int p = 1; p <= passes; ++p) EXPECT_TRUE(drv.runPass(p));
     Rendered r;
@@ -105,7 +105,7 @@ TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
             for (int k = 0; k < B; ++k) ref[(static_cast<size_t>(y) * W + x) * B + k] = bins[k];
         }
 
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     auto errors = [&](const Rendered& r, double& steadyErr, double& binErr) {
         double se = 0.0, sr = 0.0, be = 0.0, br = 0.0;
@@ -132,7 +132,7 @@ TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
     EXPECT_LT(b128, b8);  // converges as passes accumulate and the radius shrinks
 
     // Long beams and the paper's uniform time profile estimate the same quantity.
-    DriverSettings dl = ds;
+    RenderSettings dl = ds;
     dl.beamLength = BeamLength::Long;
     double sl, bl;
     errors(render(*sc, dl, 64), sl, bl);
@@ -144,7 +144,7 @@ TEST(TransientBeams, SteadyStateEqualsBeforePlusBinsPlusAfterOnBothAxes) {
     // A denser medium and a long film, so that no energy arrives after the film's end on the real
     // axis; on the unwarped axis much of it arrives before the film's start (kept per pixel).
     auto sc = sceneFrom(denseScene());
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     Driver drv(*sc, ds);
     for (int p = 1; p <= 4; ++p) ASSERT_TRUE(drv.runPass(p));
@@ -196,7 +196,7 @@ TEST(TransientBeams, ContinuousEmissionIsTheStepResponseOnBothAxes) {
     auto wide = sceneFrom(early);
     const ReferenceVolume ref = singleScatteringReference(*wide, 3, 2);
     const int W = sc->camera.width, H = sc->camera.height, B = sc->time.bins, BW = wide->time.bins, skip = 32;
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     Driver drv(*sc, ds);
     for (int p = 1; p <= 64; ++p) ASSERT_TRUE(drv.runPass(p));
@@ -269,7 +269,7 @@ TEST(TransientBeams, LongBeamsInAnUnboundedMediumLoseNothingTheFilmShows) {
     // All beams start at the light at t = 0 with the same length: the cut share is exp(-sigma_t L).
     EXPECT_NEAR(map.cutFlux.x / map.emittedFlux.x, std::exp(-m.sigma_t.x * sc->time.endOpl()), 1e-9);
 
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     ds.beamLength = BeamLength::Long;
     ds.beamRadius0 = 0.2;
@@ -293,12 +293,12 @@ TEST(TransientBeams, LongBeamsInAnUnboundedMediumLoseNothingTheFilmShows) {
 
 TEST(TransientBeams, BruteForceAndEmbreeQueriesGiveIdenticalFilms) {
     auto sc = sceneFrom(kSingleScatter);
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     ds.maxDepth = 4;
-    ds.accel = BeamAccel::Kind::Embree;
+    ds.accel = AccelBackend::Embree;
     const Rendered a = render(*sc, ds, 2);
-    ds.accel = BeamAccel::Kind::BruteForce;
+    ds.accel = AccelBackend::BruteForce;
     const Rendered b = render(*sc, ds, 2);
     ASSERT_EQ(a.volume.size(), b.volume.size());
     double total = 0.0;
@@ -328,7 +328,7 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
       "render": {"photons_per_pass": 3000, "radius_relative": 0.01, "surface_radius_relative": 0.03, "seed": 9}
     })";
     auto sc = sceneFrom(scene);
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 1;
     const Rendered a = render(*sc, ds, 2);
     ds.threads = 2;
@@ -340,7 +340,7 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
 
 TEST(TransientBeams, ExactAndUniformProfilesCarryTheSameEnergy) {
     auto sc = sceneFrom(denseScene());
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     ds.profile = TimeProfile::Exact;
     const Rendered a = render(*sc, ds, 2);
@@ -367,7 +367,7 @@ TEST(TransientBeams, FirstArrivalOnASurfaceMatchesGeometricOpticalPath) {
       "render": {"photons_per_pass": 200000, "surface_radius": 0.025, "radius": 0.01, "max_depth": 1, "seed": 5}
     })";
     auto sc = sceneFrom(scene);
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     Driver drv(*sc, ds);
     ASSERT_TRUE(drv.runPass(1));
@@ -433,7 +433,7 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
         }
         return std::sqrt(e / n);
     };
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     ds.alpha = 1.0;  // keep the kernel wide: the time smearing is what is compared
     ds.profile = TimeProfile::Exact;

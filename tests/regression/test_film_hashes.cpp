@@ -86,7 +86,7 @@ Signature renderSignature(const std::string& scenePath) {
     d.render.seed = 7;
     auto scene = Scene::build(d);
     fitTimeRange(*scene, 1500, 2);
-    DriverSettings ds = DriverSettings::fromScene(*scene);
+    RenderSettings ds = RenderSettings::fromScene(*scene);
     ds.threads = 2;
     Driver drv(*scene, ds);
     for (int p = 1; p <= 2; ++p) EXPECT_TRUE(drv.runPass(p)) << scenePath;
@@ -102,7 +102,8 @@ Signature pathTracerSignature(const std::string& scenePath) {
     d.render.seed = 7;
     auto scene = Scene::build(d);
     fitTimeRange(*scene, 1500, 2);
-    PathTracerSettings ps;
+    RenderSettings ps;
+    ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.seed = 7;
     ps.samplesPerPixel = 1;
     ps.maxDepth = 8;

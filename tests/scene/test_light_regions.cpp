@@ -134,7 +134,7 @@ ImageSum sumOf(const std::vector<float>& img) {
 // The beam renderer (passes 1..2) and the path tracer (16 paths per pixel) on the scene; both
 // images must be exactly zero since the camera sees only the outside of the cage.
 void expectDarkOutside(const Scene& sc) {
-    DriverSettings ds = DriverSettings::fromScene(sc);
+    RenderSettings ds = RenderSettings::fromScene(sc);
     ds.threads = 2;
     Driver drv(sc, ds);
     for (int p = 1; p <= 2; ++p) ASSERT_TRUE(drv.runPass(p));
@@ -148,7 +148,8 @@ void expectDarkOutside(const Scene& sc) {
     for (double v : vol) lit += v != 0.0;
     EXPECT_EQ(lit, 0) << "texels of the transient volume";
 
-    PathTracerSettings ps;
+    RenderSettings ps;
+    ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.samplesPerPixel = 16;
     ps.threads = 2;
     ps.seed = 3;
@@ -169,7 +170,7 @@ void expectLitInside(std::string json) {
     json.replace(json.find(res), res.size(), R"("resolution": [8, 8])");
     json.replace(json.find(photons), photons.size(), R"("photons_per_pass": 2000)");
     const auto sc = sceneFrom(json);
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.threads = 2;
     Driver drv(*sc, ds);
     ASSERT_TRUE(drv.runPass(1));
@@ -350,7 +351,7 @@ std::vector<double> blockSums(const std::vector<float>& img, int w, int h) {
 }
 
 std::vector<float> beamImage(const Scene& sc, int64_t* beams = nullptr) {
-    DriverSettings ds = DriverSettings::fromScene(sc);
+    RenderSettings ds = RenderSettings::fromScene(sc);
     ds.threads = 2;
     Driver drv(sc, ds);
     for (int p = 1; p <= 2; ++p) EXPECT_TRUE(drv.runPass(p));
@@ -361,7 +362,8 @@ std::vector<float> beamImage(const Scene& sc, int64_t* beams = nullptr) {
 }
 
 std::vector<float> pathTracedImage(const Scene& sc) {
-    PathTracerSettings ps;
+    RenderSettings ps;
+    ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.samplesPerPixel = 128;
     ps.threads = 2;
     ps.seed = sc.desc.render.seed;
@@ -534,7 +536,8 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
         }
     EXPECT_EQ(cst.regionOverflows, 16);
 
-    PathTracerSettings ps;
+    RenderSettings ps;
+    ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.threads = 1;
     TransientFilm film(4, 4, sc->time);
     PathTracerStats pst;
@@ -543,7 +546,7 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
     EXPECT_EQ(pst.shadowRays, 0);  // the paths never reached the wall
 
     // The driver's pass statistics carry both counts (for summary.json).
-    DriverSettings ds = DriverSettings::fromScene(*sc);
+    RenderSettings ds = RenderSettings::fromScene(*sc);
     ds.photonsPerPass = 300;
     ds.threads = 1;
     Driver drv(*sc, ds);
