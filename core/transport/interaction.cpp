@@ -5,6 +5,21 @@
 
 namespace tpb {
 
+namespace {
+
+// The region stack on transmission through a dielectric/null surface: entering (against its
+// normal) pushes the shape's interior, leaving pops. False, stack untouched, when the push finds
+// the stack full (RegionStack).
+[[nodiscard]] bool crossRegions(const SurfaceInteraction& si, RegionStack& regions) {
+    if (!si.front) {
+        regions.pop();
+        return true;
+    }
+    return regions.push(si.shape->interiorRegion);
+}
+
+}  // namespace
+
 SurfaceInteraction interact(const Scene& scene, const Ray& ray, const SurfaceHit& hit) {
     SurfaceInteraction si;
     si.shape = &scene.shapes[hit.shape];
@@ -62,13 +77,9 @@ SpecularContinuation followInterface(const Scene& scene, const Ray& ray, const S
         c.ray = scene.leaveSurface(hit.p, glm::normalize(reflect(d, si.ns)), si.ng);
         return c;
     }
-    if (si.front) {
-        if (!regions.push(si.shape->interiorRegion)) {
-            c.regionOverflow = true;
-            return c;
-        }
-    } else {
-        regions.pop();
+    if (!crossRegions(si, regions)) {
+        c.regionOverflow = true;
+        return c;
     }
     c.transmitted = true;
     c.ray = scene.leaveSurface(hit.p, refr, -si.ng);
@@ -80,13 +91,9 @@ SpecularContinuation crossNull(const Scene& scene, const Ray& ray, const Surface
     SpecularContinuation c;
     c.nullCrossing = true;
     c.ray = {hit.p - scene.rayEps * si.ng, ray.d};
-    if (si.front) {
-        if (!regions.push(si.shape->interiorRegion)) {
-            c.regionOverflow = true;
-            return c;
-        }
-    } else {
-        regions.pop();
+    if (!crossRegions(si, regions)) {
+        c.regionOverflow = true;
+        return c;
     }
     c.transmitted = true;
     return c;
