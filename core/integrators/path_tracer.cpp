@@ -8,11 +8,12 @@
 // times solid angle over the sampling pdfs, W / (m^2 sr)).
 #include "integrators/path_tracer.h"
 
-#include "scene/bsdf.h"
 #include "base/error.h"
 #include "base/parallel.h"
 #include "base/rng.h"
 #include "base/sampling.h"
+#include "transport/free_flight.h"
+#include "transport/interaction.h"
 
 #include <vector>
 
@@ -51,22 +52,15 @@ bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stac
         if (!(dist > 0.0)) return true;
         const Ray ray{from, v / dist, 0.0, dist};
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
-        const double seg = hit ? hit->t : dist;
-        const Region& region = scene.regions[stack.top()];
-        opl += region.ior * seg;
-        if (region.hasMedium) tr *= region.medium.transmittance(seg);
+        const SegmentTransport seg = crossSegment(scene.regions[stack.top()], ray, hit ? hit->t : dist);
+        opl += seg.opl;
+        tr *= seg.transmittance;
         if (!hit) return true;
-        const ShapeInfo& shape = scene.shapes[hit->shape];
-        if (shape.areaLight >= 0 || shape.material < 0) return false;
-        if (scene.materials[shape.material].type != MaterialType::Null) return false;
-        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
-        const Vec3 ng = front ? hit->ng : -hit->ng;
-        if (front) {
-            if (!stack.push(shape.interiorRegion)) { ++stats.regionOverflows; return false; }
-        } else {
-            stack.pop();
-        }
-        from = hit->p - scene.rayEps * ng;
+        const SurfaceInteraction si = interact(scene, ray, *hit);
+        if (si.kind != SurfaceKind::Null) return false;  // every other surface blocks
+        const SpecularContinuation c = crossNull(scene, ray, *hit, si, stack);
+        if (c.regionOverflow) { ++stats.regionOverflows; return false; }
+        from = c.ray.o;
     }
     return false;
 }
@@ -222,13 +216,7 @@ void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const
 // Russian roulette on the throughput; false if the path dies.
 bool roulette(Rng& rng, Color& beta, int depth) {
     if (depth < kRussianRouletteDepth) return true;
-    const double q = std::min(1.0, maxComponent(beta));
-    if (!(q > 0.0)) return false;
-    if (q < 1.0) {
-        if (rng.uniform() >= q) return false;
-        beta /= q;
-    }
-    return true;
+    return russianRoulette(rng, beta, 1.0);
 }
 
 void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
@@ -255,12 +243,13 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                 const double sigmaBar = m.samplingSigma();
                 const SegmentMis mis{ray, s.equiangular ? std::min(dSurf, equiangularReach(m)) : 0.0, sigmaBar};
                 if (s.equiangular) equiangularSegment(ctx, rng, mis, region, regions, beta, oplCam, oplUnw, nonSpecular);
-                const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
-                if (d < dSurf) {
+                const FreeFlight ff = sampleFreeFlight(region, ray, dSurf, rng);
+                if (ff.scattered) {
                     // Medium scattering vertex.
-                    beta *= m.sigma_s * m.transmittance(d) / (sigmaBar * std::exp(-sigmaBar * d));
-                    oplCam += region.ior * d;
-                    if (nonSpecular) oplUnw += region.ior * d;
+                    const double d = ff.distance;
+                    beta *= ff.weight;
+                    oplCam += ff.opl;
+                    if (nonSpecular) oplUnw += ff.opl;
                     nonSpecular = true;
                     if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
                     const Vec3 x = ray.at(d);
@@ -275,9 +264,9 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                     emitterVisible = false;
                     continue;
                 }
-                if (hit) beta *= m.transmittance(dSurf) / std::exp(-sigmaBar * dSurf);
+                if (hit) beta *= ff.weight;
             } else if (hit) {
-                beta *= m.transmittance(dSurf);
+                beta *= crossSegment(region, ray, dSurf).transmittance;
             }
         }
         if (!hit) return;  // escaped
@@ -286,35 +275,30 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
         if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
         if (isBlack(beta)) return;
 
-        const ShapeInfo& shape = scene.shapes[hit->shape];
-        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
-        const Vec3 ng = front ? hit->ng : -hit->ng;  // facing the incoming ray
-        Vec3 ns = front ? hit->ns : -hit->ns;
-        if (glm::dot(ns, ng) <= 0.0) ns = ng;
+        const SurfaceInteraction si = interact(scene, ray, *hit);
+        const Vec3& ng = si.ng;  // facing the incoming ray
+        const Vec3& ns = si.ns;
 
-        if (shape.areaLight >= 0) {  // emitter: visible from its front side, absorbs
-            if (front && emitterVisible) {
-                const Light& l = scene.lights[shape.areaLight];
+        if (si.kind == SurfaceKind::Emitter) {  // emitter: visible from its front side, absorbs
+            if (si.front && emitterVisible) {
+                const Light& l = scene.lights[si.shape->areaLight];
                 splat(ctx, beta * l.areaRadiance(), l.emitOpl + oplCam, l.emitOpl + oplUnw);
             }
             return;
         }
-        if (shape.material < 0) return;
-        const Material& mat = scene.materials[shape.material];
+        if (si.kind == SurfaceKind::Absorber) return;
+        const Material& mat = *si.material;
 
-        if (mat.type == MaterialType::Null) {
+        if (si.kind == SurfaceKind::Null) {
             // Index-matched boundary (as in the beam core): no bending, no reflection, no depth.
-            ray = {hit->p - scene.rayEps * ng, ray.d};
-            if (front) {
-                if (!regions.push(shape.interiorRegion)) { ++ctx.stats.regionOverflows; return; }
-            } else {
-                regions.pop();
-            }
+            const SpecularContinuation c = crossNull(scene, ray, *hit, si, regions);
+            if (c.regionOverflow) { ++ctx.stats.regionOverflows; return; }
+            ray = c.ray;
             continue;
         }
 
         ++depth;
-        if (mat.type == MaterialType::Diffuse) {
+        if (si.kind == SurfaceKind::Diffuse) {
             nonSpecular = true;
             const Color fr = mat.albedo * kInvPi;
             const Vec3 origin = scene.bounceOrigin(ray, *hit, ng);
@@ -329,18 +313,18 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
             beta *= mat.albedo;  // f cos / pdf
             ray = {origin, wo};
             emitterVisible = false;
-        } else if (mat.type == MaterialType::Mirror) {
+        } else if (si.kind == SurfaceKind::Mirror) {
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
-            beta *= mat.specular;
-            ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
+            const SpecularContinuation c = reflectMirror(scene, ray, *hit, si);
+            beta *= c.tint;
+            ray = c.ray;
             emitterVisible = true;
         } else {  // dielectric: reflection or refraction chosen by Fresnel
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
-            const std::optional<Ray> next =
-                scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
-            if (!next) { ++ctx.stats.regionOverflows; return; }
-            ray = *next;
-            beta *= mat.specular;
+            const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
+            if (c.regionOverflow) { ++ctx.stats.regionOverflows; return; }
+            ray = c.ray;
+            beta *= c.tint;
             emitterVisible = true;
         }
         if (!roulette(rng, beta, depth)) return;
