@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <numeric>
 #include <vector>
@@ -185,6 +186,7 @@ Chi2Result chi2Test2D(const Sampler2D& sample, const Pdf2D& pdf, const Domain2D&
     r.dof = cells - 1;
     r.pValue = r.dof > 0 ? chi2PValue(r.statistic, r.dof) : 0.0;
     r.rejected = r.outside > 0 || r.impossible > 0 || r.dof < 1 || !(r.pValue >= r.significance);
+    if (std::getenv("TPB_CHI2_VERBOSE")) std::fprintf(stderr, "%s\n", r.summary().c_str());
     return r;
 }
 

@@ -8,6 +8,8 @@
 // p < the per-test significance, the overall significance Sidak-corrected for the number of tests
 // run: alpha_1 = 1 - (1 - alpha)^(1 / tests).
 //
+// With the environment variable TPB_CHI2_VERBOSE set, every test prints its Chi2Result::summary().
+//
 // Directions are tested in spherical coordinates (cos theta, phi) around an axis, where
 // d omega = d cos(theta) d phi, so the density over that rectangle is the solid-angle pdf pdfW.
 #pragma once
