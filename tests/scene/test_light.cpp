@@ -61,6 +61,7 @@ TEST(LightEmission, PointLightIsUniformOverTheSphere) {
         },
         [](const Vec3&) { return 1.0 / (4.0 * kPi); }, Vec3(0.0, 1.0, 0.0), -1.0, settings(1));
     EXPECT_FALSE(r.rejected) << r.summary();
+    EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-9);
 }
 
 TEST(LightEmission, SpotLightIsUniformInItsConeWithTheFalloffInTheWeight) {
@@ -97,6 +98,7 @@ TEST(LightEmission, SpotLightIsUniformInItsConeWithTheFalloffInTheWeight) {
             },
             [&](const Vec3&) { return pdfW; }, axis, cosC, settings(seed++));
         EXPECT_FALSE(r.rejected) << cutoffDeg << "/" << falloffDeg << ": " << r.summary();
+        EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-9);
         // The mean weight is the power (all of it leaves the light): a z-test at 5 sigma.
         const double mean = weightSum / n, sd = std::sqrt(std::max(weightSq / n - mean * mean, 0.0) / n);
         EXPECT_NEAR(mean, 5.0, 5.0 * sd) << cutoffDeg;
@@ -133,6 +135,7 @@ TEST(LightEmission, AreaLightPositionIsUniformOverTheQuad) {
         },
         [](double, double) { return 1.0; }, Domain2D{}, settings(4));
     EXPECT_FALSE(r.rejected) << r.summary();
+    EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-9);
 }
 
 TEST(LightEmission, AreaLightDirectionIsCosineAroundItsNormal) {
@@ -143,6 +146,7 @@ TEST(LightEmission, AreaLightDirectionIsCosineAroundItsNormal) {
                                             [&](const Vec3& w) { return std::max(glm::dot(w, n), 0.0) / kPi; }, n, 0.0,
                                             settings(5));
     EXPECT_FALSE(r.rejected) << r.summary();
+    EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-9);
 }
 
 // With an offset, the origin is that far in front of the quad and inside it.
@@ -202,4 +206,5 @@ TEST(LightEmission, WideLaserIsUniformOverItsDisc) {
         },
         [](double, double) { return 1.0 / (2.0 * kPi); }, Domain2D{0.0, 1.0, 0.0, 2.0 * kPi}, settings(8));
     EXPECT_FALSE(r.rejected) << r.summary();
+    EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-9);
 }
