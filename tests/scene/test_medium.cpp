@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 using namespace tpb;
 using namespace tpb::test;
 
@@ -39,25 +41,36 @@ TEST(HenyeyGreenstein, EvalIsTheNormalisedHgPdf) {
     }
 }
 
-TEST(HenyeyGreenstein, SampleFollowsEvalChi2) {
+// One test per g (a CTest entry each).
+class HenyeyGreensteinChi2 : public ::testing::TestWithParam<int> {};
+
+TEST_P(HenyeyGreensteinChi2, SampleFollowsEval) {
     const Vec3 wi = glm::normalize(Vec3(0.4, -0.7, 0.3));
-    uint64_t seed = 1;
-    for (const double g : kGs) {
-        const HenyeyGreenstein hg{g};
-        Chi2Settings s;
-        s.seed = seed++;
-        s.testCount = kChi2Tests;
-        s.binsX = 64;  // cos theta: the forward peak at g = 0.95 is ~0.003 wide
-        const Chi2Result r = chi2TestDirections(
-            [&](Rng& rng) {
-                const double u1 = rng.uniform(), u2 = rng.uniform();
-                return hg.sample(wi, u1, u2);
-            },
-            [&](const Vec3& wo) { return hg.eval(glm::dot(wi, wo)); }, wi, -1.0, s);
-        EXPECT_FALSE(r.rejected) << "g=" << g << ": " << r.summary();
-        EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-8) << g;
-    }
+    const double g = kGs[GetParam()];
+    const HenyeyGreenstein hg{g};
+    Chi2Settings s;
+    s.seed = 1 + GetParam();
+    s.testCount = kChi2Tests;
+    s.binsX = 64;  // cos theta: the forward peak at g = 0.95 is ~0.003 wide
+    const Chi2Result r = chi2TestDirections(
+        [&](Rng& rng) {
+            const double u1 = rng.uniform(), u2 = rng.uniform();
+            return hg.sample(wi, u1, u2);
+        },
+        [&](const Vec3& wo) { return hg.eval(glm::dot(wi, wo)); }, wi, -1.0, s);
+    EXPECT_FALSE(r.rejected) << "g=" << g << ": " << r.summary();
+    EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-8) << g;
 }
+
+INSTANTIATE_TEST_SUITE_P(G, HenyeyGreensteinChi2, ::testing::Range(0, kChi2Tests),
+                         [](const ::testing::TestParamInfo<int>& info) {
+                             const double g = kGs[info.param];
+                             std::string name = (g < 0.0 ? "minus" : "") + std::to_string(std::abs(g));
+                             for (char& c : name) c = c == '.' ? 'p' : c;
+                             name = name.substr(0, name.find_last_not_of('0') + 1);  // 0.500000 -> 0p5
+                             if (name.back() == 'p') name.pop_back();                 // 0.000000 -> 0
+                             return "g_" + name;
+                         });
 
 TEST(HenyeyGreenstein, SamplesAreUnitAndForwardForLargeG) {
     const Vec3 wi = glm::normalize(Vec3(-0.1, 0.2, 1.0));
