@@ -121,29 +121,6 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
     splat(ctx, L, light.emitOpl + oplShadow + oplCam, light.emitOpl + oplShadow + oplUnw);
 }
 
-// Equiangular sampling (Kulla and Fajardo 2012) of a point on the medium segment x(t) = o + t w,
-// 0 <= t < tMax, towards a light at y. With D = (y - o).w and h the distance from y to the line,
-// |x(t) - y|^2 = h^2 + (t - D)^2; the angle theta(t) = atan((t - D) / h) has
-// d theta / dt = h / (h^2 + (t - D)^2), so theta uniform in [theta(0), theta(tMax)] gives
-//     pdf(t) = h / ((theta_b - theta_a) (h^2 + (t - D)^2)),     t = D + h tan(theta),
-// whose 1/|x - y|^2 cancels the light's. (Checked against free-flight NEE in test_path_tracer.)
-struct EquiangularFrame {
-    double D = 0.0, h = 0.0, thetaA = 0.0, thetaB = 0.0;
-    bool valid = false;
-
-    EquiangularFrame(const Ray& ray, double tMax, const Vec3& y) {
-        const Vec3 oy = y - ray.o;
-        D = glm::dot(oy, ray.d);
-        h = glm::length(oy - D * ray.d);
-        if (!(h > 0.0) || !(tMax > 0.0)) return;  // the light on the ray's line: a set of measure zero
-        thetaA = std::atan2(-D, h);
-        thetaB = std::isfinite(tMax) ? std::atan2(tMax - D, h) : 0.5 * kPi;
-        valid = thetaB > thetaA;
-    }
-    double sample(double u) const { return D + h * std::tan(thetaA + u * (thetaB - thetaA)); }
-    double pdf(double t) const { return h / ((thetaB - thetaA) * (h * h + (t - D) * (t - D))); }
-};
-
 // Where equiangular sampling stops on a segment: transmittance e^-30 in the clearest channel.
 // Beyond it, free-flight vertices alone connect to delta lights, so an unbounded segment (an open
 // medium) neither wastes samples at negligible transmittance nor puts them at absurd times.
@@ -154,10 +131,11 @@ double equiangularReach(const Medium& m) {
 
 // The two techniques that place a scattering point on a medium segment and connect it to a point
 // or spot light: free flight (pdf sigma_bar exp(-sigma_bar t), the vertex the path continues
-// from) and equiangular (pdf above, on [0, reach)). Each takes one sample; the balance heuristic
-// weights them, so the sum stays unbiased while each covers where the other is poor: equiangular
-// next to the light (where free flight has infinite variance: the integral of 1/d^4 over a ball
-// around the light diverges), free flight far from it, where the transmittance dominates.
+// from) and equiangular (EquiangularFrame, base/sampling.h, on [0, reach)). Each takes one
+// sample; the balance heuristic weights them, so the sum stays unbiased while each covers where
+// the other is poor: equiangular next to the light (where free flight has infinite variance: the
+// integral of 1/d^4 over a ball around the light diverges), free flight far from it, where the
+// transmittance dominates.
 struct SegmentMis {
     Ray ray;
     double reach = 0.0, sigmaBar = 0.0;
@@ -177,7 +155,7 @@ void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, co
     if (li < 0 || !(pick > 0.0)) return;
     const Light& light = ctx.scene.lights[li];
     if (mis && isDeltaPositionLight(light) && t < mis->reach) {
-        const EquiangularFrame f(mis->ray, mis->reach, light.position);
+        const EquiangularFrame f(mis->ray.o, mis->ray.d, mis->reach, light.position);
         if (f.valid) {
             const double pff = mis->freeFlightPdf(t), peq = f.pdf(t);
             beta *= pff / (pff + peq);
@@ -197,11 +175,12 @@ void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const
     if (li < 0 || !(pick > 0.0)) return;
     const Light& light = ctx.scene.lights[li];
     if (!isDeltaPositionLight(light)) return;
-    const EquiangularFrame f(mis.ray, mis.reach, light.position);
+    const EquiangularFrame f(mis.ray.o, mis.ray.d, mis.reach, light.position);
     if (!f.valid) return;
-    const double t = f.sample(uT);
+    const EquiangularSample eq = f.sample(uT);  // base/sampling.h
+    const double t = eq.t;
     if (!(t >= 0.0 && t < mis.reach)) return;  // rounding at the ends
-    const double peq = f.pdf(t), pff = mis.freeFlightPdf(t);
+    const double peq = eq.pdf, pff = mis.freeFlightPdf(t);
     if (!(peq > 0.0) || !std::isfinite(peq)) return;
     const Medium& m = region.medium;
     // sigma_s T / pdf_eq * w_eq = sigma_s T / pdf_eq * pdf_eq / (pdf_eq + pdf_ff) = sigma_s T / (pdf_eq + pdf_ff)
