@@ -4,7 +4,7 @@
 // spread over the time bins it covers (eqs. 12-15, time_splat.h) on both time axes.
 #pragma once
 #include "accel/beam_accel.h"
-#include "film/film.h"
+#include "film/transient_film.h"
 #include "accel/photon_grid.h"
 #include "photons/photon_tracer.h"
 #include "scene/scene.h"

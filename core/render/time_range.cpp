@@ -89,7 +89,7 @@ TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int t
             for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
                 for (int k = scratch.acc.lo(a); k <= scratch.acc.hi(a); ++k) {
                     const double* v = scratch.acc.bin(a, k);
-                    local[k] += std::max(0.0, 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]);
+                    local[k] += std::max(0.0, luminance(Color(v[0], v[1], v[2])));
                 }
             scratch.acc.clearTouched();
         }

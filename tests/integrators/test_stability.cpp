@@ -20,6 +20,7 @@
 #include "scene/bsdf.h"
 #include "integrators/camera_pass.h"
 #include "render/driver.h"
+#include "film/film_view.h"
 #include "base/error.h"
 #include "base/parallel.h"
 #include "photons/photon_tracer.h"
@@ -1315,7 +1316,7 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
 
 // ---- the viewer's access pattern while the driver runs -----------------------------------------
 
-// One thread reads the film the way the viewer does (frame(..., wait=false), steadyImage(wait=false),
+// One thread reads the film the way the viewer does (snapshots: frame, steady image, and
 // pixelProfile/streak on a helper thread, history(), lastPass(), completedPasses()) while
 // Driver::start renders, pauses, resumes and stops. Everything read must be finite, per-tile pass
 // counts never go backwards, and history() is consistent with completedPasses(). Run under
@@ -1349,8 +1350,9 @@ TEST(StabilityConcurrent, ViewerReadsWhileTheDriverRenders) {
     std::thread helper([&] {  // the viewer's helper thread: profile and streak of a pixel
         std::vector<float> prof, streak;
         while (!done) {
-            drv.film().pixelProfile(7, 5, TimeAxis::Real, EmissionMode::Continuous, prof);
-            drv.film().streak(5, TimeAxis::Unwarped, EmissionMode::Delta, streak);
+            const auto snap = drv.snapshot();
+            prof = pixelProfile(*snap, 7, 5, TimeAxis::Real, EmissionMode::Continuous);
+            streak = streakImage(*snap, 5, TimeAxis::Unwarped, EmissionMode::Delta);
             finite(prof);
             finite(streak);
             ++reads;
@@ -1361,10 +1363,11 @@ TEST(StabilityConcurrent, ViewerReadsWhileTheDriverRenders) {
     int iter = 0;
     while (drv.completedPasses() < 8 || iter < 50) {
         const int k = iter % 24;
-        drv.film().frame(k, iter % 2 ? TimeAxis::Real : TimeAxis::Unwarped,
-                         iter % 3 ? EmissionMode::Delta : EmissionMode::Continuous, frame, false);
+        const auto snap = drv.snapshot();
+        frame = frameImage(*snap, k, iter % 2 ? TimeAxis::Real : TimeAxis::Unwarped,
+                           iter % 3 ? EmissionMode::Delta : EmissionMode::Continuous);
         finite(frame);
-        drv.film().steadyImage(frame, false);
+        frame = steadyImage(*snap);
         finite(frame);
         const uint64_t completed = drv.completedPasses();
         EXPECT_GE(completed, lastCompleted);
