@@ -339,7 +339,7 @@ int64_t warnFilmOverflow(const Scene& scene, const TransientFilm& film) {
     const int64_t n = film.stats.overflowedPixels.load();
     if (n > 0)
         std::fprintf(stderr,
-                     "warning: %s: %lld pixel sums would have overflowed the film's 32-bit floats (max 3.4e38) and "
+                     "warning: %s: %lld pixel sums would have exceeded the film's float images (max 3.4e38) and "
                      "were dropped from those passes (the film holds no Inf, but those pixels are too dark): lower "
                      "the lights' power (transport is linear: scaling every light by s scales the film by s)\n",
                      keyWhere(scene.desc, scene.desc.lights.empty() ? "lights" : "lights[0].power").c_str(),

@@ -16,8 +16,8 @@
 // copy of the tile's block and publishes the copy when it finishes (copy-on-write, see
 // film_snapshot.h for the memory this costs), so a reader always sees, per tile, the sum of the
 // passes that tile has completed - never a partially gathered pass - and never waits for a writer.
-// Sums are FilmSum (film_snapshot.h) per bin (per pass, each pixel is accumulated in double first);
-// steady-state, before and after sums are double.
+// Sums are double (FilmSum, film_snapshot.h: per bin, and the steady-state, before and after sums);
+// the images read from them are float (film_view.h).
 #pragma once
 #include "base/math.h"
 #include "scene/scene_desc.h"
@@ -67,7 +67,7 @@ private:
 
 struct FilmStats {
     std::atomic<int64_t> rejectedSamples{0};  // NaN/Inf estimates discarded
-    // Pixel sums that would have overflowed the film's float storage: the pass's contribution to
+    // Pixel sums that would have exceeded the film's float images (3.4e38): the pass's contribution to
     // that pixel was dropped (counted, reported; the film never holds Inf).
     std::atomic<int64_t> overflowedPixels{0};
     // Luminance of energy that fell outside the film's time range (sum over passes, not averaged),
@@ -133,7 +133,8 @@ public:
 
     // Adds another film's sums and pass counts (and its counters), tile by tile: for checkpoints
     // and films rendered elsewhere. Throws std::invalid_argument unless it has the same size and
-    // time axis. Merging is exact up to the rounding of one addition per value (FilmSum).
+    // time axis. The merged sums equal one film of all the passes to < 1e-12 relative (one extra
+    // double rounding per value, FilmSum in film_snapshot.h).
     void merge(const TransientFilm& other);
 
     // Shorthands that take a snapshot and read it (film_view.h).
