@@ -2,6 +2,7 @@
 
 #include "cli/interrupt.h"
 #include "base/error.h"
+#include "film/film_view.h"
 #include "render/time_range.h"
 
 #include "cli/commands.h"
@@ -338,7 +339,7 @@ int64_t warnFilmOverflow(const Scene& scene, const TransientFilm& film) {
     const int64_t n = film.stats.overflowedPixels.load();
     if (n > 0)
         std::fprintf(stderr,
-                     "warning: %s: %lld pixel sums would have overflowed the film's 32-bit floats (max 3.4e38) and "
+                     "warning: %s: %lld pixel sums would have exceeded the film's float images (max 3.4e38) and "
                      "were dropped from those passes (the film holds no Inf, but those pixels are too dark): lower "
                      "the lights' power (transport is linear: scaling every light by s scales the film by s)\n",
                      keyWhere(scene.desc, scene.desc.lights.empty() ? "lights" : "lights[0].power").c_str(),
@@ -576,6 +577,8 @@ void reportPlannedOutputs(const Scene& scene, const RenderOutputs& r, double pre
 
 OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& r,
                                 const std::function<nlohmann::json()>& summary) {
+    // Every output from one snapshot: the same passes in each file.
+    const std::shared_ptr<const FilmSnapshot> snap = film.snapshot();
     OutputReport rep;
     const bool tty = isatty(STDERR_FILENO) && !r.quiet;
     if (!r.noFrames) rep.framesExpected = exportFrameCount(film.bins(), r.opt);
@@ -591,8 +594,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
     };
 
     {
-        std::vector<float> steady;  // one image for both files
-        film.steadyImage(steady);
+        const std::vector<float> steady = steadyImage(*snap);  // one image for both files
         writeExr(r.out + "/steady.exr", film.width(), film.height(), steady, r.opt.pixel);
         rep.kept.push_back("steady.exr");
         writePngPreview(r.out + "/steady.png", film.width(), film.height(), steady);
@@ -608,7 +610,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         if (!r.noFrames) {
             const double t0 = nowSec();
             double lastPrint = t0;
-            exportFrames(film, r.out + "/frames", r.opt, [&](int done, int total) {
+            exportFrames(*snap, r.out + "/frames", r.opt, [&](int done, int total) {
                 rep.framesWritten = done;
                 if (tty) {
                     std::fprintf(stderr, "\rwriting frames %d/%d", done, total);
@@ -625,7 +627,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
             }
         }
         if (r.strip > 0 && !rep.interrupted) {
-            exportStripPng(film, r.out + "/strip.png", r.strip, r.opt, r.stripEv);
+            exportStripPng(*snap, r.out + "/strip.png", r.strip, r.opt, r.stripEv);
             rep.kept.push_back("strip.png");
         }
     } catch (const UserError& e) {

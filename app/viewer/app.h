@@ -70,13 +70,14 @@ struct ProfileResult {
     FetchKey key;
     std::vector<float> profile;  // bins*3
     std::vector<float> streak;   // bins rows x W cols x 3
+    int width = 0, bins = 0;     // of the snapshot read
 };
 
 // Luminance of each bin (delta pulse, summed over the image) on one axis, for the automatic bin.
 struct BinEnergyResult {
     FetchKey key;                // generation, passes, axis
     std::vector<double> energy;  // per bin
-    bool complete = false;       // no tile was skipped (being written)
+    bool complete = false;       // every tile of the snapshot read had the same passes
 };
 
 // The bin holding the most light, or -1 if the film is black.

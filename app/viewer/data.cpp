@@ -1,8 +1,12 @@
-// Viewer: the driver session and the data path from the film to the textures. The UI thread only
-// reads the film with frame(..., wait=false) (tiles being written keep their previous pixels and
-// are fetched again), the streak and the pixel profile are read on a helper thread (they lock
-// tiles and would otherwise stall the UI behind a tile being rendered).
+// Viewer: the driver session and the data path from the film to the textures. The viewer never
+// reads the live film: it takes a snapshot (film_snapshot.h: a pointer per tile, never waits for a
+// tile being rendered) for each fetch and reads the images from it (film_view.h). The frame is read
+// on the UI thread; the streak, the pixel profile and the energy per bin on helper threads, from
+// a snapshot taken on the UI thread. Snapshots are dropped after the read (a held one keeps the
+// tiles it shows alive while the render replaces them).
 #include "viewer/app.h"
+
+#include "film/film_view.h"
 
 #include <GLFW/glfw3.h>
 
@@ -17,7 +21,7 @@ ExposureFit fitExposure(const std::vector<float>& rgb) {
     std::vector<float> lum;
     lum.reserve(rgb.size() / 3);
     for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
-        const float l = 0.2126f * rgb[i] + 0.7152f * rgb[i + 1] + 0.0722f * rgb[i + 2];
+        const float l = static_cast<float>(luminance(Color(rgb[i], rgb[i + 1], rgb[i + 2])));
         if (std::isfinite(l) && l > 0.0f) lum.push_back(l);
     }
     ExposureFit fit;
@@ -95,21 +99,21 @@ FetchKey Viewer::binEnergyKey() const {
 void Viewer::updateFrame() {
     const FetchKey key = frameKey();
     const double now = glfwGetTime();
-    // Fetch when the film or the selection changed. An incomplete fetch (tiles being written were
-    // skipped) is repeated, and while a pass renders the tiles it finishes are fetched too (the
-    // first pass can take many seconds): at most 30 (incomplete) or 4 (complete) times a second,
-    // and at most a tenth of the UI thread's time (a continuous frame sums all earlier bins).
+    // Fetch when the film or the selection changed. An incomplete fetch (its tiles differ in passes:
+    // a pass was being rendered) is repeated, and while a pass renders the tiles it finishes are
+    // fetched too (the first pass can take many seconds): at most 30 (incomplete) or 4 (complete)
+    // times a second, and at most a tenth of the UI thread's time (a continuous frame reads the
+    // prefix sums, computed once per tile block on the first continuous read).
     const bool changed = !(key == frameKey_);
     const bool rendering = driver_->running() && !driver_->paused();
     const double gap = std::max(frameComplete_ ? 0.25 : 1.0 / 30.0, 10.0 * fetchSec_);
     if (changed || ((!frameComplete_ || rendering) && now - lastFetch_ >= gap)) {
-        const TransientFilm& film = driver_->film();
-        frameRgb_.resize(static_cast<size_t>(film.width()) * film.height() * 3, 0.0f);
-        frameComplete_ = key.steady ? film.steadyImage(frameRgb_, false)
-                                    : film.frame(key.bin, key.axis, key.mode, frameRgb_, false);
+        const std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+        frameRgb_ = key.steady ? steadyImage(*snap) : frameImage(*snap, key.bin, key.axis, key.mode);
+        frameComplete_ = snap->minPasses() == snap->maxPasses();
         frameKey_ = key;
         lastFetch_ = now;
-        image_.upload(film.width(), film.height(), frameRgb_.data());
+        image_.upload(snap->width(), snap->height(), frameRgb_.data());
         imageDirty_ = true;
         fitPendingExposure(key);
         fetchSec_ = glfwGetTime() - now;  // the fit included (it sorts the lit pixels)
@@ -156,8 +160,8 @@ void Viewer::updateBinEnergy() {
                 st_.autoBin = false;
                 if (st_.autoFrame) frameKey_ = FetchKey{};  // and fit the exposure to it for good
             } else if (!r.complete) {
-                // A tile was busy (being written, or read by the UI thread's own fetch at that
-                // instant): measure again, even if no pass completes any more.
+                // The snapshot caught a pass in progress (its tiles differ in passes): measure
+                // again, even if no pass completes any more.
                 binEnergyRequested_ = FetchKey{};
             }
         }
@@ -172,22 +176,12 @@ void Viewer::updateBinEnergy() {
     if (key == binEnergyRequested_ && !due) return;
     binEnergyRequested_ = key;
     binEnergyLaunched_ = now;
-    std::shared_ptr<const Driver> drv = driver_;
-    binEnergyJob_ = std::async(std::launch::async, [drv, key] {
+    std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+    binEnergyJob_ = std::async(std::launch::async, [snap = std::move(snap), key] {
         BinEnergyResult r;
         r.key = key;
-        r.complete = true;
-        const TransientFilm& film = drv->film();
-        r.energy.assign(static_cast<size_t>(film.bins()), 0.0);
-        std::vector<float> rgb;
-        for (int k = 0; k < film.bins(); ++k) {
-            rgb.assign(static_cast<size_t>(film.width()) * film.height() * 3, 0.0f);  // skipped tiles: 0
-            r.complete &= film.frame(k, key.axis, EmissionMode::Delta, rgb, false);
-            double sum = 0.0;
-            for (size_t i = 0; i + 2 < rgb.size(); i += 3)
-                sum += 0.2126 * rgb[i] + 0.7152 * rgb[i + 1] + 0.0722 * rgb[i + 2];
-            r.energy[static_cast<size_t>(k)] = sum;
-        }
+        r.complete = snap->minPasses() == snap->maxPasses();
+        r.energy = binEnergy(*snap, key.axis);
         return r;
     });
 }
@@ -196,27 +190,28 @@ void Viewer::updateProfile() {
     using namespace std::chrono_literals;
     if (profileJob_.valid() && profileJob_.wait_for(0s) == std::future_status::ready) {
         ProfileResult r = profileJob_.get();
-        const TransientFilm& film = driver_->film();
         if (r.key.generation == generation_) {
             profileKey_ = r.key;
             profileRgb_ = std::move(r.profile);
             profileLum_.resize(profileRgb_.size() / 3);
             for (size_t k = 0; k < profileLum_.size(); ++k)
-                profileLum_[k] = 0.2126f * profileRgb_[k * 3] + 0.7152f * profileRgb_[k * 3 + 1] +
-                                 0.0722f * profileRgb_[k * 3 + 2];
-            streak_.upload(film.width(), film.bins(), r.streak.data());
+                profileLum_[k] = static_cast<float>(
+                    luminance(Color(profileRgb_[k * 3], profileRgb_[k * 3 + 1], profileRgb_[k * 3 + 2])));
+            streak_.upload(r.width, r.bins, r.streak.data());
             streakDirty_ = true;
         }
     }
     const FetchKey key = profileKey();
     if (!profileJob_.valid() && !(key == profileRequested_)) {
         profileRequested_ = key;
-        std::shared_ptr<const Driver> drv = driver_;
-        profileJob_ = std::async(std::launch::async, [drv, key] {
+        std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+        profileJob_ = std::async(std::launch::async, [snap = std::move(snap), key] {
             ProfileResult r;
             r.key = key;
-            drv->film().pixelProfile(key.x, key.y, key.axis, key.mode, r.profile);
-            drv->film().streak(key.y, key.axis, key.mode, r.streak);
+            r.width = snap->width();
+            r.bins = snap->bins();
+            r.profile = pixelProfile(*snap, key.x, key.y, key.axis, key.mode);
+            r.streak = streakImage(*snap, key.y, key.axis, key.mode);
             return r;
         });
     }

@@ -47,7 +47,9 @@ bool ExportJob::start(std::shared_ptr<const Driver> driver, const ExportRequest&
 }
 
 void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
-    const TransientFilm& film = driver->film();
+    // One snapshot for the whole export (the files show the same passes); held until it ends.
+    const std::shared_ptr<const FilmSnapshot> snap = driver->snapshot();
+    const FilmSnapshot& film = *snap;
     ExportOptions opt;
     opt.axis = req.axis;
     opt.mode = req.mode;

@@ -1,7 +1,8 @@
 // The viewer's exports, run on a background thread so the window keeps drawing: the current
 // frame, all frames, the steady-state image, the streak image of a row and a pixel's profile, in
-// the time axis and emission mode shown. The job holds a reference to the driver, so a restart or
-// closing the window never frees the film under it. Only film_export.h is called from the thread.
+// the time axis and emission mode shown. The job reads one snapshot of the film (film_snapshot.h),
+// taken when it starts, so its files show the same passes and a restart or closing the window never
+// frees the data under it. Only film_export.h is called from the thread.
 #pragma once
 #include "render/driver.h"
 #include "film/film_export.h"

@@ -271,7 +271,7 @@ void drawFilmStats(const FilmStats& fs, TimeAxis shownAxis) {
                            overflowed);
         if (ImGui::IsItemHovered())
             ImGui::SetTooltip("%lld non-finite (NaN/Inf) estimates were rejected (they are not in the film).\n"
-                              "%lld pixel sums would have overflowed the film's 32-bit floats and were dropped\n"
+                              "%lld pixel sums would have exceeded the film's float images (3.4e38) and were dropped\n"
                               "from their passes (those pixels are too dark): lower the lights' power (the\n"
                               "film scales with it).",
                               rejected, overflowed);

@@ -10,19 +10,19 @@
 
 namespace tpb {
 
-void sortBeamHits(std::vector<BeamHit>& hits, size_t from) {
-    std::sort(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(), [](const BeamHit& a, const BeamHit& b) {
+void sortBeamPieces(std::vector<BeamPiece>& hits, size_t from) {
+    std::sort(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(), [](const BeamPiece& a, const BeamPiece& b) {
         return a.beam != b.beam ? a.beam < b.beam : a.piece < b.piece;
     });
     // Embree may visit a primitive twice (spatial splits); keep one hit per (beam, piece).
     hits.erase(std::unique(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
-                           [](const BeamHit& a, const BeamHit& b) { return a.beam == b.beam && a.piece == b.piece; }),
+                           [](const BeamPiece& a, const BeamPiece& b) { return a.beam == b.beam && a.piece == b.piece; }),
                hits.end());
 }
 
 namespace {
 
-// Everything the overlap test needs, contiguous (one memory access per candidate).
+// A piece with its beam's axis and region, contiguous (one memory access per candidate).
 struct Piece {
     Vec3 origin, dir;  // of the beam
     double sbLo, sbHi;
@@ -43,13 +43,7 @@ void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece
     }
 }
 
-bool testPiece(const Piece& p, double radius, const Vec3& o, const Vec3& d, double sMax, int region, BeamHit& hit) {
-    if (p.region != region) return false;
-    if (!rayBeamOverlap(o, d, sMax, p.origin, p.dir, p.sbLo, p.sbHi, radius, hit.overlap)) return false;
-    hit.beam = p.beam;
-    hit.piece = p.piece;
-    return true;
-}
+BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
 
 class BruteForceBeams final : public BeamAccel {
 public:
@@ -58,12 +52,9 @@ public:
         radius_ = radius;
         makePieces(beams, radius, pieces_);
     }
-    void query(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamHit>& hits) const override {
-        const size_t from = hits.size();
-        BeamHit h;
+    void candidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out) const override {
         for (const Piece& p : pieces_)
-            if (testPiece(p, radius_, o, d, sMax, region, h)) hits.push_back(h);
-        sortBeamHits(hits, from);
+            if (p.region == region) out.push_back(candidate(p));  // already in (beam, piece) order
     }
     std::string name() const override { return "brute-force"; }
     size_t pieceCount() const override { return pieces_.size(); }
@@ -109,15 +100,12 @@ public:
         rtcCommitScene(scene_);
     }
 
-    void query(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamHit>& hits) const override {
+    void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits) const override {
         const size_t from = hits.size();
         if (pieces_.empty()) return;
         Context ctx;
         rtcInitIntersectContext(&ctx.base);
         ctx.self = this;
-        ctx.o = o;
-        ctx.d = d;
-        ctx.sMax = sMax;
         ctx.region = region;
         ctx.hits = &hits;
         RTCRayHit rh;
@@ -136,7 +124,7 @@ public:
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene_, &ctx.base, &rh);
-        sortBeamHits(hits, from);
+        sortBeamPieces(hits, from);
     }
     std::string name() const override { return "embree"; }
     size_t pieceCount() const override { return pieces_.size(); }
@@ -145,10 +133,8 @@ private:
     struct Context {
         RTCIntersectContext base;  // must be first: Embree hands this pointer back to the callbacks
         const EmbreeBeams* self;
-        Vec3 o, d;
-        double sMax;
         int region;
-        std::vector<BeamHit>* hits;
+        std::vector<BeamPiece>* hits;
     };
 
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
@@ -169,11 +155,10 @@ private:
     static void intersectFn(const RTCIntersectFunctionNArguments* args) {
         if (!args->valid[0]) return;
         auto* ctx = reinterpret_cast<Context*>(args->context);
-        const EmbreeBeams* self = ctx->self;
-        BeamHit h;
-        if (testPiece(self->pieces_[args->primID], self->radius_, ctx->o, ctx->d, ctx->sMax, ctx->region, h))
-            ctx->hits->push_back(h);
-        // No hit is reported to Embree: traversal goes on and visits every overlapping piece.
+        const Piece& p = ctx->self->pieces_[args->primID];
+        // Embree reached this piece's padded box: a candidate (the estimator tests its kernel).
+        if (p.region == ctx->region) ctx->hits->push_back(candidate(p));
+        // No hit is reported to Embree: traversal goes on and visits every candidate piece.
     }
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}
 

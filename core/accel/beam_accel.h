@@ -1,12 +1,17 @@
-// Finding every photon beam whose kernel cylinder overlaps a camera segment.
-// Long beams are split into pieces (each a sub-range of s_b) so bounding boxes stay tight; both
-// backends use the same pieces, so they return exactly the same hits:
-//   BruteForceBeams: tests every piece (the test oracle).
+// Finding the photon beams a camera segment may touch: the candidates of an estimator's gather.
+// Long beams are split into pieces (each a sub-range [sbLo, sbHi] of s_b) so bounding boxes stay
+// tight. The accelerator knows only the beams' axes and a support radius (the widest distance from
+// the axis at which the estimator's kernel is non-zero, given to build()): it returns every piece
+// whose box, padded by that radius, the segment may cross, and the ESTIMATOR decides the overlap
+// with its own kernel (a cylinder for the 2D kernel, closest approach for a 1D kernel, ...), so a
+// new kernel needs no change here. Both backends use the same pieces and return the same set once
+// the estimator has tested them:
+//   BruteForceBeams: every piece of the region (the test oracle).
 //   EmbreeBeams:     Embree user geometry over the pieces (Embree's BVH), in beam_accel.cpp only.
-// Hits are returned sorted by (beam, piece), so sums over hits do not depend on traversal order.
+// Candidates are returned sorted by (beam, piece), one per piece, so sums over them do not depend
+// on traversal order.
 #pragma once
 #include "accel/accel_backend.h"
-#include "estimators/beam_kernel.h"
 #include "photons/photon_tracer.h"
 
 #include <memory>
@@ -15,10 +20,11 @@
 
 namespace tpb {
 
-struct BeamHit {
+// A piece of beam `beam`: its parameters s_b in [sbLo, sbHi] (m along the beam from its origin).
+struct BeamPiece {
     uint32_t beam;
     uint32_t piece;
-    RayBeamOverlap overlap;
+    double sbLo, sbHi;
 };
 
 // Pieces of a beam of this length for kernel radius r: about 16 r long, at most 16 per beam. A
@@ -33,16 +39,19 @@ inline uint32_t beamPieceCount(double length, double radius) {
 class BeamAccel {
 public:
     virtual ~BeamAccel() = default;
-    // `beams` must outlive the accelerator (it is referenced, not copied).
-    virtual void build(const std::vector<Beam>& beams, double radius, int threads) = 0;
-    // Appends the hits of segment o + s d, s in [0, sMax], with beams of `region`, then sorts them.
-    virtual void query(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamHit>& hits) const = 0;
+    // `beams` must outlive the accelerator (it is referenced, not copied). supportRadius (m): the
+    // estimator's kernel is zero farther than this from a beam's axis.
+    virtual void build(const std::vector<Beam>& beams, double supportRadius, int threads) = 0;
+    // Appends the candidate pieces of beams of `region` for the segment o + s d, s in [0, sMax]
+    // (d unit), sorted by (beam, piece): a superset of the pieces whose kernel the segment meets.
+    virtual void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out) const = 0;
     virtual std::string name() const = 0;
     virtual size_t pieceCount() const = 0;
 
     static std::unique_ptr<BeamAccel> create(AccelBackend kind);
 };
 
-void sortBeamHits(std::vector<BeamHit>& hits, size_t from);
+// Sorts out[from..] by (beam, piece) and keeps one entry per piece.
+void sortBeamPieces(std::vector<BeamPiece>& out, size_t from);
 
 }  // namespace tpb

@@ -1,7 +1,7 @@
 // Spreading one ray-beam estimate over the film's time bins (paper Sec. 4, eqs. 12-15, Fig. 2d).
 //
 // An estimate carries energy E (RGB) produced along s in [s0, s1] of the camera segment, with
-// energy density proportional to exp(-kappa s) (kappa per channel, see beam_kernel.h), and the
+// energy density proportional to exp(-kappa s) (kappa per channel, see beam2d.h), and the
 // time of flight is linear in s: t(s) = a + b s (OPL, m). Two profiles:
 //   Exact:   the density above, integrated over each bin in closed form (stable form with g(x)).
 //   Uniform: the paper's even spread over [t-, t+] (= kappa 0, since t is linear in s).
@@ -9,7 +9,6 @@
 // all energy goes to one bin. Energy before the film's start and after its end is returned
 // (OutsideFilm), never dropped silently: the film keeps both, per pixel and axis.
 #pragma once
-#include "estimators/beam_kernel.h"
 #include "base/math.h"
 
 #include <algorithm>

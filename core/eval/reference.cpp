@@ -4,6 +4,7 @@
 #include "io/atomic_file.h"
 #include "base/error.h"
 #include "base/parallel.h"
+#include "film/film_view.h"
 
 #include <nlohmann/json.hpp>
 
@@ -435,16 +436,16 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
         }
         info.passes = done;
         info.interrupted = abort && abort->load();
-        std::vector<float> img;
+        const std::shared_ptr<const FilmSnapshot> snap = drv.snapshot();
         for (int a = 0; a < 2; ++a) {
             std::vector<float>& dst = a == 0 ? r.real : r.unwarped;
             for (int k = 0; k < B; ++k) {
-                drv.film().frame(k, static_cast<TimeAxis>(a), EmissionMode::Delta, img);
+                const std::vector<float> img = frameImage(*snap, k, static_cast<TimeAxis>(a), EmissionMode::Delta);
                 for (size_t p = 0; p < P; ++p)
                     for (int c = 0; c < 3; ++c) dst[(p * B + k) * 3 + c] = img[p * 3 + c];
             }
         }
-        drv.film().steadyImage(r.steady);
+        r.steady = steadyImage(*snap);
         info.selfErrorEstimate = "unknown (photon beams: the error is mostly kernel bias)";
     } else {
         RenderSettings ps = job.pt;
@@ -469,12 +470,13 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
         r.selfDiff2.assign(P * 3, 0.0f);
         std::vector<double> diff2(P * 3, 0.0);
         SquaredError sums[3];  // ref2 per quantity (diff2 kept per pixel)
+        const std::shared_ptr<const FilmSnapshot> sa = fa.snapshot(), sb = fb.snapshot();
         std::vector<float> ia, ib;
         for (int a = 0; a < 2; ++a) {
             std::vector<float>& dst = a == 0 ? r.real : r.unwarped;
             for (int k = 0; k < B; ++k) {
-                fa.frame(k, static_cast<TimeAxis>(a), EmissionMode::Delta, ia);
-                fb.frame(k, static_cast<TimeAxis>(a), EmissionMode::Delta, ib);
+                ia = frameImage(*sa, k, static_cast<TimeAxis>(a), EmissionMode::Delta);
+                ib = frameImage(*sb, k, static_cast<TimeAxis>(a), EmissionMode::Delta);
                 for (size_t p = 0; p < P; ++p)
                     for (int c = 0; c < 3; ++c) {
                         const double x = ia[p * 3 + c], y = ib[p * 3 + c];
@@ -485,8 +487,8 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
                     }
             }
         }
-        fa.steadyImage(ia);
-        fb.steadyImage(ib);
+        ia = steadyImage(*sa);
+        ib = steadyImage(*sb);
         for (size_t p = 0; p < P; ++p)
             for (int c = 0; c < 3; ++c) {
                 const double x = ia[p * 3 + c], y = ib[p * 3 + c];
@@ -583,13 +585,14 @@ FilmError compareWithReference(const TransientFilm& film, const ReferenceVolume&
     const int B = i.bins;
     const bool useMask = mask && mask->size() == P;
     const std::vector<float>& rv = ref.volume(axis);
+    const std::shared_ptr<const FilmSnapshot> snap = film.snapshot();  // one state of the film for every frame
     FilmError out;
     SquaredError total;
     AbsoluteError totalL1, steadyL1;
     if (perFrame) out.perFrame.assign(static_cast<size_t>(B), 0.0);
     std::vector<float> img;
     for (int k = 0; k < B; ++k) {
-        film.frame(k, axis, EmissionMode::Delta, img);
+        img = frameImage(*snap, k, axis, EmissionMode::Delta);
         SquaredError e;
         for (size_t p = 0; p < P; ++p) {
             if (useMask && (*mask)[p]) continue;
@@ -604,7 +607,7 @@ FilmError compareWithReference(const TransientFilm& film, const ReferenceVolume&
     }
     out.volume = total.relative();
     out.volumeL1 = totalL1.relative();
-    film.steadyImage(img);
+    img = steadyImage(*snap);
     SquaredError s;
     double sx = 0.0, sr = 0.0;
     for (size_t p = 0; p < P; ++p) {

@@ -27,7 +27,7 @@
 #pragma once
 #include "render/driver.h"
 #include "eval/error_metrics.h"
-#include "film/film.h"
+#include "film/transient_film.h"
 #include "integrators/path_tracer.h"
 #include "scene/scene.h"
 

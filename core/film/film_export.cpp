@@ -1,5 +1,8 @@
 #include "film/film_export.h"
 
+#include "base/math.h"
+#include "film/film_view.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -13,10 +16,8 @@ std::string frameFileName(int bin) {
     return buf;
 }
 
-void exportFrame(const TransientFilm& film, int bin, const std::string& path, const ExportOptions& opt) {
-    std::vector<float> img;
-    film.frame(bin, opt.axis, opt.mode, img);
-    writeExr(path, film.width(), film.height(), img, opt.pixel);
+void exportFrame(const FilmSnapshot& film, int bin, const std::string& path, const ExportOptions& opt) {
+    writeExr(path, film.width(), film.height(), frameImage(film, bin, opt.axis, opt.mode), opt.pixel);
 }
 
 namespace {
@@ -28,7 +29,7 @@ int exportFrameCount(int bins, const ExportOptions& opt) {
     return last >= opt.firstBin ? (last - opt.firstBin) / std::max(1, opt.step) + 1 : 0;
 }
 
-int exportFrames(const TransientFilm& film, const std::string& dir, const ExportOptions& opt,
+int exportFrames(const FilmSnapshot& film, const std::string& dir, const ExportOptions& opt,
                  const std::function<void(int, int)>& progress, const std::atomic<bool>* cancel) {
     ensureWritableDir(dir);
     const int last = lastExportBin(film.bins(), opt);
@@ -44,21 +45,16 @@ int exportFrames(const TransientFilm& film, const std::string& dir, const Export
     return done;
 }
 
-void exportSteady(const TransientFilm& film, const std::string& path, ExrPixel pixel) {
-    std::vector<float> img;
-    film.steadyImage(img);
-    writeExr(path, film.width(), film.height(), img, pixel);
+void exportSteady(const FilmSnapshot& film, const std::string& path, ExrPixel pixel) {
+    writeExr(path, film.width(), film.height(), steadyImage(film), pixel);
 }
 
-void exportStreak(const TransientFilm& film, int row, const std::string& path, const ExportOptions& opt) {
-    std::vector<float> img;
-    film.streak(row, opt.axis, opt.mode, img);
-    writeExr(path, film.width(), film.bins(), img, opt.pixel);
+void exportStreak(const FilmSnapshot& film, int row, const std::string& path, const ExportOptions& opt) {
+    writeExr(path, film.width(), film.bins(), streakImage(film, row, opt.axis, opt.mode), opt.pixel);
 }
 
-void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string& path, const ExportOptions& opt) {
-    std::vector<float> prof;
-    film.pixelProfile(x, y, opt.axis, opt.mode, prof);
+void exportProfileCsv(const FilmSnapshot& film, int x, int y, const std::string& path, const ExportOptions& opt) {
+    const std::vector<float> prof = pixelProfile(film, x, y, opt.axis, opt.mode);
     std::ostringstream os;
     os << "bin,t_opl_m,t_ns,r,g,b\n";
     const TimeBins& tb = film.time();
@@ -70,7 +66,7 @@ void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string
     writeTextFile(path, os.str());
 }
 
-std::vector<int> exportStripPng(const TransientFilm& film, const std::string& path, int count, const ExportOptions& opt,
+std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& path, int count, const ExportOptions& opt,
                                 double exposureEv) {
     count = std::clamp(count, 1, film.bins());
     const int W = film.width(), H = film.height();
@@ -79,13 +75,7 @@ std::vector<int> exportStripPng(const TransientFilm& film, const std::string& pa
     std::vector<float> lum;
     // Frames spread over the part of the time axis that carries the energy: from the 0.5% to the
     // 90% quantile of the (delta) arrival-time distribution summed over the image.
-    std::vector<double> perBin(film.bins(), 0.0);
-    ExportOptions delta = opt;
-    delta.mode = EmissionMode::Delta;
-    for (int k = 0; k < film.bins(); ++k) {
-        film.frame(k, delta.axis, delta.mode, img);
-        for (size_t p = 0; p < img.size(); p += 3) perBin[k] += 0.2126 * img[p] + 0.7152 * img[p + 1] + 0.0722 * img[p + 2];
-    }
+    const std::vector<double> perBin = binEnergy(film, opt.axis);
     double total = 0.0;
     for (double v : perBin) total += std::max(v, 0.0);
     int kLo = 0, kHi = film.bins() - 1;
@@ -102,7 +92,7 @@ std::vector<int> exportStripPng(const TransientFilm& film, const std::string& pa
     for (int i = 0; i < count; ++i) {
         const int k = std::min(kHi, kLo + static_cast<int>(std::lround(i * double(kHi - kLo) / std::max(1, count - 1))));
         binsUsed.push_back(k);
-        film.frame(k, opt.axis, opt.mode, img);
+        img = frameImage(film, k, opt.axis, opt.mode);
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x)
                 for (int c = 0; c < 3; ++c)
@@ -110,7 +100,7 @@ std::vector<int> exportStripPng(const TransientFilm& film, const std::string& pa
                         img[(static_cast<size_t>(y) * W + x) * 3 + c];
     }
     for (size_t p = 0; p < strip.size(); p += 3) {
-        const float l = 0.2126f * strip[p] + 0.7152f * strip[p + 1] + 0.0722f * strip[p + 2];
+        const float l = static_cast<float>(luminance(Color(strip[p], strip[p + 1], strip[p + 2])));
         if (l > 0.0f) lum.push_back(l);  // lit pixels only: a small lit region must not read as black
     }
     std::sort(lum.begin(), lum.end());

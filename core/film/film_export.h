@@ -1,8 +1,11 @@
 // Writing the transient film to disk: frames (one EXR per time bin), the steady-state image, the
 // streak image of a row, and a pixel's time profile as CSV. Each file is written atomically
-// (image_io.h). Used by `tpb render` and by the viewer's export buttons.
+// (image_io.h). Used by `tpb render` and by the viewer's export buttons. Everything is read from
+// one snapshot (film_snapshot.h), so the files of one export show the same passes while the render
+// goes on (the snapshot keeps the blocks it shows alive until the export returns).
 #pragma once
-#include "film/film.h"
+#include "film/film_snapshot.h"
+#include "scene/scene_desc.h"
 #include "io/image_io.h"
 
 #include <atomic>
@@ -20,14 +23,14 @@ struct ExportOptions {
 
 // Writes <dir>/frame_<bin>.exr for the selected bins; progress(done, total) after each file.
 // Returns the number of frames written (stops early if `cancel` is set).
-int exportFrames(const TransientFilm& film, const std::string& dir, const ExportOptions& opt,
+int exportFrames(const FilmSnapshot& film, const std::string& dir, const ExportOptions& opt,
                  const std::function<void(int, int)>& progress = {}, const std::atomic<bool>* cancel = nullptr);
-void exportFrame(const TransientFilm& film, int bin, const std::string& path, const ExportOptions& opt);
-void exportSteady(const TransientFilm& film, const std::string& path, ExrPixel pixel = ExrPixel::Float);
+void exportFrame(const FilmSnapshot& film, int bin, const std::string& path, const ExportOptions& opt);
+void exportSteady(const FilmSnapshot& film, const std::string& path, ExrPixel pixel = ExrPixel::Float);
 // Streak image: x horizontally, time (bins) vertically, for image row `row`.
-void exportStreak(const TransientFilm& film, int row, const std::string& path, const ExportOptions& opt);
+void exportStreak(const FilmSnapshot& film, int row, const std::string& path, const ExportOptions& opt);
 // "bin,t_opl_m,t_ns,r,g,b" rows.
-void exportProfileCsv(const TransientFilm& film, int x, int y, const std::string& path, const ExportOptions& opt);
+void exportProfileCsv(const FilmSnapshot& film, int x, int y, const std::string& path, const ExportOptions& opt);
 
 std::string frameFileName(int bin);
 // How many frames exportFrames writes for a film of `bins` bins with these options.
@@ -37,7 +40,7 @@ int exportFrameCount(int bins, const ExportOptions& opt);
 // over the part of the time axis that carries the energy (0.5% to 90% of the arrival times).
 // Exposure: 2^exposureEv times a normalisation that maps the 99.5th percentile of the strip's
 // lit pixels' luminance to 1 (so strips of different scenes are comparable without tuning). Returns the bins used.
-std::vector<int> exportStripPng(const TransientFilm& film, const std::string& path, int count, const ExportOptions& opt,
+std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& path, int count, const ExportOptions& opt,
                                 double exposureEv = 0.0);
 
 }  // namespace tpb

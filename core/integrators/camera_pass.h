@@ -1,11 +1,11 @@
 // Camera pass of Transient Photon Beams (paper Sec. 4): camera paths through specular surfaces,
-// the 2D-kernel beam estimate (eq. 8, closed form in beam_kernel.h) on every medium segment,
-// transient progressive photon mapping on the diffuse hit, visible emitters; every estimate is
-// spread over the time bins it covers (eqs. 12-15, time_splat.h) on both time axes.
+// the volume estimator (today the 2D beam kernel, estimators/beam2d.h) on every segment inside a
+// scattering medium, the surface estimator (transient progressive photon mapping,
+// estimators/surface_ppm.h) on the diffuse hit, visible emitters; every estimate is spread over
+// the time bins it covers (eqs. 12-15, time_splat.h) on both time axes.
 #pragma once
-#include "accel/beam_accel.h"
-#include "film/film.h"
-#include "accel/photon_grid.h"
+#include "estimators/estimator.h"
+#include "film/transient_film.h"
 #include "photons/photon_tracer.h"
 #include "scene/scene.h"
 
@@ -14,11 +14,13 @@ namespace tpb {
 struct CameraPassSettings {
     uint64_t seed = 1;
     uint64_t pass = 1;
-    double beamRadius = 0.01;     // m, this pass
-    double surfaceRadius = 0.02;  // m, this pass
-    TimeProfile profile = TimeProfile::Exact;
-    BeamLength beamLength = BeamLength::Short;
     int maxDepth = 16;
+};
+
+// The estimators a camera path asks (either may be null: that stage is off for the scene).
+struct CameraPassEstimators {
+    const VolumeEstimator* volume = nullptr;
+    const SurfaceEstimator* surface = nullptr;
 };
 
 struct CameraPassStats : FilmTally {
@@ -32,18 +34,16 @@ struct CameraPassStats : FilmTally {
 // Per-thread scratch space.
 struct CameraPassScratch {
     PixelAccumulator acc;
-    std::vector<BeamHit> hits;
-    std::vector<int> nearShapes;  // shapes near the current camera segment (beam visibility)
+    EstimatorScratch estimator;
 };
 
-// Renders the pixels of `tile` into the film (the film's TileWriter locks that tile).
-void renderTile(const Scene& scene, const PhotonMap& map, const BeamAccel* beams, const PhotonGrid* grid,
-                const CameraPassSettings& s, TransientFilm& film, int tile, CameraPassScratch& scratch,
-                CameraPassStats& stats);
+// Renders one pixel's estimate for this pass into `scratch.acc` (no film access).
+void renderPixel(const Scene& scene, const CameraPassEstimators& est, const CameraPassSettings& s, const TimeBins& time,
+                 int x, int y, CameraPassScratch& scratch, CameraPassStats& stats);
 
-// Renders one pixel's estimate for this pass into `acc` (no film access; used by tests too).
-void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beams, const PhotonGrid* grid,
-                 const CameraPassSettings& s, const TimeBins& time, int x, int y, CameraPassScratch& scratch,
-                 CameraPassStats& stats);
+// Renders the pixels of `tile` into the film (the film's TileWriter locks that tile): for tools and
+// tests; the Driver runs the photon beams integrator (integrators/photon_beams.h) instead.
+void renderTile(const Scene& scene, const CameraPassEstimators& est, const CameraPassSettings& s, TransientFilm& film,
+                int tile, CameraPassScratch& scratch, CameraPassStats& stats);
 
 }  // namespace tpb

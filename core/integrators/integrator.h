@@ -18,7 +18,7 @@
 // case in makeIntegrator() (integrators/integrator.cpp), and add it to the parameterised test
 // tests/integrators/test_integrators.cpp that runs every integrator on the analytic scenes.
 #pragma once
-#include "film/film.h"
+#include "film/transient_film.h"
 #include "integrators/camera_pass.h"
 #include "integrators/path_tracer.h"
 #include "render/render_settings.h"

@@ -52,7 +52,7 @@
 // diffuse, mirror and dielectric interactions; null crossings do not count). NEE is done at the
 // last allowed vertex, so maxDepth = 1 gives exactly single scattering / direct lighting.
 #pragma once
-#include "film/film.h"
+#include "film/transient_film.h"
 #include "render/render_settings.h"
 #include "scene/scene.h"
 

@@ -1,5 +1,6 @@
 #include "integrators/photon_beams.h"
 
+#include "base/error.h"
 #include "base/progressive.h"
 #include "render/memory_budget.h"
 
@@ -14,21 +15,21 @@ double wallSec() {
     return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
-// Kernel dimensions of the two estimators, for the radius schedule (base/progressive.h).
-constexpr int kBeamKernelDim = 2;     // the 2D beam kernel: a disc across the beam (eq. 8)
-constexpr int kSurfaceKernelDim = 2;  // surface photon mapping: a disc on the surface
-
 }  // namespace
 
 PhotonBeamsIntegrator::PhotonBeamsIntegrator(const Scene& scene, const RenderSettings& settings)
-    : scene_(scene), settings_(settings) {}
+    : scene_(scene), settings_(settings), volume_(makeVolumeEstimator(settings.volumeEstimator)),
+      surface_(makeSurfaceEstimator(settings.surfaceEstimator)) {
+    if (!volume_) throw UserError("unknown volume estimator \"" + settings.volumeEstimator + "\"");
+    if (!surface_) throw UserError("unknown surface estimator \"" + settings.surfaceEstimator + "\"");
+}
 
 double PhotonBeamsIntegrator::beamRadius(uint64_t pass) const {
-    return progressiveRadius(settings_.beamRadius0, settings_.alpha, pass, kBeamKernelDim);
+    return progressiveRadius(settings_.beamRadius0, settings_.alpha, pass, volume_->dim());
 }
 
 double PhotonBeamsIntegrator::surfaceRadius(uint64_t pass) const {
-    return progressiveRadius(settings_.surfaceRadius0, settings_.alpha, pass, kSurfaceKernelDim);
+    return progressiveRadius(settings_.surfaceRadius0, settings_.alpha, pass, surface_->dim());
 }
 
 bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
@@ -58,17 +59,23 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     ps.regionOverflows = map_.regionOverflows;
     const double t1 = wallSec();
 
-    // 2. Acceleration structures.
-    haveBeams_ = scene_.stages.beams && !map_.beams.empty();
-    if (haveBeams_) {
-        if (!accel_) accel_ = BeamAccel::create(settings_.accel);
-        accel_->build(map_.beams, ps.beamRadius, ctx.threads);
-        ps.beamPieces = static_cast<int64_t>(accel_->pieceCount());
+    // 2. The estimators' acceleration structures for this pass's radii.
+    EstimatorPass ep;
+    ep.profile = settings_.profile;
+    ep.beamLength = settings_.beamLength;
+    ep.accel = settings_.accel;
+    ep.threads = ctx.threads;
+    estimators_ = {};
+    if (scene_.stages.beams && !map_.beams.empty()) {
+        ep.radius = ps.beamRadius;
+        volume_->prepare(scene_, map_, ep);
+        if (!volume_->empty()) estimators_.volume = volume_.get();
+        ps.beamPieces = static_cast<int64_t>(volume_->accelPrimitives());
     }
-    grid_.reset();
     if (scene_.stages.surfacePhotons && !map_.photons.empty()) {
-        grid_ = std::make_unique<PhotonGrid>();
-        grid_->build(map_.photons, ps.surfaceRadius);
+        ep.radius = ps.surfaceRadius;
+        surface_->prepare(scene_, map_, ep);
+        if (!surface_->empty()) estimators_.surface = surface_.get();
     }
     const double t2 = wallSec();
     ps.photonSec = t1 - t0;
@@ -77,10 +84,6 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     // 3. Camera pass settings and scratch for the tiles.
     camera_.seed = settings_.seed;
     camera_.pass = ctx.pass;
-    camera_.beamRadius = ps.beamRadius;
-    camera_.surfaceRadius = ps.surfaceRadius;
-    camera_.profile = settings_.profile;
-    camera_.beamLength = settings_.beamLength;
     camera_.maxDepth = settings_.maxDepth;
     scratch_.resize(static_cast<size_t>(ctx.threads));
     for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
@@ -92,10 +95,9 @@ void PhotonBeamsIntegrator::renderTile(const PassContext& ctx, int tile, const T
                                        TransientFilm::TileWriter& writer, int thread) {
     CameraPassScratch& scratch = scratch_[static_cast<size_t>(thread)];
     CameraPassStats& stats = tileStats_[static_cast<size_t>(tile)];
-    const BeamAccel* beams = haveBeams_ ? accel_.get() : nullptr;
     for (int y = r.y0; y < r.y0 + r.h; ++y)
         for (int x = r.x0; x < r.x0 + r.w; ++x) {
-            renderPixel(scene_, map_, beams, grid_.get(), camera_, *ctx.time, x, y, scratch, stats);
+            renderPixel(scene_, estimators_, camera_, *ctx.time, x, y, scratch, stats);
             writer.addPixel(x, y, scratch.acc);
             scratch.acc.clearTouched();
         }

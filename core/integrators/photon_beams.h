@@ -9,13 +9,13 @@
 //              on the diffuse hit, each spread over the time bins it covers (eqs. 12-15);
 //   endPass    the counters.
 // The kernel radii shrink pass after pass (Knaus & Zwicker 2011; base/progressive.h): each
-// estimator gives the dimension of its kernel to the schedule (the 2D beam kernel and the surface
-// kernel are both 2D: their area shrinks by (i + alpha) / (i + 1) per pass).
+// estimator (estimators/estimator.h, chosen by name in the settings) gives the dimension of its
+// kernel to the schedule (the 2D beam kernel and the surface kernel are both 2D: their area shrinks
+// by (i + alpha) / (i + 1) per pass).
 // Only the stages the scene needs run (Scene::stages: no beams without a scattering medium that
 // photons reach, no surface photons without a diffuse surface).
 #pragma once
-#include "accel/beam_accel.h"
-#include "accel/photon_grid.h"
+#include "estimators/estimator.h"
 #include "integrators/camera_pass.h"
 #include "integrators/integrator.h"
 #include "photons/photon_tracer.h"
@@ -44,9 +44,9 @@ private:
     const Scene& scene_;
     RenderSettings settings_;
     PhotonMap map_;
-    std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
-    bool haveBeams_ = false;
-    std::unique_ptr<PhotonGrid> grid_;
+    std::unique_ptr<VolumeEstimator> volume_;    // settings.volumeEstimator, kept across passes
+    std::unique_ptr<SurfaceEstimator> surface_;  // settings.surfaceEstimator
+    CameraPassEstimators estimators_;            // this pass's (null: stage off or nothing to gather)
     CameraPassSettings camera_;
     std::vector<CameraPassScratch> scratch_;     // per thread
     std::vector<CameraPassStats> tileStats_;     // per tile, summed in tile order

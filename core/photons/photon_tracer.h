@@ -5,7 +5,7 @@
 // Beams are "short" by default: a beam ends at the next scattering event or surface, and its
 // energy along s_b is Phi * T(s_b) / P(survive to s_b); with free-flight sampling at the average
 // extinction sigma_bar this leaves exp(-(sigma_t - sigma_bar) s_b) inside the kernel (tau_b, see
-// beam_kernel.h), which is 1 for grey media. "Long" beams extend to the surface and keep the full
+// beam2d.h), which is 1 for grey media. "Long" beams extend to the surface and keep the full
 // transmittance exp(-sigma_t s_b) (the form of the paper's eq. 8); the photon still scatters at the
 // sampled distance.
 #pragma once

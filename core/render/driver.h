@@ -5,11 +5,11 @@
 // list of pass indices can be run (runPass).
 //
 // Asynchronous API for the viewer and the CLI: start() runs passes on a background thread until
-// the pass count or time budget is reached or stop() is called; pause()/resume(); the film can be
-// read at any time (per-tile consistent, see film.h) and history() returns finished passes.
+// the pass count or time budget is reached or stop() is called; pause()/resume(); snapshot() can be
+// taken at any time (per-tile consistent, see film_snapshot.h) and history() returns finished passes.
 #pragma once
 #include "integrators/integrator.h"
-#include "film/film.h"
+#include "film/transient_film.h"
 #include "render/memory_budget.h"
 #include "render/render_settings.h"
 #include "base/pause_gate.h"
@@ -57,6 +57,12 @@ public:
     // Only stores an atomic: safe to call from a signal handler (the CLI's Ctrl-C/SIGTERM).
     void requestStop() { stopRequested_ = true; }
 
+    // The film as its tiles have published it: after runPass() returns (or onPass is called), every
+    // tile holds that pass; during a pass, tiles may differ by one. Cheap (a pointer per tile): take
+    // one when showing or exporting and drop it after, since a snapshot held while passes go on keeps
+    // the tile blocks it shows alive (film_snapshot.h). Not cached here for that reason: a snapshot
+    // the driver kept from one pass to the next would double the film's memory during every pass.
+    std::shared_ptr<const FilmSnapshot> snapshot() const { return film_->snapshot(); }
     const TransientFilm& film() const { return *film_; }
     TransientFilm& film() { return *film_; }
     const Scene& scene() const { return scene_; }

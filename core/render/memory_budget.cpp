@@ -1,6 +1,7 @@
 #include "render/memory_budget.h"
 
 #include "base/error.h"
+#include "film/film_snapshot.h"
 
 #include <algorithm>
 #include <charconv>
@@ -22,8 +23,8 @@ uint64_t filmBytes(int width, int height, int bins) {
     const uint64_t w = static_cast<uint64_t>(std::max(width, 0));
     const uint64_t h = static_cast<uint64_t>(std::max(height, 0));
     const uint64_t b = static_cast<uint64_t>(std::max(bins, 0));
-    // Transient: bins x 2 time axes x RGB x float. Double: steady RGB + 2 axes x (before, after) x RGB.
-    const uint64_t perPixel = satAdd(satMul(b, 2 * 3 * sizeof(float)), (3 + 2 * 2 * 3) * sizeof(double));
+    // Transient: bins x 2 time axes x RGB x double (FilmSum). Steady RGB + 2 axes x (before, after) x RGB, double.
+    const uint64_t perPixel = satAdd(satMul(b, 2 * 3 * sizeof(FilmSum)), (3 + 2 * 2 * 3) * sizeof(double));
     return satMul(satMul(w, h), perPixel);
 }
 

@@ -9,10 +9,12 @@
 
 namespace tpb {
 
-// Memory the transient film needs, in bytes: the one formula (TransientFilm::bytes() counts what it
-// really allocated and must agree; tests/film/test_film.cpp checks it). Per pixel: bins x 2 time axes x
-// RGB x float, plus in double the steady-state RGB and, per axis, the RGB that arrived before and
-// after the film. Saturates at UINT64_MAX instead of wrapping.
+// Memory the live transient film needs, in bytes: the one formula (TransientFilm::bytes() counts what
+// it really allocated and must agree; tests/film/test_transient_film.cpp checks it). Per pixel, all in
+// double: bins x 2 time axes x RGB, the steady-state RGB and, per axis, the RGB that arrived before
+// and after the film. Not included (film_snapshot.h): one tile block per render thread while a pass
+// runs, the blocks that snapshots still hold, and the continuous-mode prefix sums of the blocks read.
+// Saturates at UINT64_MAX instead of wrapping.
 uint64_t filmBytes(int width, int height, int bins);
 inline uint64_t filmBytes(const CameraDesc& cam, int bins) { return filmBytes(cam.width, cam.height, bins); }
 // Rough memory of one pass's photon map (~4 beam segments per photon, as `tpb info` prints).

@@ -46,6 +46,9 @@ struct RenderSettings {
     TimeProfile profile = TimeProfile::Exact;
     BeamLength beamLength = BeamLength::Short;
     AccelBackend accel = AccelBackend::Embree;
+    // The density estimators, by name (estimators/registry.cpp, docs/estimators.md).
+    std::string volumeEstimator = "beam2d";  // along camera segments in media
+    std::string surfaceEstimator = "ppm";    // at diffuse camera-path vertices
     uint64_t maxPhotonMapBytes = 0;  // per pass; 0 = maxFilmBytes() (memory_budget.h)
 
     // ---- path tracer ----

@@ -53,18 +53,23 @@ TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int t
     cs.pass = 0;
     // Generous kernels (a low-noise pilot), never wider than kPilotMaxRadiusFraction of the diagonal:
     // the render's own radius may be huge, and the pilot only needs the arrival times.
-    cs.beamRadius = std::min(std::max(scene.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
-    cs.surfaceRadius = std::min(std::max(scene.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
+    const double beamRadius = std::min(std::max(scene.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
+    const double surfaceRadius = std::min(std::max(scene.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
     cs.maxDepth = scene.desc.render.maxDepth;
-    std::unique_ptr<BeamAccel> accel;
+    EstimatorPass ep;
+    ep.threads = threads;
+    std::unique_ptr<VolumeEstimator> volume = makeVolumeEstimator("beam2d");
+    std::unique_ptr<SurfaceEstimator> surface = makeSurfaceEstimator("ppm");
+    CameraPassEstimators est;
     if (scene.stages.beams && !map.beams.empty()) {
-        accel = BeamAccel::create(AccelBackend::Embree);
-        accel->build(map.beams, cs.beamRadius, threads);
+        ep.radius = beamRadius;
+        volume->prepare(scene, map, ep);
+        est.volume = volume.get();
     }
-    std::unique_ptr<PhotonGrid> grid;
     if (scene.stages.surfacePhotons && !map.photons.empty()) {
-        grid = std::make_unique<PhotonGrid>();
-        grid->build(map.photons, cs.surfaceRadius);
+        ep.radius = surfaceRadius;
+        surface->prepare(scene, map, ep);
+        est.surface = surface.get();
     }
     if (aborted()) {
         fit.interrupted = true;
@@ -85,11 +90,11 @@ TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int t
         const int y = static_cast<int>(r) * sy;
         for (int x = 0; x < W; x += sx) {
             if (aborted()) return;  // (a row of a huge film is long too)
-            renderPixel(scene, map, accel.get(), grid.get(), cs, wide, x, y, scratch, stats);
+            renderPixel(scene, est, cs, wide, x, y, scratch, stats);
             for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
                 for (int k = scratch.acc.lo(a); k <= scratch.acc.hi(a); ++k) {
                     const double* v = scratch.acc.bin(a, k);
-                    local[k] += std::max(0.0, 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2]);
+                    local[k] += std::max(0.0, luminance(Color(v[0], v[1], v[2])));
                 }
             scratch.acc.clearTouched();
         }

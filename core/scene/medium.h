@@ -6,7 +6,7 @@
 // through core/transport/free_flight.h. The set of media is closed (MediumKind): homogeneous is
 // the only kind today; a heterogeneous medium adds a kind and a case in these two functions
 // (delta/ratio tracking against a majorant; the Rng is passed for that), and nothing else in the
-// tracers changes. The camera pass's 2D beam kernel (estimators/beam_kernel.h, eq. 8 in closed
+// tracers changes. The camera pass's 2D beam kernel (estimators/beam2d.h, eq. 8 in closed
 // form) reads sigma_t / sigma_s directly: it needs a homogeneous medium, so a heterogeneous one
 // will need its own estimator there (or a quadrature of the kernel).
 #pragma once

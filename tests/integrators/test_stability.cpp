@@ -7,7 +7,7 @@
 // Most estimator-level cases use one construction: a laser inside a box of homogeneous medium
 // (null boundary), seen from a camera outside it, single scattering only (max_depth 1). The
 // expected image, integrated over solid angle, has an exact form for the 2D kernel of
-// beam_kernel.h: for a camera ray of direction w and the kernel cylinder C of radius r around the
+// beam2d.h: for a camera ray of direction w and the kernel cylinder C of radius r around the
 // beam, d(omega) ds = d^3x / |x - cam|^2, so
 //   E[ sum_pixels L_px Omega_px ] = int_C sigma_s p(-c(x)) Phi / (pi r^2) T_cam(x) T_b(s_b(x)) / |x - cam|^2 d^3x,
 // with c(x) = dot(w(x), w_b), s_b(x) the projection of x on the beam axis, T_cam the transmittance
@@ -18,8 +18,10 @@
 // interval, no closed-form transmittance integral, no time splat).
 #include "accel/beam_accel.h"
 #include "scene/bsdf.h"
+#include "estimators/beam2d.h"
 #include "integrators/camera_pass.h"
 #include "render/driver.h"
+#include "film/film_view.h"
 #include "base/error.h"
 #include "base/parallel.h"
 #include "photons/photon_tracer.h"
@@ -269,19 +271,23 @@ struct PassRunner {
         pt.threads = threads;
         const PhotonMap map = tracePhotons(scene, pt);
         beams += static_cast<int64_t>(map.beams.size());
-        std::unique_ptr<BeamAccel> accel = BeamAccel::create(AccelBackend::Embree);
-        accel->build(map.beams, radius, threads);
+        Beam2DEstimator beam2d;
+        EstimatorPass ep;
+        ep.radius = radius;
+        ep.beamLength = beamLength;
+        ep.threads = threads;
+        beam2d.prepare(scene, map, ep);
+        CameraPassEstimators est;
+        if (!beam2d.empty()) est.volume = &beam2d;
         CameraPassSettings cs;
         cs.seed = seed;
         cs.pass = pass;
-        cs.beamRadius = radius;
         cs.maxDepth = cameraDepth;
-        cs.beamLength = beamLength;
         std::vector<CameraPassScratch> scratch(threads);
         std::vector<CameraPassStats> stats(threads);
         for (auto& sc : scratch) sc.acc.reset(film.bins());
         parallelFor(film.tileCount(), threads, [&](int64_t tile, int t) {
-            renderTile(scene, map, accel.get(), nullptr, cs, film, static_cast<int>(tile), scratch[t], stats[t]);
+            renderTile(scene, est, cs, film, static_cast<int>(tile), scratch[t], stats[t]);
         });
         for (const auto& st : stats) st.flushInto(film.stats);
     }
@@ -1269,15 +1275,19 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
     const auto render = [&](const std::vector<Beam>& beams, AccelBackend kind, std::vector<double>& vol) {
         PhotonMap map;
         map.beams = beams;
-        auto accel = BeamAccel::create(kind);
-        accel->build(map.beams, 0.02, 1);
+        Beam2DEstimator beam2d;
+        EstimatorPass ep;
+        ep.radius = 0.02;
+        ep.accel = kind;
+        beam2d.prepare(*sc, map, ep);
+        CameraPassEstimators est;
+        if (!beam2d.empty()) est.volume = &beam2d;
         TransientFilm film(16, 16, sc->time);
         CameraPassSettings cs;
-        cs.beamRadius = 0.02;
         CameraPassScratch scratch;
         scratch.acc.reset(film.bins());
         CameraPassStats stats;
-        for (int t = 0; t < film.tileCount(); ++t) renderTile(*sc, map, accel.get(), nullptr, cs, film, t, scratch, stats);
+        for (int t = 0; t < film.tileCount(); ++t) renderTile(*sc, est, cs, film, t, scratch, stats);
         stats.flushInto(film.stats);
         expectFiniteFilm(film, "hand-made beams");
         film.volume(TimeAxis::Real, EmissionMode::Delta, vol);
@@ -1305,7 +1315,7 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
 
 // ---- the viewer's access pattern while the driver runs -----------------------------------------
 
-// One thread reads the film the way the viewer does (frame(..., wait=false), steadyImage(wait=false),
+// One thread reads the film the way the viewer does (snapshots: frame, steady image, and
 // pixelProfile/streak on a helper thread, history(), lastPass(), completedPasses()) while
 // Driver::start renders, pauses, resumes and stops. Everything read must be finite, per-tile pass
 // counts never go backwards, and history() is consistent with completedPasses(). Run under
@@ -1339,8 +1349,9 @@ TEST(StabilityConcurrent, ViewerReadsWhileTheDriverRenders) {
     std::thread helper([&] {  // the viewer's helper thread: profile and streak of a pixel
         std::vector<float> prof, streak;
         while (!done) {
-            drv.film().pixelProfile(7, 5, TimeAxis::Real, EmissionMode::Continuous, prof);
-            drv.film().streak(5, TimeAxis::Unwarped, EmissionMode::Delta, streak);
+            const auto snap = drv.snapshot();
+            prof = pixelProfile(*snap, 7, 5, TimeAxis::Real, EmissionMode::Continuous);
+            streak = streakImage(*snap, 5, TimeAxis::Unwarped, EmissionMode::Delta);
             finite(prof);
             finite(streak);
             ++reads;
@@ -1351,10 +1362,11 @@ TEST(StabilityConcurrent, ViewerReadsWhileTheDriverRenders) {
     int iter = 0;
     while (drv.completedPasses() < 8 || iter < 50) {
         const int k = iter % 24;
-        drv.film().frame(k, iter % 2 ? TimeAxis::Real : TimeAxis::Unwarped,
-                         iter % 3 ? EmissionMode::Delta : EmissionMode::Continuous, frame, false);
+        const auto snap = drv.snapshot();
+        frame = frameImage(*snap, k, iter % 2 ? TimeAxis::Real : TimeAxis::Unwarped,
+                           iter % 3 ? EmissionMode::Delta : EmissionMode::Continuous);
         finite(frame);
-        drv.film().steadyImage(frame, false);
+        frame = steadyImage(*snap);
         finite(frame);
         const uint64_t completed = drv.completedPasses();
         EXPECT_GE(completed, lastCompleted);

@@ -527,11 +527,11 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
     EXPECT_TRUE(map.photons.empty());
 
     CameraPassSettings cs;
-    CameraPassScratch scratch{PixelAccumulator(sc->time.bins), {}, {}};
+    CameraPassScratch scratch{PixelAccumulator(sc->time.bins), {}};
     CameraPassStats cst;
     for (int y = 0; y < 4; ++y)
         for (int x = 0; x < 4; ++x) {
-            renderPixel(*sc, map, nullptr, nullptr, cs, sc->time, x, y, scratch, cst);
+            renderPixel(*sc, CameraPassEstimators{}, cs, sc->time, x, y, scratch, cst);
             scratch.acc.clearTouched();
         }
     EXPECT_EQ(cst.regionOverflows, 16);

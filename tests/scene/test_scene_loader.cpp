@@ -303,7 +303,7 @@ TEST(SceneLoader, FilmBytesAndLimit) {
     CameraDesc cam;
     cam.width = 10;
     cam.height = 20;
-    EXPECT_EQ(filmBytes(cam, 5), 200u * (5 * 2 * 3 * 4 + (3 + 2 * 2 * 3) * 8));  // tests/film/test_film.cpp: = what the film allocates
+    EXPECT_EQ(filmBytes(cam, 5), 200u * (5 * 2 * 3 * 8 + (3 + 2 * 2 * 3) * 8));  // tests/film/test_transient_film.cpp: = what the film allocates
     cam.width = cam.height = INT_MAX;
     EXPECT_EQ(filmBytes(cam, INT_MAX), UINT64_MAX);  // saturates instead of wrapping
     EXPECT_GT(maxFilmBytes(), 0u);

@@ -1,12 +1,15 @@
-// TransientFilm (core/film/film.h): memory accounting, the energy it keeps outside its time range, and
-// the overflow guard of its float sums.
-#include "film/film.h"
+// TransientFilm (core/film/transient_film.h): memory accounting, the energy it keeps outside its time
+// range, the overflow guard of its sums, and merging films.
+#include "film/transient_film.h"
 #include "render/memory_budget.h"
+#include "film_test_passes.h"
 
 #include <gtest/gtest.h>
 
 #include <cfloat>
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 
 using namespace tpb;
 
@@ -92,4 +95,73 @@ TEST(Film, SumsThatWouldOverflowAreDroppedAndCounted) {
     std::vector<float> steady;
     film.steadyImage(steady);
     for (float v : steady) EXPECT_TRUE(std::isfinite(v));
+}
+
+// Merging (checkpoints, films from other machines): the films of passes 1-3 and 4-6 merged are
+// the film of passes 1-6 to < 1e-12 relative in every sum (double sums: one extra rounding, ~1e-16),
+// with the pass counts and counters added. A snapshot held before the merge is unchanged.
+TEST(Film, MergeOfTwoRunsIsTheFilmOfAllTheirPasses) {
+    const TimeBins time{0.5, 0.3, 7};
+    TransientFilm all(21, 18, time), first(21, 18, time), second(21, 18, time);
+    for (uint64_t p = 1; p <= 6; ++p) test::addRandomPass(all, 5, p);
+    for (uint64_t p = 1; p <= 3; ++p) test::addRandomPass(first, 5, p);
+    for (uint64_t p = 4; p <= 6; ++p) test::addRandomPass(second, 5, p);
+    const auto held = first.snapshot();
+    first.merge(second);
+    EXPECT_EQ(held->minPasses(), 3);
+    EXPECT_EQ(first.minPasses(), 6);
+    const auto a = all.snapshot(), m = first.snapshot();
+    double maxRel = 0.0;
+    const auto compare = [&](double x, double y) { maxRel = std::max(maxRel, std::abs(x - y) / std::max(std::abs(x), 1e-300)); };
+    for (int t = 0; t < a->tileCount(); ++t) {
+        const TileSums &sa = a->block(t).sums, &sm = m->block(t).sums;
+        ASSERT_EQ(sm.passes, 6);
+        for (int ax = 0; ax < 2; ++ax) {
+            for (size_t i = 0; i < sa.bins[ax].size(); ++i) compare(sa.bins[ax][i], sm.bins[ax][i]);
+            for (size_t i = 0; i < sa.before[ax].size(); ++i) compare(sa.before[ax][i], sm.before[ax][i]);
+            for (size_t i = 0; i < sa.after[ax].size(); ++i) compare(sa.after[ax][i], sm.after[ax][i]);
+        }
+        for (size_t i = 0; i < sa.steady.size(); ++i) compare(sa.steady[i], sm.steady[i]);
+    }
+    EXPECT_LT(maxRel, 1e-12);
+    EXPECT_NEAR(first.stats.inside[0].load(), all.stats.inside[0].load(), 1e-9 * all.stats.inside[0].load());
+    EXPECT_NEAR(first.stats.outside[1].load(), all.stats.outside[1].load(), 1e-9 * all.stats.outside[1].load());
+}
+
+TEST(Film, MergeRefusesAFilmOfAnotherShape) {
+    TransientFilm film(8, 8, TimeBins{0.0, 1.0, 4});
+    TransientFilm wider(9, 8, TimeBins{0.0, 1.0, 4}), longer(8, 8, TimeBins{0.0, 1.0, 5}), later(8, 8, TimeBins{0.5, 1.0, 4});
+    EXPECT_THROW(film.merge(wider), std::invalid_argument);
+    EXPECT_THROW(film.merge(longer), std::invalid_argument);
+    EXPECT_THROW(film.merge(later), std::invalid_argument);
+    EXPECT_THROW(film.merge(film), std::invalid_argument);
+    EXPECT_EQ(film.minPasses(), 0);
+}
+
+// Why the sums are double: the same six passes summed in float, in one run and as 1-3 + 4-6,
+// differ by far more than the 1e-12 that merging is held to above (float rounds at ~6e-8).
+TEST(Film, FloatSumsWouldNotMergeToTheTolerance) {
+    const TimeBins time{0.5, 0.3, 7};
+    std::vector<std::unique_ptr<TransientFilm>> passes;  // one film per pass: its sums are that pass's values
+    for (uint64_t p = 1; p <= 6; ++p) {
+        passes.push_back(std::make_unique<TransientFilm>(21, 18, time));
+        test::addRandomPass(*passes.back(), 5, p);
+    }
+    std::vector<std::shared_ptr<const FilmSnapshot>> snaps;
+    for (const auto& f : passes) snaps.push_back(f->snapshot());
+    double maxRel = 0.0;
+    for (int t = 0; t < snaps[0]->tileCount(); ++t)
+        for (int ax = 0; ax < 2; ++ax)
+            for (size_t i = 0; i < snaps[0]->block(t).sums.bins[ax].size(); ++i) {
+                float all = 0.0f, first = 0.0f, second = 0.0f;
+                for (int p = 0; p < 6; ++p) {
+                    const float v = static_cast<float>(snaps[p]->block(t).sums.bins[ax][i]);
+                    all += v;
+                    (p < 3 ? first : second) += v;
+                }
+                const float merged = first + second;
+                if (all != 0.0f) maxRel = std::max(maxRel, std::abs(static_cast<double>(merged) - all) / std::abs(all));
+            }
+    EXPECT_GT(maxRel, 1e-12);
+    EXPECT_GT(maxRel, 1e-8);  // float rounding, not a few double ulps
 }

@@ -1,22 +1,28 @@
 // The transient film: RGB radiance per pixel per time bin, on two time axes (real time, camera
-// path included; camera-unwarped time, camera path excluded), plus the steady-state image.
+// path included; camera-unwarped time, camera path excluded), plus the steady-state image. This
+// file is the accumulation side (tiles, per-tile pass counts, TileWriter, merging films); readers
+// take an immutable snapshot (film_snapshot.h) and read images from it (film_view.h).
 //
 // Units: a bin holds the part of the steady-state radiance carried by light whose arrival OPL falls
 // in that bin (i.e. the delta-pulse response integrated over the bin). Per pixel and axis the film
 // also keeps what arrived before its first bin and after its last, so that
 //     steady = before + sum over bins + after      (per pixel, per axis, up to rounding).
 // Continuous emission (light on from the pulse instant) is the step response: the frame of bin k is
-// before + the running sum of bins 0..k, computed on demand (transport is linear and
-// time-invariant); its last frame is steady - after.
+// before + the running sum of bins 0..k (transport is linear and time-invariant), read from prefix
+// sums (film_view.h); its last frame is steady - after.
 //
 // Concurrency: the image is split in 16x16 tiles. A tile has one writer at a time (the worker that
-// renders it in the current pass) and its own pass count, so a reader always sees, per tile, the
-// average of the passes that tile has completed - never a partially gathered pass. Sums are float
-// (per pass, each pixel is accumulated in double first); steady-state sums are double.
+// renders it in the current pass, TileWriter) and its own pass count. The writer adds its pass to a
+// copy of the tile's block and publishes the copy when it finishes (copy-on-write, see
+// film_snapshot.h for the memory this costs), so a reader always sees, per tile, the sum of the
+// passes that tile has completed - never a partially gathered pass - and never waits for a writer.
+// Sums are double (FilmSum, film_snapshot.h: per bin, and the steady-state, before and after sums);
+// the images read from them are float (film_view.h).
 #pragma once
 #include "base/math.h"
 #include "scene/scene_desc.h"
 #include "estimators/time_splat.h"
+#include "film/film_snapshot.h"
 
 #include <atomic>
 #include <memory>
@@ -24,10 +30,6 @@
 #include <vector>
 
 namespace tpb {
-
-enum class TimeAxis { Real = 0, Unwarped = 1 };
-
-struct TileRect { int x0, y0, w, h; };
 
 // Accumulates one pixel's contributions during one pass, in double, touched bins only.
 class PixelAccumulator {
@@ -65,7 +67,7 @@ private:
 
 struct FilmStats {
     std::atomic<int64_t> rejectedSamples{0};  // NaN/Inf estimates discarded
-    // Pixel sums that would have overflowed the film's float storage: the pass's contribution to
+    // Pixel sums that would have exceeded the film's float images (3.4e38): the pass's contribution to
     // that pixel was dropped (counted, reported; the film never holds Inf).
     std::atomic<int64_t> overflowedPixels{0};
     // Luminance of energy that fell outside the film's time range (sum over passes, not averaged),
@@ -99,36 +101,48 @@ inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally&
 
 class TransientFilm {
 public:
-    static constexpr int kTile = 16;
+    static constexpr int kTile = FilmLayout::kTile;
 
     TransientFilm(int width, int height, const TimeBins& time);
-    int width() const { return width_; }
-    int height() const { return height_; }
-    const TimeBins& time() const { return time_; }
-    int bins() const { return time_.bins; }
-    int tileCount() const { return static_cast<int>(tiles_.size()); }
-    TileRect tileRect(int tile) const { return tiles_[tile].rect; }
-    uint64_t bytes() const;
+    int width() const { return layout_->width; }
+    int height() const { return layout_->height; }
+    const TimeBins& time() const { return layout_->time; }
+    int bins() const { return layout_->time.bins; }
+    int tileCount() const { return static_cast<int>(layout_->tiles.size()); }
+    TileRect tileRect(int tile) const { return layout_->tiles[tile]; }
+    uint64_t bytes() const;  // of the live film's blocks (the formula in memory_budget.cpp must agree)
 
-    // Writer side (one writer per tile at a time): lock, add pixels, finish.
+    // Writer side (one writer per tile at a time): construct (waits for the tile's previous
+    // writer, copies the tile's block), add pixels, destroy (counts the pass, publishes the block).
     class TileWriter {
     public:
         TileWriter(TransientFilm& film, int tile);
         ~TileWriter();
+        TileWriter(const TileWriter&) = delete;
+        TileWriter& operator=(const TileWriter&) = delete;
         void addPixel(int x, int y, const PixelAccumulator& acc);
     private:
         TransientFilm& film_;
         int tile_;
         std::unique_lock<std::mutex> lock_;
+        std::shared_ptr<TileBlock> next_;
     };
 
-    // Reader side. Each returns averages (sum / passes of the tile). `wait=false` skips tiles that
-    // are being written (their pixels are left untouched in `out`), returning false if any was.
-    bool frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out, bool wait = true) const;
-    bool steadyImage(std::vector<float>& out, bool wait = true) const;  // W*H*3
+    // The tiles' current blocks: cheap (a pointer copy per tile), never waits for a writer.
+    std::shared_ptr<const FilmSnapshot> snapshot() const;
+
+    // Adds another film's sums and pass counts (and its counters), tile by tile: for checkpoints
+    // and films rendered elsewhere. Throws std::invalid_argument unless it has the same size and
+    // time axis. The merged sums equal one film of all the passes to < 1e-12 relative (one extra
+    // double rounding per value, FilmSum in film_snapshot.h).
+    void merge(const TransientFilm& other);
+
+    // Shorthands that take a snapshot and read it (film_view.h).
+    void frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const;
+    void steadyImage(std::vector<float>& out) const;  // W*H*3
     // Energy that arrived before the film's first bin / after its last, per pixel (W*H*3).
-    bool beforeImage(TimeAxis axis, std::vector<float>& out, bool wait = true) const;
-    bool afterImage(TimeAxis axis, std::vector<float>& out, bool wait = true) const;
+    void beforeImage(TimeAxis axis, std::vector<float>& out) const;
+    void afterImage(TimeAxis axis, std::vector<float>& out) const;
     void pixelProfile(int x, int y, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const;  // bins*3
     void streak(int row, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const;  // bins rows x W cols x 3
     // Whole volume (W*H*bins*3, pixel-major: ((y*W + x)*bins + k)*3), in double.
@@ -140,28 +154,15 @@ public:
 
 private:
     struct Tile {
-        TileRect rect;
-        size_t offset = 0;  // into sums_ (per axis)
-        int64_t passes = 0;
-        std::vector<double> steady;            // w*h*3
-        std::vector<double> before[2], after[2];  // per axis, w*h*3
-        mutable std::mutex mutex;
+        std::mutex writer;   // held by the tile's TileWriter (and merge, clear)
+        mutable std::mutex publish;  // guards `block` (held for a pointer copy or swap only)
+        std::shared_ptr<const TileBlock> block;
     };
-    // Layout per axis: [tile][bin][pixel in tile][rgb], so a frame reads contiguous blocks.
-    size_t index(const Tile& t, int bin, int px, int py) const {
-        return t.offset + (static_cast<size_t>(bin) * t.rect.w * t.rect.h + static_cast<size_t>(py) * t.rect.w + px) * 3;
-    }
-    int tileOf(int x, int y) const { return (y / kTile) * tilesX_ + (x / kTile); }
-    // Copies a per-pixel image kept in double (steady, before, after), averaged over passes.
-    enum class PerPixel { Steady, Before, After };
-    static const std::vector<double>& perPixel(const Tile& t, PerPixel which, TimeAxis axis);
-    bool perPixelImage(PerPixel which, TimeAxis axis, std::vector<float>& out, bool wait) const;
+    std::shared_ptr<const TileBlock> current(int tile) const;
+    void publish(int tile, std::shared_ptr<const TileBlock> block);
 
-    int width_, height_, tilesX_;
-    TimeBins time_;
-    std::vector<Tile> tiles_;
-    std::vector<float> sums_[2];
+    std::shared_ptr<const FilmLayout> layout_;
+    std::unique_ptr<Tile[]> tiles_;
 };
-
 
 }  // namespace tpb

@@ -1,6 +1,6 @@
 // Exact and analytic tests of the ray-beam kernel, the time splat, the progressive schedule and the
 // phase function / Fresnel helpers: closed forms against numerical quadrature and limits.
-#include "estimators/beam_kernel.h"
+#include "estimators/beam2d.h"
 #include "scene/bsdf.h"
 #include "scene/medium.h"
 #include "base/progressive.h"

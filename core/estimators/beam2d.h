@@ -1,5 +1,8 @@
-// Ray-beam density estimation with the 2D kernel of Transient Photon Beams (Marco et al. 2017),
-// building on Jarosz et al. 2011 ("Beam x Beam 2D").
+// The 2D beam kernel estimator ("beam2d"): ray-beam density estimation with the 2D kernel of
+// Transient Photon Beams (Marco et al. 2017), building on Jarosz et al. 2011 ("Beam x Beam 2D"):
+// the overlap of a camera segment with a beam's kernel cylinder, the closed form of eq. 8, the
+// time profile of the estimate (eqs. 11-15), and Beam2DEstimator, which gathers every beam of a
+// pass along a camera segment (eq. 10: the sum over the beams crossing the ray).
 //
 // Glossary (units):
 //   x_r, w_r   camera segment origin and unit direction; s_r in [0, S] distance along it (m)
@@ -14,7 +17,7 @@
 //   L_b = sigma_s rho(-c) Phi_b / (pi r^2) * Int_{s-}^{s+} T(s_r) T_b(s_b(s_r)) ds_r,
 // where s_b(s_r) = s_b0 + c s_r is the projection of the ray point on the beam axis.
 // The closed form of the integral (derived in README "Derivations", checked against quadrature in
-// tests/estimators/test_beam_kernel.cpp) is, with kappa = sigma_t + tau_b c and E(s) = sigma_t s + tau_b s_b(s):
+// tests/estimators/test_beam2d.cpp) is, with kappa = sigma_t + tau_b c and E(s) = sigma_t s + tau_b s_b(s):
 //   Int = exp(-E(s-)) * (s+ - s-) * g(kappa (s+ - s-)),   g(x) = (1 - e^{-x}) / x,
 // evaluated from the end with the larger transmittance so g's argument is >= 0 (no overflow, no 0/0;
 // g(0) = 1 gives the beam-pointing-at-the-camera limit kappa -> 0 and the sigma_t -> 0 limit).
@@ -28,6 +31,7 @@
 // and the energy density along s_r is proportional to exp(-kappa s_r): exponential in time too.
 #pragma once
 #include "base/math.h"
+#include "estimators/estimator.h"
 
 namespace tpb {
 
@@ -52,5 +56,29 @@ bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb,
 
 // Int_{s-}^{s+} exp(-sigma_t s - tau_b (sb0 + c s)) ds for one channel (closed form above).
 double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap& o);
+
+// The estimator (eqs. 8, 10, 12-15). Kernel dimension 2 (a disc across the beam): the kernel's
+// area pi r^2 shrinks by (i + alpha) / (i + 1) per pass. Homogeneous media only (it reads the
+// region's sigma_t and sigma_s): a heterogeneous medium needs its own estimator (transmittance
+// integrals by ray marching or tracking).
+class Beam2DEstimator final : public VolumeEstimator {
+public:
+    static constexpr int kDim = 2;
+    std::string name() const override { return "beam2d"; }
+    int dim() const override { return kDim; }
+    void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) override;
+    bool empty() const override { return !ready_; }
+    size_t accelPrimitives() const override { return ready_ ? accel_->pieceCount() : 0; }
+    int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
+                   EstimatorScratch& scratch) const override;
+
+private:
+    const Scene* scene_ = nullptr;
+    const PhotonMap* map_ = nullptr;
+    EstimatorPass pass_;
+    std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
+    AccelBackend backend_ = AccelBackend::Embree;
+    bool ready_ = false;
+};
 
 }  // namespace tpb

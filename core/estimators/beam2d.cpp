@@ -1,0 +1,163 @@
+#include "estimators/beam2d.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tpb {
+
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
+                    double sbLo, double sbHi, double radius, RayBeamOverlap& out) {
+    // Decompose the ray relative to the beam axis: parallel part (along w_b) and perpendicular part.
+    const Vec3 d = xr - xb;
+    const double c = glm::dot(wr, wb);
+    const double sb0 = glm::dot(d, wb);
+    const Vec3 w = d - sb0 * wb;   // perpendicular offset of x_r from the axis
+    const Vec3 dp = wr - c * wb;   // perpendicular part of the ray direction, |dp|^2 = 1 - c^2
+    const double a = glm::dot(dp, dp);
+    const double r2 = radius * radius;
+    const double w2 = glm::dot(w, w);
+
+    double lo = 0.0, hi = sMax;
+    // 1. Inside the infinite cylinder: a s^2 + 2 b s + (w2 - r2) <= 0.
+    if (a < 1e-14) {
+        // Ray parallel to the beam: inside everywhere or nowhere.
+        if (w2 > r2) return false;
+    } else {
+        const double b = glm::dot(w, dp);
+        const double disc = b * b - a * (w2 - r2);
+        if (disc <= 0.0) return false;  // misses or grazes the kernel (zero-length overlap)
+        const double sq = std::sqrt(disc);
+        // Stable roots of a s^2 + 2 b s + cc: q = -(b + sign(b) sq); roots q/a and cc/q.
+        const double q = -(b + std::copysign(sq, b));
+        double s1 = q / a;
+        double s2 = (q != 0.0) ? (w2 - r2) / q : s1;
+        if (s1 > s2) std::swap(s1, s2);
+        lo = std::max(lo, s1);
+        hi = std::min(hi, s2);
+    }
+    // 2. Projection on the beam inside [sbLo, sbHi]: sbLo <= sb0 + c s <= sbHi.
+    if (std::abs(c) < 1e-15) {
+        if (sb0 < sbLo || sb0 > sbHi) return false;
+    } else {
+        double t1 = (sbLo - sb0) / c, t2 = (sbHi - sb0) / c;
+        if (t1 > t2) std::swap(t1, t2);
+        lo = std::max(lo, t1);
+        hi = std::min(hi, t2);
+    }
+    if (!(hi > lo)) return false;
+    out.sMinus = lo;
+    out.sPlus = hi;
+    out.sb0 = sb0;
+    out.cosRB = c;
+    return true;
+}
+
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
+                    double beamLength, double radius, RayBeamOverlap& out) {
+    return rayBeamOverlap(xr, wr, sMax, xb, wb, 0.0, beamLength, radius, out);
+}
+
+double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap& o) {
+    const double kappa = sigma_t + tau_b * o.cosRB;
+    const double len = o.sPlus - o.sMinus;
+    // Optical depth E(s) = sigma_t s + tau_b s_b(s); start from the end where it is smallest.
+    const double sRef = kappa >= 0.0 ? o.sMinus : o.sPlus;
+    const double depth = sigma_t * sRef + tau_b * (o.sb0 + o.cosRB * sRef);
+    return std::exp(-depth) * len * expRel(std::abs(kappa) * len);
+}
+
+// ---- the estimator ------------------------------------------------------------------------------
+
+namespace {
+
+// Shapes whose bounds come within r of the camera segment [0, sMax]: only they can stand between
+// a point of the segment and a beam point within r of it (the beam visibility test in gather).
+void nearShapes(const Scene& scene, const Ray& ray, double sMax, double r, std::vector<int>& out) {
+    out.clear();
+    Bounds3 seg;
+    seg.expand(ray.o);
+    seg.expand(ray.at(sMax));  // an unbounded segment gives infinite bounds: every shape is near
+    const Vec3 pad(r + 8.0 * scene.rayEps);
+    for (size_t i = 0; i < scene.shapes.size(); ++i) {
+        const Bounds3& b = scene.shapes[i].bounds;
+        const bool apart = glm::any(glm::lessThan(b.hi + pad, seg.lo)) || glm::any(glm::greaterThan(b.lo - pad, seg.hi));
+        if (!apart || !std::isfinite(sMax)) out.push_back(static_cast<int>(i));
+    }
+}
+
+// Whether one of the `near` shapes' bounds meets the segment from a to b (else nothing blocks it).
+bool mayBlock(const Scene& scene, const std::vector<int>& near, const Vec3& a, const Vec3& b) {
+    const Vec3 pad(8.0 * scene.rayEps);
+    const Vec3 lo = glm::min(a, b) - pad, hi = glm::max(a, b) + pad;
+    for (int i : near) {
+        const Bounds3& sb = scene.shapes[i].bounds;
+        if (!(glm::any(glm::lessThan(sb.hi, lo)) || glm::any(glm::greaterThan(sb.lo, hi)))) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+void Beam2DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
+    scene_ = &scene;
+    map_ = &map;
+    pass_ = pass;
+    ready_ = !map.beams.empty();
+    if (!ready_) return;
+    if (!accel_ || backend_ != pass.accel) {
+        accel_ = BeamAccel::create(pass.accel);
+        backend_ = pass.accel;
+    }
+    // The kernel is a cylinder of radius r around the beam: nothing beyond r from its axis.
+    accel_->build(map.beams, pass.radius, pass.threads);
+}
+
+// Beam radiance estimate along the camera segment x_r + s w_r, s in [0, sMax] (eqs. 8, 10, 12-15).
+int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
+                                EstimatorScratch& scratch) const {
+    if (!ready_) return 0;
+    const Scene& scene = *scene_;
+    const Ray& ray = seg.ray;
+    const Region& region = scene.regions[seg.region];
+    const Medium& m = region.medium;
+    const double eta = region.ior;
+    const double r = pass_.radius;
+    scratch.pieces.clear();
+    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces);
+    bool haveNear = false;
+    // tau_b: attenuation along the beam inside the kernel (photon_tracer.h).
+    const Color tauB = pass_.beamLength == BeamLength::Long ? m.sigma_t : m.sigma_t - Color(m.samplingSigma());
+    const double invArea = 1.0 / (kPi * r * r);  // 1 / Omega_R(r^2)
+    int64_t estimates = 0;
+    for (const BeamPiece& piece : scratch.pieces) {
+        const Beam& b = map_->beams[piece.beam];
+        RayBeamOverlap o;
+        if (!rayBeamOverlap(ray.o, ray.d, seg.sMax, b.origin, b.dir, piece.sbLo, piece.sbHi, r, o)) continue;
+        const double c = o.cosRB;
+        // The kernel blurs the beam by r in every direction, also through a wall: a beam inside a
+        // closed box would light the fog just outside it. Keep the estimate only when the beam
+        // point nearest the middle of the overlap sees that point of the camera segment.
+        if (!haveNear) {
+            nearShapes(scene, ray, seg.sMax, r, scratch.shapes);
+            haveNear = true;
+        }
+        const double sMid = 0.5 * (o.sMinus + o.sPlus);
+        const double sbMid = std::clamp(o.sb0 + c * sMid, 0.0, b.length);
+        const Vec3 xr = ray.at(sMid), xb = b.origin + sbMid * b.dir;
+        if (mayBlock(scene, scratch.shapes, xr, xb) && !scene.segmentClear(xr, xb)) continue;
+        // Eq. 8: L_b = sigma_s rho(theta) Phi_b / (pi r^2) * int T(s_r) T_b(s_b(s_r)) ds_r
+        const Color integral(transmittanceIntegral(m.sigma_t.x, tauB.x, o), transmittanceIntegral(m.sigma_t.y, tauB.y, o),
+                             transmittanceIntegral(m.sigma_t.z, tauB.z, o));
+        const double rho = m.phase.eval(-c);  // scattering from w_b into -w_r (towards the camera)
+        const Color L = path.beta * m.sigma_s * rho * b.power * invArea * integral;
+        ++estimates;
+        // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r.
+        const Color kappa = pass_.profile == TimeProfile::Exact ? m.sigma_t + tauB * c : Color(0.0);
+        const double tBeam = b.opl0 + eta * o.sb0;
+        splatSpread(sink.time, sink.acc, sink.tally, L, kappa, o.sMinus, o.sPlus, path.oplCam + tBeam, eta * (1.0 + c),
+                    tBeam, eta * c);
+    }
+    return estimates;
+}
+
+}  // namespace tpb

@@ -1,0 +1,107 @@
+// Density estimators of the photon-beams camera pass, as units (docs/estimators.md: how to add one,
+// with a worked example). The camera pass (integrators/camera_pass.cpp) follows a camera path
+// through specular surfaces and asks:
+//   a VolumeEstimator, on every segment of the path inside a scattering medium, for the in-scattered
+//     radiance the photon map's beams (or points) put along it;
+//   a SurfaceEstimator, at the diffuse surface the path ends on, for the reflected radiance of the
+//     surface photons around it.
+// Each estimate goes to the pixel's accumulator spread over the time bins it covers (PixelSink,
+// film/transient_film.h: splatSpread / splatInstant) on both time axes.
+//
+// An estimator owns what it needs to answer queries for one pass (an accelerator over the beams, a
+// grid over the photons), built in prepare() from the pass's photon map and kernel radius. Its
+// kernel's dimension (dim()) drives the progressive radius schedule (base/progressive.h): the
+// kernel's measure r^dim shrinks by (i + alpha) / (i + 1) per pass, so the estimator's bias goes
+// to zero while its variance stays bounded (Knaus & Zwicker 2011; Jarosz et al. 2011 for beams).
+//
+// Registration: estimators are created by name (estimators/registry.cpp; RenderSettings::
+// volumeEstimator / surfaceEstimator): a new estimator is its own file, one line there, its tests.
+#pragma once
+#include "accel/beam_accel.h"
+#include "film/transient_film.h"
+#include "photons/photon_tracer.h"
+#include "scene/scene.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tpb {
+
+// The part of a camera path a volume estimate is taken along: x_r + s w_r, s in [0, sMax] (m; sMax
+// may be infinite), inside `region` (its medium scatters).
+struct CameraSegment {
+    Ray ray;
+    double sMax = kInf;
+    int region = 0;
+};
+
+// What the camera path carries to the estimate: its throughput and the OPL from the sensor to the
+// segment's start (the real time axis adds it; the unwarped axis does not).
+struct PathState {
+    Color beta{1.0};
+    double oplCam = 0.0;  // m
+};
+
+// Where an estimate goes: the pixel's accumulator for this pass, on the film's time axis; tally
+// counts what fell outside the film and non-finite estimates (dropped).
+struct PixelSink {
+    const TimeBins& time;
+    PixelAccumulator& acc;
+    FilmTally& tally;
+};
+
+// Per-thread scratch space of the estimators (kept across pixels to avoid allocations).
+struct EstimatorScratch {
+    std::vector<BeamPiece> pieces;  // candidate beam pieces of the current segment
+    std::vector<int> shapes;        // shapes near the current segment (visibility tests)
+};
+
+// Per-pass parameters of an estimator.
+struct EstimatorPass {
+    double radius = 0.01;  // m, this pass's kernel radius
+    TimeProfile profile = TimeProfile::Exact;
+    BeamLength beamLength = BeamLength::Short;
+    AccelBackend accel = AccelBackend::Embree;
+    int threads = 1;
+};
+
+class VolumeEstimator {
+public:
+    virtual ~VolumeEstimator() = default;
+    virtual std::string name() const = 0;
+    virtual int dim() const = 0;  // kernel dimension for the radius schedule
+    // Builds what gather() needs from this pass's photon map (which must outlive the pass).
+    virtual void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) = 0;
+    virtual bool empty() const = 0;            // nothing to gather this pass
+    virtual size_t accelPrimitives() const = 0;  // beam pieces (or points) indexed, for the stats
+    // Adds the estimate along `seg` to `sink`; returns the number of beams/points that contributed.
+    virtual int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
+                           EstimatorScratch& scratch) const = 0;
+};
+
+// The diffuse surface point a camera path ends on.
+struct SurfaceQuery {
+    const Ray& ray;         // the camera ray that hit it
+    const SurfaceHit& hit;
+    Vec3 ng;                // geometric normal facing the ray
+    Color albedo;           // Lambertian albedo (f_r = albedo / pi)
+};
+
+class SurfaceEstimator {
+public:
+    virtual ~SurfaceEstimator() = default;
+    virtual std::string name() const = 0;
+    virtual int dim() const = 0;
+    virtual void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) = 0;
+    virtual bool empty() const = 0;
+    virtual int64_t gather(const SurfaceQuery& q, const PathState& path, PixelSink& sink) const = 0;
+};
+
+// By name ("beam2d"; "ppm"): nullptr for an unknown name (estimatorNames() lists the known ones).
+std::unique_ptr<VolumeEstimator> makeVolumeEstimator(const std::string& name);
+std::unique_ptr<SurfaceEstimator> makeSurfaceEstimator(const std::string& name);
+std::vector<std::string> volumeEstimatorNames();
+std::vector<std::string> surfaceEstimatorNames();
+
+}  // namespace tpb

@@ -1,0 +1,21 @@
+// The estimators by name (estimators/estimator.h). Adding one: include its header, add a line.
+#include "estimators/beam2d.h"
+#include "estimators/estimator.h"
+#include "estimators/surface_ppm.h"
+
+namespace tpb {
+
+std::unique_ptr<VolumeEstimator> makeVolumeEstimator(const std::string& name) {
+    if (name == "beam2d") return std::make_unique<Beam2DEstimator>();
+    return nullptr;
+}
+
+std::unique_ptr<SurfaceEstimator> makeSurfaceEstimator(const std::string& name) {
+    if (name == "ppm") return std::make_unique<SurfacePpmEstimator>();
+    return nullptr;
+}
+
+std::vector<std::string> volumeEstimatorNames() { return {"beam2d"}; }
+std::vector<std::string> surfaceEstimatorNames() { return {"ppm"}; }
+
+}  // namespace tpb

@@ -1,0 +1,97 @@
+// An immutable view of the transient film's sums: what a reader (the viewer, an export, the CLI,
+// a reference comparison) holds while passes go on. The film itself is transient_film.h; the
+// images read from a snapshot (frames, steady, profile, streak, volume) are film_view.h.
+//
+// Copy-on-write tile blocks: the image is split in 16x16 tiles and each tile's sums live in one
+// immutable TileBlock held by std::shared_ptr<const TileBlock>. A TileWriter (transient_film.h)
+// copies the tile's current block, adds its pass to the copy and publishes the copy when it
+// finishes (a pointer swap under the tile's short publish lock). A snapshot is the vector of the
+// tiles' current block pointers: taking one costs one pointer copy per tile, never waits for a
+// tile being rendered, and is per-tile consistent (every tile holds the sum of the passes it has
+// completed, its own pass count, never part of a pass). Tiles may differ by one pass while a pass
+// is being rendered (minPasses() / maxPasses()).
+//
+// Memory: the live film (one block per tile) + one block per tile being written (one per render
+// thread) + the blocks that snapshots still hold after the film replaced them: a snapshot held
+// across a whole pass keeps up to one more film's worth alive, so readers should drop snapshots
+// they no longer show. The continuous-emission prefix sums (cumulative()) are computed lazily, once
+// per block and axis, and add bins x RGB doubles per pixel per axis read in continuous mode, for as
+// long as that block lives (a block that the next pass replaces takes its prefix sums with it).
+#pragma once
+#include "estimators/time_splat.h"
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+namespace tpb {
+
+enum class TimeAxis { Real = 0, Unwarped = 1 };
+
+struct TileRect { int x0, y0, w, h; };
+
+// The type of the per-bin sums: double, so that films rendered separately (checkpoints, other
+// machines) merge to what one run of all their passes gives, to < 1e-12 relative per value (one
+// extra double rounding per value, ~1e-16, against ~1e-7 in float: tests/film/test_transient_film.cpp).
+// Memory: bins x 2 axes x RGB x 8 bytes per pixel (memory_budget.h).
+using FilmSum = double;
+
+// The sums of one tile over the passes it has completed (not averaged).
+struct TileSums {
+    int64_t passes = 0;
+    // Per axis: [bin][pixel in tile][rgb], so a frame reads one contiguous block per tile.
+    std::vector<FilmSum> bins[2];
+    std::vector<double> steady;                // [pixel][rgb]
+    std::vector<double> before[2], after[2];  // per axis, [pixel][rgb]: light before the first bin / after the last
+    void zero(size_t pixels, int binCount);
+};
+
+class TileBlock {
+public:
+    explicit TileBlock(TileSums s) : sums(std::move(s)) {}
+    TileSums sums;
+    // Step response per pixel (emission_mode "continuous", transient_film.h): before + the running
+    // sum of bins 0..k, in double, layout as sums.bins[axis]. Computed on first use (thread-safe,
+    // once per block and axis): O(bins x pixels) once, then one read per pixel per frame.
+    const std::vector<double>& cumulative(TimeAxis axis) const;
+
+private:
+    mutable std::once_flag once_[2];
+    mutable std::vector<double> cumulative_[2];
+};
+
+// The film's geometry, shared by the film and its snapshots.
+struct FilmLayout {
+    static constexpr int kTile = 16;
+    FilmLayout(int width, int height, const TimeBins& time);
+    int width, height, tilesX;
+    TimeBins time;
+    std::vector<TileRect> tiles;
+    int tileOf(int x, int y) const { return (y / kTile) * tilesX + (x / kTile); }
+    size_t pixels(int tile) const { return static_cast<size_t>(tiles[tile].w) * tiles[tile].h; }
+};
+
+class FilmSnapshot {
+public:
+    FilmSnapshot(std::shared_ptr<const FilmLayout> layout, std::vector<std::shared_ptr<const TileBlock>> blocks);
+    int width() const { return layout_->width; }
+    int height() const { return layout_->height; }
+    const TimeBins& time() const { return layout_->time; }
+    int bins() const { return layout_->time.bins; }
+    int tileCount() const { return static_cast<int>(blocks_.size()); }
+    const TileRect& tileRect(int tile) const { return layout_->tiles[tile]; }
+    int tileOf(int x, int y) const { return layout_->tileOf(x, y); }
+    const TileBlock& block(int tile) const { return *blocks_[tile]; }
+    int64_t passes(int tile) const { return blocks_[tile]->sums.passes; }
+    int64_t minPasses() const;  // passes completed by every tile
+    int64_t maxPasses() const;  // passes completed by some tile
+    // Every tile has completed the same passes, at least one (no pass is shown in part).
+    bool complete() const { return minPasses() > 0 && minPasses() == maxPasses(); }
+
+private:
+    std::shared_ptr<const FilmLayout> layout_;
+    std::vector<std::shared_ptr<const TileBlock>> blocks_;
+};
+
+}  // namespace tpb

@@ -1,0 +1,127 @@
+#include "film/film_view.h"
+
+#include "base/math.h"
+
+#include <algorithm>
+
+namespace tpb {
+
+namespace {
+
+double inversePasses(const TileSums& t) { return t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0; }
+
+// Writes a tile's [pixel][rgb] block of values (times `inv`) into the W*H*3 image.
+template <class T>
+void putTile(const FilmSnapshot& s, int tile, const T* src, double inv, std::vector<float>& out) {
+    const TileRect& r = s.tileRect(tile);
+    for (int py = 0; py < r.h; ++py)
+        for (int px = 0; px < r.w; ++px)
+            for (int c = 0; c < 3; ++c)
+                out[((static_cast<size_t>(r.y0 + py) * s.width()) + r.x0 + px) * 3 + c] =
+                    static_cast<float>(static_cast<double>(src[(static_cast<size_t>(py) * r.w + px) * 3 + c]) * inv);
+}
+
+enum class PerPixel { Steady, Before, After };
+
+std::vector<float> perPixelImage(const FilmSnapshot& s, PerPixel which, TimeAxis axis) {
+    std::vector<float> out(static_cast<size_t>(s.width()) * s.height() * 3);
+    const int a = static_cast<int>(axis);
+    for (int t = 0; t < s.tileCount(); ++t) {
+        const TileSums& sums = s.block(t).sums;
+        const std::vector<double>& src =
+            which == PerPixel::Steady ? sums.steady : which == PerPixel::Before ? sums.before[a] : sums.after[a];
+        putTile(s, t, src.data(), inversePasses(sums), out);
+    }
+    return out;
+}
+
+}  // namespace
+
+std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, EmissionMode mode) {
+    std::vector<float> out(static_cast<size_t>(s.width()) * s.height() * 3);
+    bin = std::clamp(bin, 0, s.bins() - 1);
+    const int a = static_cast<int>(axis);
+    for (int t = 0; t < s.tileCount(); ++t) {
+        const TileBlock& b = s.block(t);
+        const size_t n = static_cast<size_t>(s.tileRect(t).w) * s.tileRect(t).h * 3;
+        const size_t offset = static_cast<size_t>(bin) * n;
+        if (mode == EmissionMode::Continuous) putTile(s, t, b.cumulative(axis).data() + offset, inversePasses(b.sums), out);
+        else putTile(s, t, b.sums.bins[a].data() + offset, inversePasses(b.sums), out);
+    }
+    return out;
+}
+
+std::vector<float> steadyImage(const FilmSnapshot& s) { return perPixelImage(s, PerPixel::Steady, TimeAxis::Real); }
+std::vector<float> beforeImage(const FilmSnapshot& s, TimeAxis axis) { return perPixelImage(s, PerPixel::Before, axis); }
+std::vector<float> afterImage(const FilmSnapshot& s, TimeAxis axis) { return perPixelImage(s, PerPixel::After, axis); }
+
+namespace {
+
+// Calls put(k, rgb) for every bin of pixel (x, y) with the average, delta or running sum.
+template <class Put>
+void forEachBin(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode, Put&& put) {
+    const int tile = s.tileOf(x, y);
+    const TileSums& t = s.block(tile).sums;
+    const TileRect& r = s.tileRect(tile);
+    const int a = static_cast<int>(axis);
+    const double inv = inversePasses(t);
+    const size_t pixel = static_cast<size_t>(y - r.y0) * r.w + (x - r.x0);
+    const size_t n = static_cast<size_t>(r.w) * r.h * 3;
+    double run[3] = {0.0, 0.0, 0.0};
+    if (mode == EmissionMode::Continuous) std::copy(&t.before[a][pixel * 3], &t.before[a][pixel * 3] + 3, run);
+    for (int k = 0; k < s.bins(); ++k) {
+        const FilmSum* v = &t.bins[a][static_cast<size_t>(k) * n + pixel * 3];
+        double rgb[3];
+        for (int c = 0; c < 3; ++c) {
+            run[c] = (mode == EmissionMode::Continuous ? run[c] : 0.0) + v[c];
+            rgb[c] = run[c] * inv;
+        }
+        put(k, rgb);
+    }
+}
+
+}  // namespace
+
+std::vector<float> pixelProfile(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode) {
+    std::vector<float> out(static_cast<size_t>(s.bins()) * 3, 0.0f);
+    if (x < 0 || y < 0 || x >= s.width() || y >= s.height()) return out;
+    forEachBin(s, x, y, axis, mode, [&](int k, const double* rgb) {
+        for (int c = 0; c < 3; ++c) out[static_cast<size_t>(k) * 3 + c] = static_cast<float>(rgb[c]);
+    });
+    return out;
+}
+
+std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, EmissionMode mode) {
+    const int W = s.width();
+    std::vector<float> out(static_cast<size_t>(s.bins()) * W * 3, 0.0f);
+    if (row < 0 || row >= s.height()) return out;
+    for (int x = 0; x < W; ++x)
+        forEachBin(s, x, row, axis, mode, [&](int k, const double* rgb) {
+            for (int c = 0; c < 3; ++c) out[(static_cast<size_t>(k) * W + x) * 3 + c] = static_cast<float>(rgb[c]);
+        });
+    return out;
+}
+
+std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mode) {
+    const size_t bins = static_cast<size_t>(s.bins());
+    std::vector<double> out(static_cast<size_t>(s.width()) * s.height() * bins * 3, 0.0);
+    for (int y = 0; y < s.height(); ++y)
+        for (int x = 0; x < s.width(); ++x) {
+            double* dst = &out[(static_cast<size_t>(y) * s.width() + x) * bins * 3];
+            forEachBin(s, x, y, axis, mode, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, dst + k * 3); });
+        }
+    return out;
+}
+
+std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis) {
+    std::vector<double> energy(static_cast<size_t>(s.bins()), 0.0);
+    for (int k = 0; k < s.bins(); ++k) {
+        const std::vector<float> img = frameImage(s, k, axis, EmissionMode::Delta);
+        double sum = 0.0;
+        for (size_t p = 0; p + 2 < img.size(); p += 3) sum += luminance(Color(img[p], img[p + 1], img[p + 2]));
+        energy[static_cast<size_t>(k)] = sum;
+    }
+    return energy;
+}
+
+}  // namespace tpb

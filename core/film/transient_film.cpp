@@ -1,0 +1,258 @@
+#include "film/transient_film.h"
+
+#include "film/film_view.h"
+
+#include "base/error.h"
+#include "render/memory_budget.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace tpb {
+
+void FilmTally::flushInto(FilmStats& f) const {
+    f.rejectedSamples.fetch_add(rejected);
+    for (int a = 0; a < 2; ++a) {
+        f.outside[a].fetch_add(outside[a]);
+        f.before[a].fetch_add(before[a]);
+        f.inside[a].fetch_add(inside[a]);
+    }
+}
+
+FilmTally& FilmTally::operator+=(const FilmTally& o) {
+    rejected += o.rejected;
+    for (int a = 0; a < 2; ++a) {
+        outside[a] += o.outside[a];
+        before[a] += o.before[a];
+        inside[a] += o.inside[a];
+    }
+    return *this;
+}
+
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
+                 double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
+    if (!isFinite(L) || !std::isfinite(aReal) || !std::isfinite(aUnw) || !std::isfinite(bReal) || !std::isfinite(bUnw)) {
+        ++tally.rejected;
+        return;
+    }
+    if (isBlack(L)) return;
+    // What lands in the bins is summed as it lands (exactly zero when nothing does, which the
+    // all-black-film check relies on), what falls outside comes back split by side.
+    Color binned[2] = {Color(0.0), Color(0.0)};
+    const OutsideFilm outReal = splatTime(time, L, kappa, s0, s1, aReal, bReal, [&](int k, const Color& c) {
+        acc.add(TimeAxis::Real, k, c);
+        binned[0] += c;
+    });
+    const OutsideFilm outUnw = splatTime(time, L, kappa, s0, s1, aUnw, bUnw, [&](int k, const Color& c) {
+        acc.add(TimeAxis::Unwarped, k, c);
+        binned[1] += c;
+    });
+    acc.addSteady(L);
+    acc.addOutside(TimeAxis::Real, outReal);
+    acc.addOutside(TimeAxis::Unwarped, outUnw);
+    const OutsideFilm* outs[2] = {&outReal, &outUnw};
+    for (int a = 0; a < 2; ++a) {
+        const double before = luminance(outs[a]->before);
+        tally.before[a] += before;
+        tally.outside[a] += before + luminance(outs[a]->after);
+        tally.inside[a] += luminance(binned[a]);
+    }
+}
+
+void PixelAccumulator::reset(int bins) {
+    bins_ = bins;
+    data_.assign(static_cast<size_t>(bins) * 2 * 3, 0.0);
+    lo_[0] = lo_[1] = bins;
+    hi_[0] = hi_[1] = -1;
+    steady_ = Color(0.0);
+    for (int a = 0; a < 2; ++a) before_[a] = after_[a] = Color(0.0);
+}
+
+void PixelAccumulator::clearTouched() {
+    for (int a = 0; a < 2; ++a) {
+        if (hi_[a] >= lo_[a]) {
+            double* p = &data_[(static_cast<size_t>(a) * bins_ + lo_[a]) * 3];
+            std::fill(p, p + static_cast<size_t>(hi_[a] - lo_[a] + 1) * 3, 0.0);
+        }
+        lo_[a] = bins_;
+        hi_[a] = -1;
+        before_[a] = after_[a] = Color(0.0);
+    }
+    steady_ = Color(0.0);
+}
+
+TransientFilm::TransientFilm(int width, int height, const TimeBins& time)
+    : layout_(std::make_shared<const FilmLayout>(width, height, time)), tiles_(new Tile[layout_->tiles.size()]) {
+    for (int t = 0; t < tileCount(); ++t) {
+        TileSums zero;
+        zero.zero(layout_->pixels(t), time.bins);
+        tiles_[t].block = std::make_shared<const TileBlock>(std::move(zero));
+    }
+}
+
+std::shared_ptr<const TileBlock> TransientFilm::current(int tile) const {
+    std::lock_guard<std::mutex> g(tiles_[tile].publish);
+    return tiles_[tile].block;
+}
+
+void TransientFilm::publish(int tile, std::shared_ptr<const TileBlock> block) {
+    std::shared_ptr<const TileBlock> old;  // freed outside the lock (if no snapshot holds it)
+    {
+        std::lock_guard<std::mutex> g(tiles_[tile].publish);
+        old = std::exchange(tiles_[tile].block, std::move(block));
+    }
+}
+
+uint64_t TransientFilm::bytes() const {
+    // What the live film holds (the formula in memory_budget.cpp must agree: test_transient_film checks it).
+    uint64_t n = 0;
+    const std::shared_ptr<const FilmSnapshot> s = snapshot();
+    for (int t = 0; t < s->tileCount(); ++t) {
+        const TileSums& sums = s->block(t).sums;
+        n += sums.steady.size() * sizeof(double);
+        for (int a = 0; a < 2; ++a)
+            n += sums.bins[a].size() * sizeof(FilmSum) + (sums.before[a].size() + sums.after[a].size()) * sizeof(double);
+    }
+    return n;
+}
+
+std::shared_ptr<const FilmSnapshot> TransientFilm::snapshot() const {
+    std::vector<std::shared_ptr<const TileBlock>> blocks(static_cast<size_t>(tileCount()));
+    for (int t = 0; t < tileCount(); ++t) blocks[t] = current(t);
+    return std::make_shared<const FilmSnapshot>(layout_, std::move(blocks));
+}
+
+void TransientFilm::clear() {
+    for (int t = 0; t < tileCount(); ++t) {
+        std::lock_guard<std::mutex> g(tiles_[t].writer);
+        TileSums zero;
+        zero.zero(layout_->pixels(t), bins());
+        publish(t, std::make_shared<const TileBlock>(std::move(zero)));
+    }
+    stats.rejectedSamples = 0;
+    stats.overflowedPixels = 0;
+    for (int a = 0; a < 2; ++a) { stats.outside[a] = 0.0; stats.before[a] = 0.0; stats.inside[a] = 0.0; }
+}
+
+void TransientFilm::merge(const TransientFilm& other) {
+    if (&other == this) throw std::invalid_argument("TransientFilm::merge: a film cannot be merged into itself");
+    const TimeBins &ta = time(), &tb = other.time();
+    if (other.width() != width() || other.height() != height() || ta.bins != tb.bins || ta.startOpl != tb.startOpl ||
+        ta.binWidth != tb.binWidth)
+        throw std::invalid_argument("TransientFilm::merge: the films differ in size or time axis (" +
+                                    std::to_string(width()) + "x" + std::to_string(height()) + "x" +
+                                    std::to_string(bins()) + " vs " + std::to_string(other.width()) + "x" +
+                                    std::to_string(other.height()) + "x" + std::to_string(other.bins()) + ")");
+    const std::shared_ptr<const FilmSnapshot> theirs = other.snapshot();
+    for (int t = 0; t < tileCount(); ++t) {
+        std::lock_guard<std::mutex> g(tiles_[t].writer);
+        TileSums sum = current(t)->sums;
+        const TileSums& add = theirs->block(t).sums;
+        sum.passes += add.passes;
+        const auto addAll = [](auto& dst, const auto& src) {
+            for (size_t i = 0; i < dst.size(); ++i) dst[i] += src[i];
+        };
+        addAll(sum.steady, add.steady);
+        for (int a = 0; a < 2; ++a) {
+            addAll(sum.bins[a], add.bins[a]);
+            addAll(sum.before[a], add.before[a]);
+            addAll(sum.after[a], add.after[a]);
+        }
+        publish(t, std::make_shared<const TileBlock>(std::move(sum)));
+    }
+    stats.rejectedSamples += other.stats.rejectedSamples.load();
+    stats.overflowedPixels += other.stats.overflowedPixels.load();
+    for (int a = 0; a < 2; ++a) {
+        stats.outside[a] = stats.outside[a].load() + other.stats.outside[a].load();
+        stats.before[a] = stats.before[a].load() + other.stats.before[a].load();
+        stats.inside[a] = stats.inside[a].load() + other.stats.inside[a].load();
+    }
+}
+
+TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile)
+    : film_(film), tile_(tile), lock_(film.tiles_[tile].writer),
+      next_(std::make_shared<TileBlock>(film.current(tile)->sums)) {}
+
+TransientFilm::TileWriter::~TileWriter() {
+    ++next_->sums.passes;
+    film_.publish(tile_, std::move(next_));
+}
+
+void TransientFilm::TileWriter::addPixel(int x, int y, const PixelAccumulator& acc) {
+    TileSums& t = next_->sums;
+    const TileRect r = film_.tileRect(tile_);
+    const int px = x - r.x0, py = y - r.y0;
+    const size_t pixel = static_cast<size_t>(py) * r.w + px;
+    const size_t perBin = static_cast<size_t>(r.w) * r.h * 3;
+    // The averages are read as float: a pass whose contribution would push a sum past FLT_MAX (a
+    // light power near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this
+    // pixel and counted, so the film never holds (or shows) Inf. Checked first, then added, so a
+    // pixel gets all of the pass or none of it.
+    const auto fits = [](double sum, double add) {
+        const double r = sum + add;
+        return r >= -static_cast<double>(FLT_MAX) && r <= static_cast<double>(FLT_MAX);  // false for NaN too
+    };
+    bool ok = true;
+    for (int a = 0; a < 2 && ok; ++a) {
+        const TimeAxis axis = static_cast<TimeAxis>(a);
+        for (int k = acc.lo(axis); k <= acc.hi(axis) && ok; ++k) {
+            const double* v = acc.bin(axis, k);
+            const FilmSum* dst = &t.bins[a][static_cast<size_t>(k) * perBin + pixel * 3];
+            ok = fits(dst[0], v[0]) && fits(dst[1], v[1]) && fits(dst[2], v[2]);
+        }
+    }
+    const size_t i = pixel * 3;
+    const auto fits3 = [&](const std::vector<double>& sum, const Color& add) {
+        return fits(sum[i], add.x) && fits(sum[i + 1], add.y) && fits(sum[i + 2], add.z);
+    };
+    ok = ok && fits3(t.steady, acc.steady());
+    for (int a = 0; a < 2 && ok; ++a)
+        ok = fits3(t.before[a], acc.before(static_cast<TimeAxis>(a))) && fits3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
+    if (!ok) {
+        film_.stats.overflowedPixels.fetch_add(1, std::memory_order_relaxed);
+        return;
+    }
+    for (int a = 0; a < 2; ++a) {
+        const TimeAxis axis = static_cast<TimeAxis>(a);
+        for (int k = acc.lo(axis); k <= acc.hi(axis); ++k) {
+            const double* v = acc.bin(axis, k);
+            FilmSum* dst = &t.bins[a][static_cast<size_t>(k) * perBin + pixel * 3];
+            dst[0] += static_cast<FilmSum>(v[0]);
+            dst[1] += static_cast<FilmSum>(v[1]);
+            dst[2] += static_cast<FilmSum>(v[2]);
+        }
+    }
+    const auto add3 = [i](std::vector<double>& dst, const Color& c) {
+        dst[i] += c.x;
+        dst[i + 1] += c.y;
+        dst[i + 2] += c.z;
+    };
+    add3(t.steady, acc.steady());
+    for (int a = 0; a < 2; ++a) {
+        add3(t.before[a], acc.before(static_cast<TimeAxis>(a)));
+        add3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
+    }
+}
+
+void TransientFilm::frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {
+    out = frameImage(*snapshot(), bin, axis, mode);
+}
+void TransientFilm::steadyImage(std::vector<float>& out) const { out = tpb::steadyImage(*snapshot()); }
+void TransientFilm::beforeImage(TimeAxis axis, std::vector<float>& out) const { out = tpb::beforeImage(*snapshot(), axis); }
+void TransientFilm::afterImage(TimeAxis axis, std::vector<float>& out) const { out = tpb::afterImage(*snapshot(), axis); }
+void TransientFilm::pixelProfile(int x, int y, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {
+    out = tpb::pixelProfile(*snapshot(), x, y, axis, mode);
+}
+void TransientFilm::streak(int row, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {
+    out = streakImage(*snapshot(), row, axis, mode);
+}
+void TransientFilm::volume(TimeAxis axis, EmissionMode mode, std::vector<double>& out) const {
+    out = tpb::volume(*snapshot(), axis, mode);
+}
+int64_t TransientFilm::minPasses() const { return snapshot()->minPasses(); }
+
+}  // namespace tpb
