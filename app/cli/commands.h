@@ -1,5 +1,9 @@
 // Subcommands of the tpb executable. Each cli_*.cpp / view_*.cpp registers one.
 #pragma once
+
+namespace CLI {
+class App;
+}
 #include <CLI/CLI.hpp>
 
 namespace tpb::app {

@@ -50,11 +50,11 @@ const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta 
 }  // namespace
 
 void Viewer::setBin(int bin) {
-    st_.bin = std::clamp(bin, 0, scene_.time.bins - 1);
+    st_.bin = std::clamp(bin, 0, time_.bins - 1);
     st_.autoBin = false;  // the user chose a time: no more automatic bin
 }
 
-void Viewer::setAutoBin(int bin) { st_.bin = std::clamp(bin, 0, scene_.time.bins - 1); }
+void Viewer::setAutoBin(int bin) { st_.bin = std::clamp(bin, 0, time_.bins - 1); }
 
 bool Viewer::section(const char* label, ImGuiTreeNodeFlags flags) {
     const bool open = ImGui::CollapsingHeader(label, flags);
@@ -93,7 +93,7 @@ void Viewer::handleKeys(const std::vector<int>& keys) {
             case GLFW_KEY_LEFT: setBin(st_.bin - 1); break;
             case GLFW_KEY_RIGHT: setBin(st_.bin + 1); break;
             case GLFW_KEY_HOME: setBin(0); break;
-            case GLFW_KEY_END: setBin(scene_.time.bins - 1); break;
+            case GLFW_KEY_END: setBin(time_.bins - 1); break;
             case GLFW_KEY_SPACE: st_.playing = !st_.playing; break;
             case GLFW_KEY_F12: snapRequested_ = true; break;
             default: break;
@@ -110,7 +110,7 @@ void Viewer::advancePlayback(double dt) {
     st_.playAccum += std::min(dt, 0.25) * st_.speed;
     while (st_.playAccum >= 1.0) {
         st_.playAccum -= 1.0;
-        if (st_.bin + 1 < scene_.time.bins) {
+        if (st_.bin + 1 < time_.bins) {
             ++st_.bin;
         } else if (st_.loop) {
             st_.bin = 0;
@@ -170,9 +170,9 @@ void Viewer::drawUi() {
 // the same control after it. Rows that come and go are reserved (shown disabled or as "-"), and
 // messages of any length go to the fixed-size, wrapped messages box below the controls (drawUi).
 void Viewer::drawControls() {
-    const TimeBins& tb = scene_.time;
+    const TimeBins& tb = time_;
     ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels
-    ImGui::TextWrapped("%s", scene_.desc.path.c_str());
+    ImGui::TextWrapped("%s", scenePath_.c_str());
     ImGui::TextWrapped("%d x %d px, %d bins, %.3f - %.3f ns", scene_.camera.width, scene_.camera.height, tb.bins,
                        tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
     drawTimeSection();
@@ -230,7 +230,7 @@ void Viewer::drawControls() {
 
 void Viewer::drawTimeSection() {
     if (!section("Time", ImGuiTreeNodeFlags_DefaultOpen)) return;
-    const TimeBins& tb = scene_.time;
+    const TimeBins& tb = time_;
     int bin = st_.bin;
     if (ImGui::SliderInt("bin", &bin, 0, tb.bins - 1)) setBin(bin);
     track("bin");
@@ -491,7 +491,7 @@ void Viewer::drawImagePanel() {
 }
 
 void Viewer::drawTimePanel() {
-    const int w = scene_.camera.width, bins = scene_.time.bins;
+    const int w = scene_.camera.width, bins = time_.bins;
     ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s", st_.selY, axisName(st_.axis),
                        modeName(st_.mode));
     const ImVec2 avail = ImGui::GetContentRegionAvail();

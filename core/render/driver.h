@@ -44,8 +44,6 @@ class Driver {
 public:
     // The film gets `time` as its time axis (decided once, before the film exists: time_range.h).
     Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time);
-    // Transitional: the scene's own time axis.
-    Driver(const Scene& scene, const RenderSettings& settings) : Driver(scene, settings, scene.time) {}
     ~Driver();
 
     // Runs one pass synchronously (all threads). Returns false if aborted midway (film untouched
