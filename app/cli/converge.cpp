@@ -245,9 +245,7 @@ void runReference(ReferenceCmd& c) {
     } else {
         if (!c.ov.passes && !c.ov.timeBudget) throw UserError("a reference needs --passes N or --time SECONDS");
         job.passes = c.ov.passes.value_or(0);
-        job.timeBudgetSec = c.ov.timeBudget.value_or(0.0);
-        if (job.passes < 0 || !(job.timeBudgetSec >= 0.0) || !std::isfinite(job.timeBudgetSec))
-            throw UserError("--passes and --time must be >= 0");
+        job.timeBudgetSec = c.ov.timeBudget.value_or(0.0);  // (both validated: prepareRender)
         want.requestedPasses = job.passes;
         want.requestedTimeSec = job.timeBudgetSec;
         if (method == "pt") {

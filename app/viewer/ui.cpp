@@ -2,6 +2,8 @@
 // the selected pixel's time profile bottom right). Layout follows the window size.
 #include "viewer/app.h"
 
+#include "base/error.h"
+
 #include <imgui_internal.h>  // ImGui::GetItemID (public from ImGui 1.88)
 #include <imgui_stdlib.h>
 
@@ -366,20 +368,28 @@ void Viewer::drawSettingsSection() {
     track("pass limit (0: none)");
     if (!apply) return;
     const RenderSettings& cur = driver_->settings();
-    if (edit_.photonsPerPass < 1 || !(edit_.alpha > 0.0 && edit_.alpha <= 1.0) || !(edit_.beamRadius0 > 0.0) ||
-        edit_.passes < 0) {
-        status_ = "invalid setting (photons >= 1, alpha in (0, 1], radius > 0, passes >= 0): not applied";
-        edit_ = cur;
-        return;
-    }
     if (edit_.photonsPerPass == cur.photonsPerPass && edit_.alpha == cur.alpha &&
         edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
         return;
-    RenderSettings s = cur;  // everything else (seed, threads, radii ratio...) as before
-    s.photonsPerPass = edit_.photonsPerPass;
-    s.alpha = edit_.alpha;
-    s.beamRadius0 = edit_.beamRadius0;
-    s.passes = edit_.passes;
+    // The edited fields as overrides, checked by the one validate() (render_settings.h); everything
+    // else (seed, threads, surface radius...) as before.
+    SettingsOverrides o;
+    o.photons = edit_.photonsPerPass;
+    o.alpha = edit_.alpha;
+    o.radius = edit_.beamRadius0;
+    o.passes = edit_.passes;
+    RenderSettings s = cur;
+    s.apply(o);
+    std::vector<std::string> warnings;
+    try {
+        const double diag = scene_.bounds.diagonal() > 0.0 ? scene_.bounds.diagonal() : 1.0;
+        warnings = s.validate({nullptr, &o, diag});
+    } catch (const UserError& e) {
+        status_ = std::string("invalid setting: ") + e.what() + ": not applied";
+        edit_ = cur;
+        return;
+    }
+    for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     restart(s, "settings changed: accumulation restarted");
 }
 
