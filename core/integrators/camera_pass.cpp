@@ -5,8 +5,9 @@
 // beam power (W, already divided by the number of photons of the pass); t OPL time (m).
 #include "integrators/camera_pass.h"
 
-#include "scene/bsdf.h"
 #include "base/rng.h"
+#include "transport/free_flight.h"
+#include "transport/interaction.h"
 
 namespace tpb {
 
@@ -107,7 +108,7 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
     PathState path;
     RegionStack regions = scene.cameraRegions;
     ++stats.cameraRays;
-    int nullCrossings = 0;  // index-matched boundaries are not events: they do not use up depth
+    NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
@@ -119,26 +120,23 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
         if (beams && region.hasMedium && region.medium.scattering)
             gatherBeams(scene, map, *beams, s, time, ray, sMax, regionId, path, scratch, stats);
         if (!hit) break;
-        if (region.hasMedium) path.beta *= region.medium.transmittance(hit->t);
-        path.oplCam += region.ior * hit->t;
+        const SegmentTransport seg = crossSegment(region, ray, hit->t);
+        path.beta *= seg.transmittance;
+        path.oplCam += seg.opl;
         if (maxComponent(path.beta) <= 0.0) break;
 
-        const ShapeInfo& shape = scene.shapes[hit->shape];
-        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
-        const Vec3 ng = front ? hit->ng : -hit->ng;
-        Vec3 ns = front ? hit->ns : -hit->ns;
-        if (glm::dot(ns, ng) <= 0.0) ns = ng;
-
-        if (shape.areaLight >= 0) {  // visible emitter, seen at its arrival time
-            if (front) {
-                const Light& l = scene.lights[shape.areaLight];
+        const SurfaceInteraction si = interact(scene, ray, *hit);
+        const Vec3& ng = si.ng;
+        if (si.kind == SurfaceKind::Emitter) {  // visible emitter, seen at its arrival time
+            if (si.front) {
+                const Light& l = scene.lights[si.shape->areaLight];
                 splatInstant(time, scratch.acc, stats, path.beta * l.areaRadiance(), path.oplCam + l.emitOpl, l.emitOpl);
             }
             break;
         }
-        if (shape.material < 0) break;
-        const Material& mat = scene.materials[shape.material];
-        if (mat.type == MaterialType::Diffuse) {
+        if (si.kind == SurfaceKind::Absorber) break;
+        const Material& mat = *si.material;
+        if (si.kind == SurfaceKind::Diffuse) {
             // Transient progressive photon mapping: L = f_r sum Phi_p / (pi rs^2), at t_p + t_cam.
             if (grid) {
                 const Color fr = mat.albedo * kInvPi;
@@ -158,18 +156,18 @@ void renderPixel(const Scene& scene, const PhotonMap& map, const BeamAccel* beam
             }
             break;
         }
-        if (mat.type == MaterialType::Mirror) {
-            path.beta *= mat.specular;
-            ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
+        if (si.kind == SurfaceKind::Mirror) {
+            const SpecularContinuation c = reflectMirror(scene, ray, *hit, si);
+            path.beta *= c.tint;
+            ray = c.ray;
             continue;
         }
         // Dielectric or null boundary: follow reflection or refraction, chosen by Fresnel.
-        const std::optional<Ray> next =
-            scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
-        if (!next) { ++stats.regionOverflows; break; }
-        ray = *next;
-        if (mat.type == MaterialType::Null && ++nullCrossings <= 64) --depth;
-        if (mat.type == MaterialType::Dielectric) path.beta *= mat.specular;
+        const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
+        if (c.regionOverflow) { ++stats.regionOverflows; break; }
+        ray = c.ray;
+        if (c.nullCrossing && nullCrossings.free()) --depth;
+        path.beta *= c.tint;
     }
 }
 

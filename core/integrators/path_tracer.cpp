@@ -8,11 +8,12 @@
 // times solid angle over the sampling pdfs, W / (m^2 sr)).
 #include "integrators/path_tracer.h"
 
-#include "scene/bsdf.h"
 #include "base/error.h"
 #include "base/parallel.h"
 #include "base/rng.h"
 #include "base/sampling.h"
+#include "transport/free_flight.h"
+#include "transport/interaction.h"
 
 #include <vector>
 
@@ -51,22 +52,15 @@ bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stac
         if (!(dist > 0.0)) return true;
         const Ray ray{from, v / dist, 0.0, dist};
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
-        const double seg = hit ? hit->t : dist;
-        const Region& region = scene.regions[stack.top()];
-        opl += region.ior * seg;
-        if (region.hasMedium) tr *= region.medium.transmittance(seg);
+        const SegmentTransport seg = crossSegment(scene.regions[stack.top()], ray, hit ? hit->t : dist);
+        opl += seg.opl;
+        tr *= seg.transmittance;
         if (!hit) return true;
-        const ShapeInfo& shape = scene.shapes[hit->shape];
-        if (shape.areaLight >= 0 || shape.material < 0) return false;
-        if (scene.materials[shape.material].type != MaterialType::Null) return false;
-        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
-        const Vec3 ng = front ? hit->ng : -hit->ng;
-        if (front) {
-            if (!stack.push(shape.interiorRegion)) { ++stats.regionOverflows; return false; }
-        } else {
-            stack.pop();
-        }
-        from = hit->p - scene.rayEps * ng;
+        const SurfaceInteraction si = interact(scene, ray, *hit);
+        if (si.kind != SurfaceKind::Null) return false;  // every other surface blocks
+        const SpecularContinuation c = crossNull(scene, ray, *hit, si, stack);
+        if (c.regionOverflow) { ++stats.regionOverflows; return false; }
+        from = c.ray.o;
     }
     return false;
 }
@@ -127,29 +121,6 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
     splat(ctx, L, light.emitOpl + oplShadow + oplCam, light.emitOpl + oplShadow + oplUnw);
 }
 
-// Equiangular sampling (Kulla and Fajardo 2012) of a point on the medium segment x(t) = o + t w,
-// 0 <= t < tMax, towards a light at y. With D = (y - o).w and h the distance from y to the line,
-// |x(t) - y|^2 = h^2 + (t - D)^2; the angle theta(t) = atan((t - D) / h) has
-// d theta / dt = h / (h^2 + (t - D)^2), so theta uniform in [theta(0), theta(tMax)] gives
-//     pdf(t) = h / ((theta_b - theta_a) (h^2 + (t - D)^2)),     t = D + h tan(theta),
-// whose 1/|x - y|^2 cancels the light's. (Checked against free-flight NEE in test_path_tracer.)
-struct EquiangularFrame {
-    double D = 0.0, h = 0.0, thetaA = 0.0, thetaB = 0.0;
-    bool valid = false;
-
-    EquiangularFrame(const Ray& ray, double tMax, const Vec3& y) {
-        const Vec3 oy = y - ray.o;
-        D = glm::dot(oy, ray.d);
-        h = glm::length(oy - D * ray.d);
-        if (!(h > 0.0) || !(tMax > 0.0)) return;  // the light on the ray's line: a set of measure zero
-        thetaA = std::atan2(-D, h);
-        thetaB = std::isfinite(tMax) ? std::atan2(tMax - D, h) : 0.5 * kPi;
-        valid = thetaB > thetaA;
-    }
-    double sample(double u) const { return D + h * std::tan(thetaA + u * (thetaB - thetaA)); }
-    double pdf(double t) const { return h / ((thetaB - thetaA) * (h * h + (t - D) * (t - D))); }
-};
-
 // Where equiangular sampling stops on a segment: transmittance e^-30 in the clearest channel.
 // Beyond it, free-flight vertices alone connect to delta lights, so an unbounded segment (an open
 // medium) neither wastes samples at negligible transmittance nor puts them at absurd times.
@@ -160,10 +131,11 @@ double equiangularReach(const Medium& m) {
 
 // The two techniques that place a scattering point on a medium segment and connect it to a point
 // or spot light: free flight (pdf sigma_bar exp(-sigma_bar t), the vertex the path continues
-// from) and equiangular (pdf above, on [0, reach)). Each takes one sample; the balance heuristic
-// weights them, so the sum stays unbiased while each covers where the other is poor: equiangular
-// next to the light (where free flight has infinite variance: the integral of 1/d^4 over a ball
-// around the light diverges), free flight far from it, where the transmittance dominates.
+// from) and equiangular (EquiangularFrame, base/sampling.h, on [0, reach)). Each takes one
+// sample; the balance heuristic weights them, so the sum stays unbiased while each covers where
+// the other is poor: equiangular next to the light (where free flight has infinite variance: the
+// integral of 1/d^4 over a ball around the light diverges), free flight far from it, where the
+// transmittance dominates.
 struct SegmentMis {
     Ray ray;
     double reach = 0.0, sigmaBar = 0.0;
@@ -183,7 +155,7 @@ void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, co
     if (li < 0 || !(pick > 0.0)) return;
     const Light& light = ctx.scene.lights[li];
     if (mis && isDeltaPositionLight(light) && t < mis->reach) {
-        const EquiangularFrame f(mis->ray, mis->reach, light.position);
+        const EquiangularFrame f(mis->ray.o, mis->ray.d, mis->reach, light.position);
         if (f.valid) {
             const double pff = mis->freeFlightPdf(t), peq = f.pdf(t);
             beta *= pff / (pff + peq);
@@ -203,11 +175,12 @@ void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const
     if (li < 0 || !(pick > 0.0)) return;
     const Light& light = ctx.scene.lights[li];
     if (!isDeltaPositionLight(light)) return;
-    const EquiangularFrame f(mis.ray, mis.reach, light.position);
+    const EquiangularFrame f(mis.ray.o, mis.ray.d, mis.reach, light.position);
     if (!f.valid) return;
-    const double t = f.sample(uT);
+    const EquiangularSample eq = f.sample(uT);  // base/sampling.h
+    const double t = eq.t;
     if (!(t >= 0.0 && t < mis.reach)) return;  // rounding at the ends
-    const double peq = f.pdf(t), pff = mis.freeFlightPdf(t);
+    const double peq = eq.pdf, pff = mis.freeFlightPdf(t);
     if (!(peq > 0.0) || !std::isfinite(peq)) return;
     const Medium& m = region.medium;
     // sigma_s T / pdf_eq * w_eq = sigma_s T / pdf_eq * pdf_eq / (pdf_eq + pdf_ff) = sigma_s T / (pdf_eq + pdf_ff)
@@ -222,13 +195,7 @@ void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const
 // Russian roulette on the throughput; false if the path dies.
 bool roulette(Rng& rng, Color& beta, int depth) {
     if (depth < kRussianRouletteDepth) return true;
-    const double q = std::min(1.0, maxComponent(beta));
-    if (!(q > 0.0)) return false;
-    if (q < 1.0) {
-        if (rng.uniform() >= q) return false;
-        beta /= q;
-    }
-    return true;
+    return russianRoulette(rng, beta, 1.0);
 }
 
 void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
@@ -255,12 +222,13 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                 const double sigmaBar = m.samplingSigma();
                 const SegmentMis mis{ray, s.equiangular ? std::min(dSurf, equiangularReach(m)) : 0.0, sigmaBar};
                 if (s.equiangular) equiangularSegment(ctx, rng, mis, region, regions, beta, oplCam, oplUnw, nonSpecular);
-                const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
-                if (d < dSurf) {
+                const FreeFlight ff = sampleFreeFlight(region, ray, dSurf, rng);
+                if (ff.scattered) {
                     // Medium scattering vertex.
-                    beta *= m.sigma_s * m.transmittance(d) / (sigmaBar * std::exp(-sigmaBar * d));
-                    oplCam += region.ior * d;
-                    if (nonSpecular) oplUnw += region.ior * d;
+                    const double d = ff.distance;
+                    beta *= ff.weight;
+                    oplCam += ff.opl;
+                    if (nonSpecular) oplUnw += ff.opl;
                     nonSpecular = true;
                     if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
                     const Vec3 x = ray.at(d);
@@ -275,9 +243,9 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                     emitterVisible = false;
                     continue;
                 }
-                if (hit) beta *= m.transmittance(dSurf) / std::exp(-sigmaBar * dSurf);
+                if (hit) beta *= ff.weight;
             } else if (hit) {
-                beta *= m.transmittance(dSurf);
+                beta *= crossSegment(region, ray, dSurf).transmittance;
             }
         }
         if (!hit) return;  // escaped
@@ -286,35 +254,30 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
         if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
         if (isBlack(beta)) return;
 
-        const ShapeInfo& shape = scene.shapes[hit->shape];
-        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
-        const Vec3 ng = front ? hit->ng : -hit->ng;  // facing the incoming ray
-        Vec3 ns = front ? hit->ns : -hit->ns;
-        if (glm::dot(ns, ng) <= 0.0) ns = ng;
+        const SurfaceInteraction si = interact(scene, ray, *hit);
+        const Vec3& ng = si.ng;  // facing the incoming ray
+        const Vec3& ns = si.ns;
 
-        if (shape.areaLight >= 0) {  // emitter: visible from its front side, absorbs
-            if (front && emitterVisible) {
-                const Light& l = scene.lights[shape.areaLight];
+        if (si.kind == SurfaceKind::Emitter) {  // emitter: visible from its front side, absorbs
+            if (si.front && emitterVisible) {
+                const Light& l = scene.lights[si.shape->areaLight];
                 splat(ctx, beta * l.areaRadiance(), l.emitOpl + oplCam, l.emitOpl + oplUnw);
             }
             return;
         }
-        if (shape.material < 0) return;
-        const Material& mat = scene.materials[shape.material];
+        if (si.kind == SurfaceKind::Absorber) return;
+        const Material& mat = *si.material;
 
-        if (mat.type == MaterialType::Null) {
+        if (si.kind == SurfaceKind::Null) {
             // Index-matched boundary (as in the beam core): no bending, no reflection, no depth.
-            ray = {hit->p - scene.rayEps * ng, ray.d};
-            if (front) {
-                if (!regions.push(shape.interiorRegion)) { ++ctx.stats.regionOverflows; return; }
-            } else {
-                regions.pop();
-            }
+            const SpecularContinuation c = crossNull(scene, ray, *hit, si, regions);
+            if (c.regionOverflow) { ++ctx.stats.regionOverflows; return; }
+            ray = c.ray;
             continue;
         }
 
         ++depth;
-        if (mat.type == MaterialType::Diffuse) {
+        if (si.kind == SurfaceKind::Diffuse) {
             nonSpecular = true;
             const Color fr = mat.albedo * kInvPi;
             const Vec3 origin = scene.bounceOrigin(ray, *hit, ng);
@@ -329,18 +292,18 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
             beta *= mat.albedo;  // f cos / pdf
             ray = {origin, wo};
             emitterVisible = false;
-        } else if (mat.type == MaterialType::Mirror) {
+        } else if (si.kind == SurfaceKind::Mirror) {
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
-            beta *= mat.specular;
-            ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
+            const SpecularContinuation c = reflectMirror(scene, ray, *hit, si);
+            beta *= c.tint;
+            ray = c.ray;
             emitterVisible = true;
         } else {  // dielectric: reflection or refraction chosen by Fresnel
             if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
-            const std::optional<Ray> next =
-                scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
-            if (!next) { ++ctx.stats.regionOverflows; return; }
-            ray = *next;
-            beta *= mat.specular;
+            const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
+            if (c.regionOverflow) { ++ctx.stats.regionOverflows; return; }
+            ray = c.ray;
+            beta *= c.tint;
             emitterVisible = true;
         }
         if (!roulette(rng, beta, depth)) return;

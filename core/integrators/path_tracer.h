@@ -15,7 +15,8 @@
 //  - diffuse surface: NEE with f = albedo / pi and the cosine at the vertex; cosine sampling;
 //  - mirror, dielectric (Fresnel choice, total internal reflection, region stack push/pop) and null
 //    boundaries (always crossed, no bending) continue the path; the region stack, ray epsilons and
-//    the tint conventions are those of camera_pass.cpp / photon_tracer.cpp;
+//    the tint conventions are the beam core's (all in transport/interaction.h, the free flight in
+//    transport/free_flight.h);
 //  - an area light hit adds its emission only when NEE could not have produced that path: the
 //    previous vertex is the camera or a mirror/dielectric (null crossings are transparent and do
 //    not count). Emitters and shapes without material absorb (as in the beam core);

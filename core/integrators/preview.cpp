@@ -1,7 +1,8 @@
+// Geometry preview (see preview.h): the material switch of transport/interaction.h, no Fresnel, no region stack.
 #include "integrators/preview.h"
 
-#include "scene/bsdf.h"
 #include "base/parallel.h"
+#include "transport/interaction.h"
 
 namespace tpb {
 
@@ -15,19 +16,20 @@ std::vector<float> renderPreview(const Scene& scene, int threads) {
             for (int depth = 0; depth < 8; ++depth) {
                 const auto hit = scene.geometry.intersect(ray);
                 if (!hit) break;
-                const ShapeInfo& sh = scene.shapes[hit->shape];
+                const SurfaceInteraction si = interact(scene, ray, *hit);
                 const double cosv = std::abs(glm::dot(hit->ns, ray.d));
-                if (sh.areaLight >= 0) { c = beta; break; }
-                if (sh.material < 0) { c = beta * 0.5 * cosv; break; }
-                const Material& m = scene.materials[sh.material];
-                if (m.type == MaterialType::Diffuse) { c = beta * m.albedo * cosv; break; }
-                const Vec3 n = glm::dot(ray.d, hit->ng) < 0.0 ? hit->ns : -hit->ns;
-                if (m.type == MaterialType::Mirror) {
+                if (si.kind == SurfaceKind::Emitter) { c = beta; break; }
+                if (si.kind == SurfaceKind::Absorber) { c = beta * 0.5 * cosv; break; }
+                const Material& m = *si.material;
+                if (si.kind == SurfaceKind::Diffuse) { c = beta * m.albedo * cosv; break; }
+                // The shading normal as given, turned to the incoming side (not replaced by ng).
+                const Vec3 n = si.front ? hit->ns : -hit->ns;
+                if (si.kind == SurfaceKind::Mirror) {
                     beta *= m.specular;
-                    ray = {hit->p + scene.rayEps * n, glm::normalize(reflect(ray.d, n))};
+                    ray = offsetReflection(scene, ray, *hit, n);
                 } else {  // glass and null boundaries: look straight through, slightly tinted
-                    beta *= m.type == MaterialType::Dielectric ? 0.9 * m.specular : Color(1.0);
-                    ray = {hit->p - scene.rayEps * n, ray.d};
+                    beta *= si.kind == SurfaceKind::Dielectric ? 0.9 * m.specular : Color(1.0);
+                    ray = offsetStraightThrough(scene, ray, *hit, n);
                 }
             }
             float* p = &img[(static_cast<size_t>(y) * cam.width + x) * 3];

@@ -1,11 +1,12 @@
 #include "photons/photon_tracer.h"
 
-#include "scene/bsdf.h"
 #include "base/error.h"
 #include "render/memory_budget.h"
 #include "base/parallel.h"
 #include "base/rng.h"
 #include "base/sampling.h"
+#include "transport/free_flight.h"
+#include "transport/interaction.h"
 
 namespace tpb {
 
@@ -59,7 +60,7 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
     if (!startRegions) { ++out.regionOverflows; return; }
     RegionStack regions = *startRegions;
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
-    int nullCrossings = 0;  // index-matched boundaries are not events: they do not use up depth
+    NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
     const size_t beams0 = out.beams.size(), photons0 = out.photons.size();
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
@@ -74,16 +75,13 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
         if (region.hasMedium && !region.medium.scattering) {
             // Absorbing only: no scattering event to sample, just attenuate up to the surface.
             if (!hit) break;
-            power *= region.medium.transmittance(hit->t);
+            power *= crossSegment(region, ray, hit->t).transmittance;
         } else if (region.hasMedium) {
             const Medium& m = region.medium;
-            const double sigmaBar = m.samplingSigma();
-            // Free-flight sampling with pdf sigma_bar exp(-sigma_bar d).
-            const double d = -std::log(1.0 - rng.uniform()) / sigmaBar;
-            const bool scatters = d < dSurf;
-            const double segment = scatters ? d : dSurf;
+            // Free-flight sampling with pdf sigma_bar exp(-sigma_bar d) (transport/free_flight.h).
+            const FreeFlight ff = sampleFreeFlight(region, ray, dSurf, rng);
             if (s.storeBeams) {
-                double len = s.beamLength == BeamLength::Short ? segment : dSurf;
+                double len = s.beamLength == BeamLength::Short ? ff.distance : dSurf;
                 if (!std::isfinite(len)) {
                     len = openBeamLength(scene, m, region.ior, opl, s.filmEndOpl);
                     out.cutFlux += power * m.transmittance(len);  // what flows on past the beam's end
@@ -91,70 +89,52 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
                 if (len > 0.0 && std::isfinite(len))
                     out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
             }
-            if (!std::isfinite(segment)) break;
+            if (!std::isfinite(ff.distance)) break;
             // Weight: T(d) sigma_s / (sigma_bar T_bar(d)) at a scattering event, T / T_bar at a surface.
-            const Color tr = m.transmittance(segment);
-            const double trBar = std::exp(-sigmaBar * segment);
-            if (scatters) {
-                power *= m.sigma_s * tr / (sigmaBar * trBar);
-                opl += region.ior * d;
-                ray = {ray.at(d), m.phase.sample(ray.d, rng.uniform(), rng.uniform())};
-            } else {
-                power *= tr / trBar;
+            power *= ff.weight;
+            if (ff.scattered) {
+                opl += ff.opl;
+                ray = {ray.at(ff.distance), m.phase.sample(ray.d, rng.uniform(), rng.uniform())};
             }
             if (!isFinite(power)) { ++out.rejected; return; }
-            if (scatters) {
+            if (ff.scattered) {
                 // Russian roulette on the throughput relative to the emitted power.
-                const double q = std::min(1.0, maxComponent(power) / power0);
-                if (q <= 0.0) return;
-                if (q < 1.0) {
-                    if (rng.uniform() >= q) return;
-                    power /= q;
-                }
+                if (!russianRoulette(rng, power, power0)) return;
                 continue;
             }
         }
         if (!hit) break;
         opl += region.ior * hit->t;
 
-        const ShapeInfo& shape = scene.shapes[hit->shape];
-        if (shape.areaLight >= 0 || shape.material < 0) return;  // emitters and unassigned shapes absorb
-        const Material& mat = scene.materials[shape.material];
-        const bool front = glm::dot(ray.d, hit->ng) < 0.0;
-        const Vec3 ng = front ? hit->ng : -hit->ng;  // facing the incoming photon
-        Vec3 ns = front ? hit->ns : -hit->ns;
-        if (glm::dot(ns, ng) <= 0.0) ns = ng;
-        Vec3 newDir;
-        switch (mat.type) {
-            case MaterialType::Diffuse: {
-                if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, ng, power, opl});
-                newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), ns));
-                if (glm::dot(newDir, ng) <= 0.0) return;
-                power *= mat.albedo;
-                ray = {scene.bounceOrigin(ray, *hit, ng), newDir};
+        const SurfaceInteraction si = interact(scene, ray, *hit);
+        switch (si.kind) {
+            case SurfaceKind::Emitter:
+            case SurfaceKind::Absorber: return;  // emitters and unassigned shapes absorb
+            case SurfaceKind::Diffuse: {
+                if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, si.ng, power, opl});
+                const Vec3 newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), si.ns));
+                if (glm::dot(newDir, si.ng) <= 0.0) return;
+                power *= si.material->albedo;
+                ray = {scene.bounceOrigin(ray, *hit, si.ng), newDir};
                 break;
             }
-            case MaterialType::Mirror:
-                power *= mat.specular;
-                ray = {scene.bounceOrigin(ray, *hit, ng), glm::normalize(reflect(ray.d, ns))};
+            case SurfaceKind::Mirror: {
+                const SpecularContinuation c = reflectMirror(scene, ray, *hit, si);
+                power *= c.tint;
+                ray = c.ray;
                 break;
-            case MaterialType::Dielectric:
-            case MaterialType::Null: {
-                const std::optional<Ray> next =
-                    scene.followInterface(shape, mat, *hit, ray.d, front, ng, ns, regions, rng.uniform());
-                if (!next) { ++out.regionOverflows; return; }
-                ray = *next;
-                if (mat.type == MaterialType::Null && ++nullCrossings <= 64) { --depth; continue; }
-                if (mat.type == MaterialType::Dielectric) power *= mat.specular;
+            }
+            case SurfaceKind::Dielectric:
+            case SurfaceKind::Null: {
+                const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
+                if (c.regionOverflow) { ++out.regionOverflows; return; }
+                ray = c.ray;
+                if (c.nullCrossing && nullCrossings.free()) { --depth; continue; }
+                power *= c.tint;
                 break;
             }
         }
-        const double q = std::min(1.0, maxComponent(power) / power0);
-        if (q <= 0.0) return;
-        if (q < 1.0) {
-            if (rng.uniform() >= q) return;
-            power /= q;
-        }
+        if (!russianRoulette(rng, power, power0)) return;
     }
 }
 

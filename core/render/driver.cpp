@@ -1,8 +1,6 @@
 #include "render/driver.h"
 
 #include "base/parallel.h"
-#include "accel/photon_grid.h"
-#include "base/progressive.h"
 
 #include <chrono>
 #include <cstdio>
@@ -16,9 +14,11 @@ double nowSec() {
     return duration<double>(steady_clock::now().time_since_epoch()).count();
 }
 
-Driver::Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time)
+Driver::Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time,
+               std::unique_ptr<Integrator> integrator)
     : scene_(scene), settings_(settings),
-      film_(std::make_unique<TransientFilm>(scene.camera.width, scene.camera.height, time)) {
+      film_(std::make_unique<TransientFilm>(scene.camera.width, scene.camera.height, time)),
+      integrator_(integrator ? std::move(integrator) : makeIntegrator(scene, settings)) {
     settings_.threads = resolveThreads(settings_.threads);
     startTime_ = nowSec();
 }
@@ -28,75 +28,31 @@ Driver::~Driver() { stop(); }
 bool Driver::runPass(uint64_t pass) {
     PassStats ps;
     ps.pass = pass;
-    // Radius schedule: both kernels are 2D (area shrinks by (i + alpha) / (i + 1) per pass).
-    ps.beamRadius = progressiveRadius(settings_.beamRadius0, settings_.alpha, pass, 2);
-    ps.surfaceRadius = progressiveRadius(settings_.surfaceRadius0, settings_.alpha, pass, 2);
+    PassContext ctx;
+    ctx.pass = pass;
+    ctx.time = &film_->time();
+    ctx.threads = settings_.threads;
+    ctx.tiles = film_->tileCount();
+    ctx.abort = &abort_;
     const double t0 = nowSec();
 
-    // 1. Photon pass (only the stages the scene needs).
-    PhotonTraceSettings pt;
-    pt.seed = settings_.seed;
-    pt.pass = pass;
-    pt.photons = settings_.photonsPerPass;
-    pt.maxDepth = settings_.maxDepth;
-    pt.storeBeams = scene_.stages.beams;
-    pt.storeSurfacePhotons = scene_.stages.surfacePhotons;
-    pt.beamLength = settings_.beamLength;
-    pt.filmEndOpl = film_->time().endOpl();
-    pt.threads = settings_.threads;
-    pt.maxMapBytes = settings_.maxPhotonMapBytes > 0 ? settings_.maxPhotonMapBytes : maxFilmBytes();
-    PhotonMap map = tracePhotons(scene_, pt, &abort_);
-    if (abort_) return false;
-    ps.photons = map.emitted;
-    ps.beams = static_cast<int64_t>(map.beams.size());
-    ps.surfacePhotons = static_cast<int64_t>(map.photons.size());
-    ps.emittedFlux = map.emittedFlux;
-    ps.cutFlux = map.cutFlux;
-    ps.regionOverflows = map.regionOverflows;
+    // 1. What the integrator prepares for the pass (photon beams: photons and accelerators).
+    if (!integrator_->beginPass(ctx, ps) || abort_) return false;
     const double t1 = nowSec();
 
-    // 2. Acceleration structures.
-    BeamAccel* accel = nullptr;
-    if (scene_.stages.beams && !map.beams.empty()) {
-        if (!accel_) accel_ = BeamAccel::create(settings_.accel);
-        accel_->build(map.beams, ps.beamRadius, settings_.threads);
-        accel = accel_.get();
-        ps.beamPieces = static_cast<int64_t>(accel->pieceCount());
-    }
-    std::unique_ptr<PhotonGrid> grid;
-    if (scene_.stages.surfacePhotons && !map.photons.empty()) {
-        grid = std::make_unique<PhotonGrid>();
-        grid->build(map.photons, ps.surfaceRadius);
-    }
-    const double t2 = nowSec();
-
-    // 3. Camera pass: whole tiles per thread, so a pixel's time series has a single writer.
-    CameraPassSettings cs;
-    cs.seed = settings_.seed;
-    cs.pass = pass;
-    cs.beamRadius = ps.beamRadius;
-    cs.surfaceRadius = ps.surfaceRadius;
-    cs.profile = settings_.profile;
-    cs.beamLength = settings_.beamLength;
-    cs.maxDepth = settings_.maxDepth;
-    const int threads = settings_.threads;
-    std::vector<CameraPassScratch> scratch(static_cast<size_t>(threads));
-    for (auto& sc : scratch) sc.acc.reset(film_->bins());
-    std::vector<CameraPassStats> stats(static_cast<size_t>(threads));
-    parallelFor(film_->tileCount(), threads, [&](int64_t tile, int t) {
-        renderTile(scene_, map, accel, grid.get(), cs, *film_, static_cast<int>(tile), scratch[t], stats[t]);
+    // 2. Whole tiles per thread, so a pixel's time series has a single writer.
+    parallelFor(ctx.tiles, ctx.threads, [&](int64_t tile, int t) {
+        const int i = static_cast<int>(tile);
+        TransientFilm::TileWriter writer(*film_, i);
+        integrator_->renderTile(ctx, i, film_->tileRect(i), writer, t);
     }, &abort_);
-    for (const CameraPassStats& st : stats) {
-        ps.camera += st;
-        st.flushInto(film_->stats);
-    }
+    integrator_->endPass(ctx, ps);
+    ps.film.flushInto(film_->stats);
     if (abort_) return false;
-    const double t3 = nowSec();
-    ps.photonSec = t1 - t0;
-    ps.buildSec = t2 - t1;
-    ps.cameraSec = t3 - t2;
-    ps.passSec = t3 - t0;
-    ps.elapsedSec = t3 - startTime_;
+    const double t2 = nowSec();
+    ps.cameraSec = t2 - t1;
+    ps.passSec = t2 - t0;
+    ps.elapsedSec = t2 - startTime_;
     ps.peakRssBytes = peakRssBytes();
     {
         std::lock_guard<std::mutex> g(mutex_);

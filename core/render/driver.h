@@ -1,13 +1,14 @@
-// The progressive driver: pass i = trace photons (seeded by (pass, photon)), build the beam BVH
-// and the surface-photon grid, camera pass over tiles (seeded by (pass, pixel)), shrink the radii.
-// Passes are independent given their index, so results do not depend on the number of threads.
+// The progressive driver: runs any Integrator (integrators/integrator.h) pass after pass into one
+// transient film: beginPass on all threads, then the film's tiles spread over the worker threads
+// (each tile written by one thread at a time), then endPass; the pass's counters go to the history.
+// Pass i depends only on (seed, i), so results do not depend on the number of threads, and any
+// list of pass indices can be run (runPass).
 //
 // Asynchronous API for the viewer and the CLI: start() runs passes on a background thread until
 // the pass count or time budget is reached or stop() is called; pause()/resume(); the film can be
 // read at any time (per-tile consistent, see film.h) and history() returns finished passes.
 #pragma once
-#include "accel/beam_accel.h"
-#include "integrators/camera_pass.h"
+#include "integrators/integrator.h"
 #include "film/film.h"
 #include "render/memory_budget.h"
 #include "render/render_settings.h"
@@ -26,24 +27,12 @@
 
 namespace tpb {
 
-struct PassStats {
-    uint64_t pass = 0;  // 1-based
-    double beamRadius = 0.0, surfaceRadius = 0.0;
-    int64_t photons = 0, beams = 0, beamPieces = 0, surfacePhotons = 0;
-    // Flux the photons started with, and the part still carried at the end of long beams cut in an
-    // unbounded medium (missing from the steady image only: see photon_tracer.cpp, openBeamLength).
-    Color emittedFlux{0.0}, cutFlux{0.0};
-    int64_t regionOverflows = 0;  // photons ended by a full region stack (camera paths: camera.regionOverflows)
-    CameraPassStats camera;
-    double photonSec = 0.0, buildSec = 0.0, cameraSec = 0.0, passSec = 0.0;
-    double elapsedSec = 0.0;  // since start()
-    uint64_t peakRssBytes = 0;
-};
-
 class Driver {
 public:
     // The film gets `time` as its time axis (decided once, before the film exists: time_range.h).
-    Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time);
+    // The integrator is settings.method's (makeIntegrator) unless one is given.
+    Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time,
+           std::unique_ptr<Integrator> integrator = nullptr);
     ~Driver();
 
     // Runs one pass synchronously (all threads). Returns false if aborted midway (film untouched
@@ -70,6 +59,7 @@ public:
     TransientFilm& film() { return *film_; }
     const Scene& scene() const { return scene_; }
     const RenderSettings& settings() const { return settings_; }
+    const Integrator& integrator() const { return *integrator_; }
     uint64_t completedPasses() const { return completed_.load(); }
     std::vector<PassStats> history() const;
     PassStats lastPass() const;
@@ -88,7 +78,7 @@ private:
     std::vector<PassStats> history_;
     std::exception_ptr failure_;
     std::string failureMessage_;
-    std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
+    std::unique_ptr<Integrator> integrator_;
     double startTime_ = 0.0;
 };
 

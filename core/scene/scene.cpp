@@ -1,8 +1,8 @@
 #include "scene/scene.h"
 
-#include "scene/bsdf.h"
 #include "base/error.h"
 #include "scene/mesh.h"
+#include "transport/interaction.h"
 
 #include <algorithm>
 #include <map>
@@ -34,19 +34,20 @@ bool reachesDiffuse(const Scene& s, Ray ray, int depth) {
     for (; depth < 8; ++depth) {
         const auto hit = s.geometry.intersect(ray);
         if (!hit) return false;
-        const ShapeInfo& sh = s.shapes[hit->shape];
-        if (sh.areaLight >= 0 || sh.material < 0) return false;
-        const Material& m = s.materials[sh.material];
-        const Vec3 n = glm::dot(ray.d, hit->ng) < 0.0 ? hit->ng : -hit->ng;
-        if (m.type == MaterialType::Diffuse) return true;
-        if (m.type == MaterialType::Mirror) {
-            ray = {hit->p + s.rayEps * n, glm::normalize(ray.d - 2.0 * glm::dot(ray.d, n) * n)};
-            continue;
+        const SurfaceInteraction si = interact(s, ray, *hit);
+        switch (si.kind) {
+            case SurfaceKind::Emitter:
+            case SurfaceKind::Absorber: return false;
+            case SurfaceKind::Diffuse: return true;
+            case SurfaceKind::Mirror: ray = offsetReflection(s, ray, *hit, si.ng); continue;
+            case SurfaceKind::Dielectric:
+            case SurfaceKind::Null:
+                // The straight-through branch, then the reflection.
+                if (reachesDiffuse(s, offsetStraightThrough(s, ray, *hit, si.ng), depth + 1)) return true;
+                if (si.kind == SurfaceKind::Null) return false;
+                ray = offsetReflection(s, ray, *hit, si.ng);
+                continue;
         }
-        // Dielectric / null: the straight-through branch, then the reflection.
-        if (reachesDiffuse(s, {hit->p - s.rayEps * n, ray.d}, depth + 1)) return true;
-        if (m.type == MaterialType::Null) return false;
-        ray = {hit->p + s.rayEps * n, glm::normalize(ray.d - 2.0 * glm::dot(ray.d, n) * n)};
     }
     return false;
 }
@@ -259,26 +260,6 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d) {
                                            : "no specular chains: no mirror or dielectric");
     st.reasons.push_back(st.visibleEmitters ? "visible emitters: area lights" : "no visible emitters (delta lights only)");
     return s;
-}
-
-std::optional<Ray> Scene::followInterface(const ShapeInfo& shape, const Material& mat, const SurfaceHit& hit,
-                                          const Vec3& d, bool front, const Vec3& ng, const Vec3& ns,
-                                          RegionStack& regions, double u) const {
-    double etaI, etaT;
-    interfaceEtas(shape, front, regions, etaI, etaT);
-    if (mat.type == MaterialType::Null) etaT = etaI;  // index-matched: never bends, never reflects
-    const double F = fresnelDielectric(-glm::dot(d, ns), etaI, etaT);
-    // The continued ray starts on the surface and skips it with tmin (leaveSurface): moving the
-    // origin by rayEps would skip that much medium - 100 mean free paths at 1e6 /m - and that much
-    // optical path at every crossing.
-    Vec3 refr;
-    if (u < F || !refract(d, ns, etaI / etaT, refr)) return leaveSurface(hit.p, glm::normalize(reflect(d, ns)), ng);
-    if (front) {
-        if (!regions.push(shape.interiorRegion)) return std::nullopt;
-    } else {
-        regions.pop();
-    }
-    return leaveSurface(hit.p, refr, -ng);
 }
 
 Ray Scene::leaveSurface(const Vec3& p, const Vec3& w, const Vec3& n) const {

@@ -96,13 +96,6 @@ public:
     Stages stages;
 
     int pickLight(double u, double& pdf) const;
-    // Continues a path (propagation direction d) through a dielectric or null boundary: reflection
-    // or refraction chosen by Fresnel with the random number u (total internal reflection included),
-    // pushing/popping the region stack on transmission. ng/ns face the incoming side. Empty when
-    // the region stack is full (see RegionStack): the caller ends the path and counts it.
-    std::optional<Ray> followInterface(const ShapeInfo& shape, const Material& mat, const SurfaceHit& hit,
-                                       const Vec3& d, bool front, const Vec3& ng, const Vec3& ns,
-                                       RegionStack& regions, double u) const;
     // A ray leaving the surface point p in direction w, on the side of the unit normal n (dot(w, n)
     // > 0): it starts on the surface and skips it with tmin (rayEps off the surface), so free flights,
     // transmittance and OPL count from the surface itself; grazing directions start rayEps off it.
@@ -137,17 +130,11 @@ public:
     // Empty if the stack overflows.
     std::optional<RegionStack> emissionRegions(int li, const Vec3& start) const;
     // True when a camera ray (pixel centres, through mirrors and both ways through glass) reaches a
-    // diffuse surface: only then is a surface photon map needed.
+    // diffuse surface: only then is a surface photon map needed. (The path continuation itself,
+    // interface crossings included, lives in core/transport/interaction.h.)
     bool cameraSeesDiffuse() const;
     RegionStack cameraRegions;                  // where the camera sits
     std::vector<LightPlacement> lightPlacement;  // where each light's photons start
-    // Indices on both sides of a dielectric/null surface crossed `entering` (against its normal)
-    // or leaving. On transmission the caller pushes shape.interiorRegion or pops the stack.
-    void interfaceEtas(const ShapeInfo& shape, bool entering, const RegionStack& stack, double& etaI,
-                       double& etaT) const {
-        etaI = regions[stack.top()].ior;
-        etaT = entering ? regions[shape.interiorRegion].ior : regions[stack.below()].ior;
-    }
 };
 
 }  // namespace tpb

@@ -6,6 +6,7 @@
 #include "scene/scene.h"
 #include "scene/scene_loader.h"
 #include "render/time_range.h"
+#include "support/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -17,6 +18,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -129,16 +131,11 @@ Proc runTpb(const std::vector<std::string>& args, const fs::path& dir, const std
 class CliErrors : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("tpb_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-                std::to_string(::getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
+        tmp_ = std::make_unique<tpb::test::TempDir>(
+            "cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        dir_ = tmp_->path();
     }
-    void TearDown() override {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
+    void TearDown() override { tmp_.reset(); }
 
     fs::path write(const std::string& name, const std::string& text) {
         const fs::path p = dir_ / name;
@@ -170,6 +167,7 @@ protected:
         EXPECT_FALSE(fs::exists(dir_ / "out" / "steady.exr")) << where;
     }
 
+    std::unique_ptr<tpb::test::TempDir> tmp_;
     fs::path dir_;
 };
 

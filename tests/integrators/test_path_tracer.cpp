@@ -8,6 +8,7 @@
 // to ray mapping) is shared with the renderer.
 #include "integrators/path_tracer.h"
 #include "scene/scene.h"
+#include "support/scene_builder.h"
 #include "support/test_scene.h"
 
 #include <gtest/gtest.h>
@@ -448,11 +449,11 @@ TEST(PathTracer, SingleScatteringMatchesQuadrature) {
 // must have a clearly smaller standard error there at equal sample counts, and no larger elsewhere.
 TEST(PathTracer, EquiangularAgreesWithFreeFlightAndCutsTheVarianceNearThePointLight) {
     const int W = 16, H = 16;
-    SceneDesc d = baseDesc(W, H, Vec3(0.2, 0.1, 3.0), Vec3(0.0), 40.0);
-    setFilm(d, 0.0, 0.5, 24);
-    d.globalMedium = addMedium(d, Color(0.30, 0.40, 0.50), Color(0.10, 0.05, 0.20), 0.4, 1.33);
-    d.lights.push_back(pointLight(Vec3(0.0), Color(10.0, 8.0, 6.0), 0.3));
-    auto scene = test::prepareTestScene(d);
+    test::SceneBuilder b;
+    b.camera(Vec3(0.2, 0.1, 3.0), Vec3(0.0), 40.0, W, H).film(0.0, 0.5, 24);
+    b.globalMedium(b.medium(Color(0.30, 0.40, 0.50), Color(0.10, 0.05, 0.20), 0.4, 1.33));
+    b.pointLight(Vec3(0.0), Color(10.0, 8.0, 6.0), 0.3);
+    auto scene = test::prepareTestScene(b.desc());
     double lx, ly;
     ASSERT_TRUE(scene->camera.project(Vec3(0.0), lx, ly));
 
@@ -667,48 +668,30 @@ TEST(PathTracer, FirstArrivalThroughGlassSlab) {
 // A closed-ish Cornell box with fog, a glass sphere, a null sphere holding a denser medium with its
 // own index, a mirror, point + spot + area + laser lights.
 SceneDesc cornellDesc(int res) {
-    SceneDesc d = baseDesc(res, res, Vec3(0.0, 1.0, 3.9), Vec3(0.0, 1.0, 0.0), 38.0);
-    const int fog = addMedium(d, Color(0.3), Color(0.05), 0.3, 1.0);
-    const int dense = addMedium(d, Color(1.5, 1.0, 0.5), Color(0.1), -0.2, 1.33);
-    d.globalMedium = fog;
-    const int white = addMaterial(d, MaterialType::Diffuse, Color(0.75));
-    const int red = addMaterial(d, MaterialType::Diffuse, Color(0.63, 0.065, 0.05));
-    const int green = addMaterial(d, MaterialType::Diffuse, Color(0.14, 0.45, 0.091));
-    const int mirror = addMaterial(d, MaterialType::Mirror, Color(0.8), Color(0.9));
-    const int glass = addMaterial(d, MaterialType::Dielectric, Color(0.8), Color(1.0, 0.95, 0.9), 1.5);
-    const int null = addMaterial(d, MaterialType::Null);
-    addQuad(d, Vec3(-1, 0, -1), Vec3(0, 0, 2), Vec3(2, 0, 0), white);   // floor
-    addQuad(d, Vec3(-1, 2, -1), Vec3(2, 0, 0), Vec3(0, 0, 2), white);   // ceiling
-    addQuad(d, Vec3(-1, 0, -1), Vec3(2, 0, 0), Vec3(0, 2, 0), white);   // back
-    addQuad(d, Vec3(-1, 0, -1), Vec3(0, 2, 0), Vec3(0, 0, 2), red);     // left
-    addQuad(d, Vec3(1, 0, -1), Vec3(0, 0, 2), Vec3(0, 2, 0), green);    // right
-    addQuad(d, Vec3(-0.9, 0.8, -0.95), Vec3(0.6, 0, 0), Vec3(0, 0.6, 0), mirror);
-    addSphere(d, Vec3(0.45, 0.35, 0.2), 0.3, glass);
-    addSphere(d, Vec3(-0.4, 0.5, -0.2), 0.35, null, dense);
-    d.lights.push_back(pointLight(Vec3(0.0, 1.7, 0.0), Color(20.0), 0.0));
-    LightDesc area;
-    area.type = LightType::AreaQuad;
-    area.corner = Vec3(-0.25, 1.98, -0.25);
-    area.edgeU = Vec3(0.5, 0, 0);
-    area.edgeV = Vec3(0, 0, 0.5);  // normal -y
-    area.power = Color(15.0, 13.0, 10.0);
-    area.emitOpl = 0.2;
-    d.lights.push_back(area);
-    LightDesc spot;
-    spot.type = LightType::Spot;
-    spot.position = Vec3(0.5, 1.8, 0.5);
-    spot.direction = Vec3(0, -1, 0);
-    spot.power = Color(10.0);
-    spot.spotCutoffDeg = 35.0;
-    spot.spotFalloffDeg = 25.0;
-    d.lights.push_back(spot);
-    LightDesc laser;
-    laser.type = LightType::Laser;
-    laser.position = Vec3(-0.8, 1.0, 0.5);
-    laser.direction = Vec3(1, 0, 0);
-    laser.power = Color(2.0);
-    d.lights.push_back(laser);
-    return d;
+    test::SceneBuilder b;
+    b.camera(Vec3(0.0, 1.0, 3.9), Vec3(0.0, 1.0, 0.0), 38.0, res, res);
+    const int fog = b.medium(Color(0.3), Color(0.05), 0.3, 1.0);
+    const int dense = b.medium(Color(1.5, 1.0, 0.5), Color(0.1), -0.2, 1.33);
+    b.globalMedium(fog);
+    const int white = b.diffuse(Color(0.75));
+    const int red = b.diffuse(Color(0.63, 0.065, 0.05));
+    const int green = b.diffuse(Color(0.14, 0.45, 0.091));
+    const int mirror = b.mirror(Color(0.9));
+    const int glass = b.dielectric(1.5, Color(1.0, 0.95, 0.9));
+    const int null = b.nullMaterial();
+    b.quad(Vec3(-1, 0, -1), Vec3(0, 0, 2), Vec3(2, 0, 0), white)   // floor
+        .quad(Vec3(-1, 2, -1), Vec3(2, 0, 0), Vec3(0, 0, 2), white)   // ceiling
+        .quad(Vec3(-1, 0, -1), Vec3(2, 0, 0), Vec3(0, 2, 0), white)   // back
+        .quad(Vec3(-1, 0, -1), Vec3(0, 2, 0), Vec3(0, 0, 2), red)     // left
+        .quad(Vec3(1, 0, -1), Vec3(0, 0, 2), Vec3(0, 2, 0), green)    // right
+        .quad(Vec3(-0.9, 0.8, -0.95), Vec3(0.6, 0, 0), Vec3(0, 0.6, 0), mirror)
+        .sphere(Vec3(0.45, 0.35, 0.2), 0.3, glass)
+        .sphere(Vec3(-0.4, 0.5, -0.2), 0.35, null, dense);
+    b.pointLight(Vec3(0.0, 1.7, 0.0), Color(20.0))
+        .areaLight(Vec3(-0.25, 1.98, -0.25), Vec3(0.5, 0, 0), Vec3(0, 0, 0.5), Color(15.0, 13.0, 10.0), 0.2)  // normal -y
+        .spotLight(Vec3(0.5, 1.8, 0.5), Vec3(0, -1, 0), 35.0, 25.0, Color(10.0))
+        .laser(Vec3(-0.8, 1.0, 0.5), Vec3(1, 0, 0), Color(2.0));
+    return b.desc();
 }
 
 // Sum over pixels of the luminance of the steady image and of all bins of an axis (film averages).

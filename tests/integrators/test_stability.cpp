@@ -25,6 +25,7 @@
 #include "photons/photon_tracer.h"
 #include "base/progressive.h"
 #include "scene/scene_loader.h"
+#include "support/temp_dir.h"
 #include "support/test_scene.h"
 
 #include <gtest/gtest.h>
@@ -1097,21 +1098,11 @@ TEST(StabilityFaults, ParallelForRethrowsAWorkersExceptionOnTheCallingThread) {
 
 // ---- 10. degenerate input -------------------------------------------------------------------------
 
-namespace {
-
-fs::path tempDir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("tpb_stability_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
-
-}  // namespace
-
 // An OBJ floor with zero-area triangles (repeated vertex, collinear vertices, a needle of 1e-300
 // height) renders exactly like the clean floor: the degenerate triangles are dropped.
 TEST(StabilityDegenerate, ZeroAreaTrianglesAreHarmless) {
-    const fs::path dir = tempDir("degenerate");
+    const test::TempDir tmp("stability_degenerate");
+    const fs::path& dir = tmp.path();
     std::ofstream(dir / "clean.obj") << "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 3 2\nf 1 4 3\n";
     std::ofstream(dir / "dirty.obj") << "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nv 0 0 0\nv 1 0 1\nv 0.5 1e-300 0.5\n"
                                         "f 1 3 2\nf 5 5 6\nf 1 4 3\nf 5 6 1\nf 1 3 5\nf 5 6 7\nf 2 2 2\n";
@@ -1132,7 +1123,6 @@ TEST(StabilityDegenerate, ZeroAreaTrianglesAreHarmless) {
     b.driver->film().volume(TimeAxis::Real, EmissionMode::Delta, vb);
     EXPECT_EQ(va, vb);
     EXPECT_GT(std::accumulate(va.begin(), va.end(), 0.0), 0.0);
-    fs::remove_all(dir);
 }
 
 // A point light at the centre of a glass sphere (n = 1.5, R = 0.5) in fog: the light's region is

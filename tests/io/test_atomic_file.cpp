@@ -5,12 +5,14 @@
 #include "io/atomic_file.h"
 #include "base/error.h"
 #include "io/image_io.h"
+#include "support/temp_dir.h"
 
 #include <gtest/gtest.h>
 
 #include <csignal>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -41,16 +43,11 @@ int countTmpFiles(const fs::path& dir) {
 class AtomicFileTest : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("tpb_atomic_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-                std::to_string(::getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
+        tmp_ = std::make_unique<test::TempDir>(
+            "atomic_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        dir_ = tmp_->path();
     }
-    void TearDown() override {
-        std::error_code ec;
-        fs::remove_all(dir_, ec);
-    }
+    void TearDown() override { tmp_.reset(); }
     // Runs `body` in a child process whose files may not grow beyond `limitBytes` (SIGXFSZ ignored,
     // so write() returns EFBIG instead of killing it). The child's exit code is the result: 0 when
     // `body` returned true.
@@ -72,6 +69,7 @@ protected:
         ::waitpid(pid, &status, 0);
         return WIFEXITED(status) ? WEXITSTATUS(status) : 100 + WTERMSIG(status);
     }
+    std::unique_ptr<test::TempDir> tmp_;
     fs::path dir_;
 };
 

@@ -2,28 +2,20 @@
 #include "base/error.h"
 #include "io/image_io.h"
 #include "scene/scene_loader.h"
+#include "support/temp_dir.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <unistd.h>
 
 using namespace tpb;
 namespace fs = std::filesystem;
 
-namespace {
-fs::path tempDir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("tpb_image_io_" + name + "_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
-}  // namespace
-
 TEST(ImageIo, HalfExrClampsToItsRangeInsteadOfWritingInf) {
-    const fs::path d = tempDir("half");
+    const test::TempDir tmp("image_io_half");
+    const fs::path& d = tmp.path();
     std::vector<float> rgb = {1.0f, 7e4f, -1e6f, 3e38f, 65504.0f, 0.5f};
     const std::string path = (d / "a.exr").string();
     EXPECT_EQ(writeExr(path, 2, 1, rgb, ExrPixel::Half), 3);  // 7e4, -1e6 and 3e38 do not fit in half
@@ -37,11 +29,11 @@ TEST(ImageIo, HalfExrClampsToItsRangeInsteadOfWritingInf) {
     EXPECT_EQ(back[3], 65504.0f);
     EXPECT_EQ(back[0], 1.0f);
     EXPECT_EQ(writeExr(path, 2, 1, rgb, ExrPixel::Float), 0);  // float holds them all
-    fs::remove_all(d);
 }
 
 TEST(ImageIo, NonFiniteTexelIsRefusedAndNothingIsWritten) {
-    const fs::path d = tempDir("nan");
+    const test::TempDir tmp("image_io_nan");
+    const fs::path& d = tmp.path();
     const std::string path = (d / "b.exr").string();
     for (float bad : {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()}) {
         std::vector<float> rgb(12, 1.0f);
@@ -55,7 +47,6 @@ TEST(ImageIo, NonFiniteTexelIsRefusedAndNothingIsWritten) {
         EXPECT_FALSE(fs::exists(path));
     }
     EXPECT_TRUE(fs::is_empty(d));
-    fs::remove_all(d);
 }
 
 // A light whose power could overflow the film's float sums is refused at load, naming the key.

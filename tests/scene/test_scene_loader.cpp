@@ -4,6 +4,7 @@
 #include "io/json.h"
 #include "scene/mesh.h"
 #include "scene/scene_loader.h"
+#include "support/temp_dir.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -55,17 +56,10 @@ std::string jsonError(const std::string& text, int* line = nullptr) {
 }
 
 // A temporary folder with a tiny OBJ file, removed at the end.
-struct TempDir {
-    fs::path dir;
-    TempDir() {
-        dir = fs::temp_directory_path() / ("tpb_test_scene_loader_" + std::to_string(::getpid()));
-        fs::create_directories(dir);
-        std::ofstream(dir / "tri.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(dir, ec);
-    }
+struct ObjFolder {
+    test::TempDir tmp{"test_scene_loader"};
+    const fs::path dir = tmp.path();
+    ObjFolder() { tmp.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"); }
     std::string scene() const { return (dir / "scene.json").string(); }
 };
 
@@ -114,7 +108,7 @@ const char* kFullScene = R"({
 // ---- round trips -----------------------------------------------------------------------------------
 
 TEST(SceneLoader, FullSceneRoundTrip) {
-    TempDir tmp;
+    ObjFolder tmp;
     std::ofstream(tmp.scene()) << kFullScene;
     const SceneDesc d = loadScene(tmp.scene());
     EXPECT_EQ(d.path, tmp.scene());
@@ -423,7 +417,7 @@ TEST(SceneErrors, HugeBins) {
 }
 
 TEST(SceneErrors, MissingMeshFile) {
-    TempDir tmp;
+    ObjFolder tmp;
     const std::string text = "{\"version\": 1, \"shapes\": [\n{\"type\": \"mesh\",\n\"file\": \"nope.obj\"}]}";
     const std::string resolved = (tmp.dir / "nope.obj").string();
     expectError(text, 3, "shapes[0].file", "mesh file not found: " + resolved, tmp.scene());
@@ -539,7 +533,7 @@ TEST(SceneErrors, HugeCameraPositionNamesThePositionNotUp) {
 // A mesh "file" that is a folder was reported as "not found". Now: it is a folder, and the OBJ
 // files in it.
 TEST(SceneErrors, MeshPathThatIsAFolder) {
-    TempDir tmp;
+    ObjFolder tmp;
     fs::create_directories(tmp.dir / "bunny");
     std::ofstream(tmp.dir / "bunny" / "bunny.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     const std::string text = "{\"version\": 1, \"shapes\": [\n{\"type\": \"mesh\",\n\"file\": \"bunny\"}]}";
@@ -555,7 +549,7 @@ TEST(SceneErrors, MeshPathThatIsAFolder) {
 // NaN vertices were read as 0 by tinyobj (a triangle of them was then "degenerate"); huge ones
 // were "non-finite" or, after the float conversion, had no file:line. Now the OBJ line and the fix.
 TEST(SceneErrors, NanAndHugeMeshVerticesNameTheObjLine) {
-    TempDir tmp;
+    ObjFolder tmp;
     const auto objError = [&](const std::string& text) -> std::string {
         std::ofstream(tmp.dir / "m.obj") << text;
         try {

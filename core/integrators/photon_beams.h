@@ -1,0 +1,55 @@
+// Progressive transient photon beams (Marco, Jarosz, Gutierrez, Jarabo 2017), as an Integrator.
+// Pass i (paper Sec. 4, Fig. 2):
+//   beginPass  photon pass: photons traced from the lights, keyed by (seed, i, photon); every path
+//              segment inside a scattering medium stored as a beam with its start time (OPL, eq. 11),
+//              every diffuse landing as a surface photon (photons/photon_tracer.h); then the beam
+//              accelerator and the surface-photon grid built for this pass's kernel radii;
+//   renderTile camera pass (integrators/camera_pass.h): camera paths through specular surfaces, the
+//              2D-kernel beam estimate on every medium segment (eq. 8), the surface photon estimate
+//              on the diffuse hit, each spread over the time bins it covers (eqs. 12-15);
+//   endPass    the counters.
+// The kernel radii shrink pass after pass (Knaus & Zwicker 2011; base/progressive.h): each
+// estimator gives the dimension of its kernel to the schedule (the 2D beam kernel and the surface
+// kernel are both 2D: their area shrinks by (i + alpha) / (i + 1) per pass).
+// Only the stages the scene needs run (Scene::stages: no beams without a scattering medium that
+// photons reach, no surface photons without a diffuse surface).
+#pragma once
+#include "accel/beam_accel.h"
+#include "accel/photon_grid.h"
+#include "integrators/camera_pass.h"
+#include "integrators/integrator.h"
+#include "photons/photon_tracer.h"
+
+#include <memory>
+#include <vector>
+
+namespace tpb {
+
+class PhotonBeamsIntegrator final : public Integrator {
+public:
+    PhotonBeamsIntegrator(const Scene& scene, const RenderSettings& settings);
+    Method method() const override { return Method::Beams; }
+    bool beginPass(const PassContext& ctx, PassStats& stats) override;
+    void renderTile(const PassContext& ctx, int tile, const TileRect& rect, TransientFilm::TileWriter& writer,
+                    int thread) override;
+    void endPass(const PassContext& ctx, PassStats& stats) override;
+
+    // Kernel radii of pass `pass` (m), from the estimators' kernel dimensions.
+    double beamRadius(uint64_t pass) const;
+    double surfaceRadius(uint64_t pass) const;
+    // The photon map of the pass in progress (for tools and tests).
+    const PhotonMap& photonMap() const { return map_; }
+
+private:
+    const Scene& scene_;
+    RenderSettings settings_;
+    PhotonMap map_;
+    std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
+    bool haveBeams_ = false;
+    std::unique_ptr<PhotonGrid> grid_;
+    CameraPassSettings camera_;
+    std::vector<CameraPassScratch> scratch_;     // per thread
+    std::vector<CameraPassStats> tileStats_;     // per tile, summed in tile order
+};
+
+}  // namespace tpb
