@@ -2,9 +2,8 @@
 #pragma once
 
 namespace CLI {
-class App;
+class App;  // (CLI11: included by the .cpp files that register, through cli/flags.h)
 }
-#include <CLI/CLI.hpp>
 
 namespace tpb::app {
 
