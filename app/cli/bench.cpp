@@ -1,6 +1,7 @@
 // `tpb bench`: throughput of the progressive core on a scene, for several bin counts in one run
 // (medians over passes; the machines are shared and noisy, so compare ratios measured together).
 #include "cli/common.h"
+#include "cli/flags.h"
 #include "cli/interrupt.h"
 #include "cli/commands.h"
 #include "base/error.h"
@@ -38,10 +39,8 @@ void run(BenchCmd& c) {
         if (interrupted()) break;
         RenderOverrides ov = c.ov;
         ov.bins = bins;
-        std::unique_ptr<Scene> scene = loadAndBuild(c.scene, ov);
-        RenderSettings ds = RenderSettings::fromScene(*scene);
-        ov.applyToSettings(ds);
-        Driver drv(*scene, ds);
+        const PreparedRender prepared = loadAndBuild(c.scene, ov);
+        Driver drv(*prepared.scene, prepared.settings, prepared.time);
         std::vector<double> passSec, photonSec, cameraSec, beamsPerSec, estPerSec;
         for (int p = 1; p <= c.passes; ++p) {
             if (interrupted() || !drv.runPass(p)) break;

@@ -1,6 +1,9 @@
 // Subcommands of the tpb executable. Each cli_*.cpp / view_*.cpp registers one.
 #pragma once
-#include <CLI/CLI.hpp>
+
+namespace CLI {
+class App;  // (CLI11: included by the .cpp files that register, through cli/flags.h)
+}
 
 namespace tpb::app {
 

@@ -1,5 +1,8 @@
 #include "cli/common.h"
 
+#include "cli/flags.h"
+#include "cli/summary.h"
+
 #include "cli/interrupt.h"
 #include "base/error.h"
 #include "film/film_view.h"
@@ -158,151 +161,72 @@ void RenderOverrides::add(CLI::App* cmd) {
     cmd->add_option("--accel", accel, "Beam query backend: embree | brute")->check(CLI::IsMember({"embree", "brute"}));
 }
 
-void RenderOverrides::applyToDesc(SceneDesc& d) const {
-    if (width) d.camera.width = *width;
-    if (height) d.camera.height = *height;
-    if (bins && *bins < 1) throw UserError("--bins must be >= 1");
-    if (bins) {
-        // Keep the film's time range, change its resolution.
-        if (!d.film.autoRange) d.film.binWidthOpl = d.film.binWidthOpl * d.film.bins / *bins;
-        d.film.bins = *bins;
-    }
-    if (maxDepth) {
-        if (*maxDepth < 1) throw UserError("--max-depth must be >= 1");
-        d.render.maxDepth = *maxDepth;
-    }
-    if (d.camera.width < 1 || d.camera.height < 1 || d.film.bins < 1)
-        throw UserError("--width, --height and --bins must be >= 1");
-    const uint64_t need = filmBytes(d.camera, d.film.bins);
-    if (need > maxFilmBytes())
-        throw UserError("the film would need " + humanBytes(need) + " but at most " + humanBytes(maxFilmBytes()) +
-                        " is allowed; lower --width/--height/--bins");
-    if (static_cast<int64_t>(d.camera.width) * d.camera.height > INT_MAX)
-        throw UserError("--width x --height is " + std::to_string(static_cast<int64_t>(d.camera.width) * d.camera.height) +
-                        " pixels, more than " + std::to_string(INT_MAX) + "; lower --width/--height");
+SettingsOverrides RenderOverrides::settings() const {
+    SettingsOverrides o;
+    o.passes = passes;
+    o.photons = photons;
+    o.timeBudget = timeBudget;
+    o.radius = radius;
+    o.alpha = alpha;
+    o.threads = threads;
+    o.maxDepth = maxDepth;
+    o.seed = seed;
+    o.width = width;
+    o.height = height;
+    o.bins = bins;
+    if (profile == "exact") o.profile = TimeProfile::Exact;
+    if (profile == "uniform") o.profile = TimeProfile::Uniform;
+    if (beamLength == "short") o.beamLength = BeamLength::Short;
+    if (beamLength == "long") o.beamLength = BeamLength::Long;
+    o.accel = accel == "brute" ? AccelBackend::BruteForce : AccelBackend::Embree;
+    if (ptFreeFlight) o.equiangular = false;
+    return o;
 }
 
-void RenderOverrides::applyToSettings(RenderSettings& s) const {
-    if (passes) s.passes = *passes;
-    if (timeBudget) {
-        s.timeBudgetSec = *timeBudget;
-        if (!passes) s.passes = 0;  // a time budget alone means: as many passes as fit
-    }
-    if (photons) s.photonsPerPass = *photons;
-    if (radius) s.beamRadius0 = *radius;
-    if (alpha) s.alpha = *alpha;
-    if (threads) s.threads = *threads;
-    if (seed) s.seed = *seed;
-    if (maxDepth) s.maxDepth = *maxDepth;
-    if (profile == "exact") s.profile = TimeProfile::Exact;
-    if (profile == "uniform") s.profile = TimeProfile::Uniform;
-    if (beamLength == "short") s.beamLength = BeamLength::Short;
-    if (beamLength == "long") s.beamLength = BeamLength::Long;
-    s.accel = accel == "brute" ? AccelBackend::BruteForce : AccelBackend::Embree;
-    // The flags were validated when parsed (flags::); these hold for the scene's values too.
-    if (s.photonsPerPass < 1) throw UserError("--photons must be >= 1");
-    if (photonMapBytes(s.photonsPerPass) > maxFilmBytes())
-        throw UserError("--photons " + std::to_string(s.photonsPerPass) + " needs about " +
-                        humanBytes(photonMapBytes(s.photonsPerPass)) + " per pass for the photon map, more than " +
-                        humanBytes(maxFilmBytes()) + "; use fewer photons per pass and more passes");
-    if (!(s.alpha > 0.0 && s.alpha <= 1.0)) throw UserError("--alpha must be in (0, 1]");
-    if (!(s.beamRadius0 > 0.0) || !std::isfinite(s.beamRadius0)) throw UserError("--radius must be > 0");
-    if (s.passes < 0) throw UserError("--passes must be >= 0 (0 = until --time or Ctrl-C)");
-    if (!(s.timeBudgetSec >= 0.0) || !std::isfinite(s.timeBudgetSec))
-        throw UserError("--time must be a finite number of seconds >= 0 (0 = no time budget)");
-}
-
-namespace {
-
-// A kernel radius (m) against the scene's diagonal: refused above kMaxRadiusFraction, warned
-// about above kSlowRadiusFraction. `where` is "file:line: key" or a flag.
-void checkAbsoluteRadius(double radius, double diag, const std::string& where, const std::string& name) {
-    const double f = radius / diag;
-    char b[512];
-    if (f > kMaxRadiusFraction) {
-        std::snprintf(b, sizeof b,
-                      "%s %g m is %.0f%% of the scene's diagonal (%.4g m); allowed up to %.0f%% (%.4g m). A kernel "
-                      "that wide makes every camera ray gather every beam or photon, so a pass costs rays x beams "
-                      "(minutes, with no better image); typical radii are 0.1%% to 2%% of the diagonal (%.3g to "
-                      "%.3g m)",
-                      name.c_str(), radius, 100.0 * f, diag, 100.0 * kMaxRadiusFraction, kMaxRadiusFraction * diag,
-                      0.001 * diag, 0.02 * diag);
-        throw UserError(where == name ? std::string(b) : where + ": " + b);
-    }
-    if (f > kSlowRadiusFraction) {
-        std::snprintf(b, sizeof b,
-                      "%s %g m is %.0f%% of the scene's diagonal (%.4g m): passes get much slower as the kernel grows; "
-                      "typical radii are 0.1%% to 2%% of the diagonal (%.3g to %.3g m)",
-                      name.c_str(), radius, 100.0 * f, diag, 0.001 * diag, 0.02 * diag);
-        std::fprintf(stderr, "warning: %s%s%s\n", where == name ? "" : where.c_str(), where == name ? "" : ": ", b);
-    }
-}
-
-std::string keyWhere(const SceneDesc& d, const std::string& key) {
-    std::string w = d.where(key);  // "file:line: "
-    if (w.size() >= 2) w.resize(w.size() - 2);
-    return w + ": " + key;
-}
-
-}  // namespace
-
-std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo) {
-    SceneDesc desc = loadScene(path);
-    for (const std::string& w : desc.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-    ov.applyToDesc(desc);
-    std::unique_ptr<Scene> scene = Scene::build(desc);
-
-    // Absolute radii, now that the diagonal is known (relative ones were checked by the loader).
-    const double diag = scene->bounds.diagonal() > 0.0 ? scene->bounds.diagonal() : 1.0;
-    if (!desc.render.radiusRelative) {
-        if (desc.locs.count("render.radius"))
-            checkAbsoluteRadius(scene->beamRadius0, diag, keyWhere(desc, "render.radius"), "radius");
-        if (desc.locs.count("render.surface_radius"))
-            checkAbsoluteRadius(scene->surfaceRadius0, diag, keyWhere(desc, "render.surface_radius"), "surface_radius");
-    }
-    if (ov.radius) checkAbsoluteRadius(*ov.radius, diag, "--radius", "--radius");
-
-    if (desc.film.autoRange) {
-        const bool tty = isatty(STDERR_FILENO) && !lo.quiet;
-        const double t0 = nowSec();
-        double lastPrint = t0 - 9.0;  // not on a terminal: a first line after 1 s, then one every 10 s
-        PilotControl pc;
-        pc.abort = &interruptFlag();
-        pc.progress = [&](double f) {
-            if (lo.quiet) return;
-            const double now = nowSec();
-            if (tty) {
-                std::fprintf(stderr, "\rfitting the film's time range (pilot pass): %3.0f%%", 100.0 * f);
-            } else if (now - lastPrint >= 10.0) {  // a log: lines only when it takes that long
-                std::fprintf(stderr, "fitting the film's time range (pilot pass): %.0f%% after %.0f s\n", 100.0 * f,
-                             now - t0);
-                lastPrint = now;
-            }
-        };
-        const TimeRangeFit f = fitTimeRange(*scene, 4000, ov.threads.value_or(desc.render.threads), pc);
+PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo) {
+    const bool tty = isatty(STDERR_FILENO) && !lo.quiet;
+    const double t0 = nowSec();
+    double lastPrint = t0 - 9.0;  // not on a terminal: a first line after 1 s, then one every 10 s
+    PrepareOptions po;
+    po.warn = [](const std::string& w) { std::fprintf(stderr, "warning: %s\n", w.c_str()); };
+    po.pilot.photons = 4000;
+    po.pilot.control.abort = &interruptFlag();
+    po.pilot.control.progress = [&](double f) {
+        if (lo.quiet) return;
+        const double now = nowSec();
+        if (tty) {
+            std::fprintf(stderr, "\rfitting the film's time range (pilot pass): %3.0f%%", 100.0 * f);
+        } else if (now - lastPrint >= 10.0) {  // a log: lines only when it takes that long
+            std::fprintf(stderr, "fitting the film's time range (pilot pass): %.0f%% after %.0f s\n", 100.0 * f,
+                         now - t0);
+            lastPrint = now;
+        }
+    };
+    PreparedRender p = prepareRender(loadScene(path), ov.settings(), po);
+    if (p.film.autoRange) {
         if (tty) std::fprintf(stderr, "\r%60s\r", "");
         throwIfInterrupted("while fitting the film's time range (pilot pass)");
-        if (!f.fromPilot)
+        if (!p.fit.fromPilot)
             std::fprintf(stderr, "note: the pilot pass saw no energy; the film keeps the scene-size range\n");
     }
     throwIfInterrupted("while loading the scene");
-    return scene;
+    return p;
 }
 
-nlohmann::json filmJson(const Scene& scene) {
-    return {{"bins", scene.time.bins}, {"start_opl_m", scene.time.startOpl}, {"bin_width_opl_m", scene.time.binWidth},
-            {"start_ns", scene.time.startOpl / kC_m_per_ns}, {"bin_width_ns", scene.time.binWidth / kC_m_per_ns}};
+nlohmann::json filmJson(const TimeBins& time) {
+    return {{"bins", time.bins}, {"start_opl_m", time.startOpl}, {"bin_width_opl_m", time.binWidth},
+            {"start_ns", time.startOpl / kC_m_per_ns}, {"bin_width_ns", time.binWidth / kC_m_per_ns}};
 }
 
-nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t passes, double wallSec,
+nlohmann::json summaryHeader(const PreparedRender& p, const char* method, size_t passes, double wallSec,
                              const TransientFilm& film, const ExportOptions& opt) {
     nlohmann::json j;
-    j["scene"] = scene.desc.path;
+    j["scene"] = p.source.path;
     j["method"] = method;
     j["passes"] = passes;
     j["wall_seconds"] = wallSec;
-    j["resolution"] = {scene.camera.width, scene.camera.height};
-    j["film"] = filmJson(scene);
+    j["resolution"] = {p.scene->camera.width, p.scene->camera.height};
+    j["film"] = filmJson(film.time());
     j["film"]["bytes"] = film.bytes();
     j["frames"] = {{"axis", opt.axis == TimeAxis::Real ? "real" : "unwarped"},
                    {"emission", opt.mode == EmissionMode::Delta ? "delta" : "continuous"},
@@ -335,14 +259,14 @@ int64_t replaceNonFiniteNumbers(nlohmann::json& j) {
     return n;
 }
 
-int64_t warnFilmOverflow(const Scene& scene, const TransientFilm& film) {
+int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film) {
     const int64_t n = film.stats.overflowedPixels.load();
     if (n > 0)
         std::fprintf(stderr,
                      "warning: %s: %lld pixel sums would have exceeded the film's float images (max 3.4e38) and "
                      "were dropped from those passes (the film holds no Inf, but those pixels are too dark): lower "
                      "the lights' power (transport is linear: scaling every light by s scales the film by s)\n",
-                     keyWhere(scene.desc, scene.desc.lights.empty() ? "lights" : "lights[0].power").c_str(),
+                     source.keyWhere(source.wrote("lights[0]") ? "lights[0].power" : "lights").c_str(),
                      static_cast<long long>(n));
     return n;
 }
@@ -546,9 +470,10 @@ OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     return f;
 }
 
-void reportPlannedOutputs(const Scene& scene, const RenderOutputs& r, double previewExrSec) {
+void reportPlannedOutputs(const PreparedRender& p, const RenderOutputs& r, double previewExrSec) {
     if (r.noFrames) return;
-    const uint64_t frames = static_cast<uint64_t>(exportFrameCount(scene.time.bins, r.opt));
+    const Scene& scene = *p.scene;
+    const uint64_t frames = static_cast<uint64_t>(exportFrameCount(p.time.bins, r.opt));
     const uint64_t perFrame = static_cast<uint64_t>(scene.camera.width) * scene.camera.height * 3 *
                               (r.opt.pixel == ExrPixel::Half ? 2 : 4);
     const uint64_t need = frames * perFrame;
@@ -652,18 +577,18 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
     return rep;
 }
 
-double checkEnergyInsideFilm(const Scene& scene, const TransientFilm& film, TimeAxis axis, int threads) {
+double checkEnergyInsideFilm(const PreparedRender& p, const TransientFilm& film, TimeAxis axis) {
     const int a = axis == TimeAxis::Real ? 0 : 1;
     const double in = film.stats.inside[a].load(), out = film.stats.outside[a].load();
     if (!(in + out > 0.0)) return 0.0;
     const double fraction = out / (in + out);
-    const TimeBins& t = scene.time;
+    const TimeBins& t = film.time();
     const char* axisName = axis == TimeAxis::Real ? "real-time" : "unwarped";
-    const SceneDesc& d = scene.desc;
-    const std::string key = d.locs.count("film.start_m") ? "film.start_m"
-                            : d.locs.count("film.start_ns") ? "film.start_ns"
-                            : d.locs.count("film.bin_width_m") ? "film.bin_width_m"
-                            : d.locs.count("film.bin_width_ns") ? "film.bin_width_ns" : "film";
+    const SceneSource& d = p.source;
+    const std::string key = d.wrote("film.start_m") ? "film.start_m"
+                            : d.wrote("film.start_ns") ? "film.start_ns"
+                            : d.wrote("film.bin_width_m") ? "film.bin_width_m"
+                            : d.wrote("film.bin_width_ns") ? "film.bin_width_ns" : "film";
     char range[160];
     std::snprintf(range, sizeof range, "%.4g to %.4g m OPL (%.4g to %.4g ns)", t.startOpl, t.endOpl(),
                   t.startOpl / kC_m_per_ns, t.endOpl() / kC_m_per_ns);
@@ -673,14 +598,14 @@ double checkEnergyInsideFilm(const Scene& scene, const TransientFilm& film, Time
                      "warning: %s: %.1f%% of the energy that reached the camera arrived outside the film's time range, "
                      "%s on the %s axis: the frames miss it; fit the range with \"film\": {\"range\": \"auto\"} or "
                      "widen start_m/bin_width_m (or bins)\n",
-                     keyWhere(d, key).c_str(), 100.0 * fraction, range, axisName);
+                     d.keyWhere(key).c_str(), 100.0 * fraction, range, axisName);
         return fraction;
     }
     // Every frame is black. Measure where the energy arrives, to say which range would hold it.
     std::string fix = "use \"film\": {\"range\": \"auto\"} to fit it to the scene";
     PilotControl pc;
     pc.abort = &interruptFlag();
-    const TimeRangeFit fit = measureArrivalRange(scene, 4000, threads, pc);
+    const TimeRangeFit fit = measureArrivalRange(*p.scene, p.pilotSettings, 4000, pc);
     if (fit.fromPilot) {
         char b[400];
         std::snprintf(b, sizeof b,
@@ -693,7 +618,7 @@ double checkEnergyInsideFilm(const Scene& scene, const TransientFilm& film, Time
     std::fprintf(stderr,
                  "error: %s: every frame is black: all the energy that reached the camera arrived outside the film's "
                  "time range, %s on the %s axis; %s (the outputs were written)\n",
-                 keyWhere(d, key).c_str(), range, axisName, fix.c_str());
+                 d.keyWhere(key).c_str(), range, axisName, fix.c_str());
     if (exitCode() == 0) exitCode() = kExitUserError;
     return fraction;
 }

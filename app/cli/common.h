@@ -1,12 +1,11 @@
 // Options shared by the subcommands that render (render, view, converge, bench): scene loading
-// and command-line overrides of the scene's render settings; flag validation; the output folder
-// (lock, stale outputs); the checks and reports around a render's outputs.
+// and command-line overrides of the scene's render settings; the output folder (lock, stale
+// outputs); the checks and reports around a render's outputs. No third-party header: the flag
+// validators are in cli/flags.h (CLI11), summary.json in cli/summary.h (nlohmann).
 #pragma once
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include "render/driver.h"
 #include "film/film_export.h"
+#include "render/prepare.h"
 #include "scene/scene.h"
 #include "scene/scene_loader.h"
 
@@ -15,25 +14,11 @@
 #include <optional>
 #include <string>
 
-namespace tpb::app {
+namespace CLI {
+class App;
+}
 
-// ---- flag validation --------------------------------------------------------------------------
-// CLI11 validators whose messages name the allowed range and the meaning of special values, and
-// that check finiteness ("--time nan" used to render forever). integer() and threads() rewrite the
-// value (1e6 -> 1000000, a capped thread count), so they are attached with ->transform(), the
-// others with ->check(). They run while the command line is
-// parsed, before any subcommand starts, so a bad flag never leaves a file behind. CLI11 prefixes
-// the flag: "error: --passes: must be an integer >= 0 (0 = ...); got -3".
-namespace flags {
-// An integer in [lo, hi]; an integral number written as 1e6 is accepted (and rewritten as digits).
-CLI::Validator integer(int64_t lo, int64_t hi, const std::string& meaning = "");
-// A finite number in [lo, hi] (or (lo, hi] when loOpen).
-CLI::Validator number(double lo, double hi, bool loOpen, const std::string& meaning = "");
-// A seed: an integer in [0, 2^64 - 1] (strtoull would wrap -1 to 2^64 - 1).
-CLI::Validator seed();
-// Worker threads: an integer >= 0; more than maxUsefulThreads() is capped with a warning.
-CLI::Validator threads();
-}  // namespace flags
+namespace tpb::app {
 
 struct RenderOverrides {
     std::optional<int64_t> passes, photons;
@@ -44,35 +29,22 @@ struct RenderOverrides {
     bool ptFreeFlight = false;  // path tracer: no equiangular sampling (for comparisons)
 
     void add(CLI::App* cmd);
-    // Applies the overrides that change the scene description (resolution, bins).
-    void applyToDesc(SceneDesc& desc) const;
-    // Applies the rest to the driver settings.
-    void applyToSettings(RenderSettings& s) const;
+    // The overrides the flags give (prepareRender applies and validates them).
+    SettingsOverrides settings() const;
 };
 
 struct LoadOptions {
     bool quiet = false;  // no pilot progress
 };
 
-// Loads, validates and builds a scene, printing the loader's warnings to stderr; fits an automatic
-// film range with the pilot (progress on a terminal; Ctrl-C/SIGTERM abort it: Interrupted, see
-// cli_interrupt.h); refuses kernel radii that would make a pass quadratic (kMaxRadiusFraction).
-std::unique_ptr<Scene> loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo = {});
+// Loads a scene and prepares its render (prepareRender: overrides, build, one validate() of the
+// settings, the film's time axis), printing the warnings to stderr; fits an automatic film range
+// with the pilot (progress on a terminal; Ctrl-C/SIGTERM abort it: Interrupted, see interrupt.h).
+PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo = {});
 
-// The film's time axis as written in summary.json and reference headers.
-nlohmann::json filmJson(const Scene& scene);
-// Fields every summary.json starts with (scene, method, passes, wall time, resolution, film, frames,
-// film_energy: the shares of the energy before / inside / after the film per axis, rejected
-// samples and overflowed pixel sums).
-nlohmann::json summaryHeader(const Scene& scene, const char* method, size_t passes, double wallSec,
-                             const TransientFilm& film, const ExportOptions& opt);
-
-// Replaces every non-finite number in `j` by the string "inf", "-inf" or "nan" (JSON has no such
-// numbers and nlohmann would write null, which reads as "unknown"); returns how many it replaced.
-int64_t replaceNonFiniteNumbers(nlohmann::json& j);
 // Warns on stderr when the film dropped pixel sums that would have overflowed its floats
 // (FilmStats::overflowedPixels), naming the fix; returns that count.
-int64_t warnFilmOverflow(const Scene& scene, const TransientFilm& film);
+int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film);
 
 // ---- the output folder ------------------------------------------------------------------------
 // A folder one tpb run writes into (render, converge). The constructor creates it if needed, takes
@@ -125,18 +97,7 @@ struct OutputReport {
 // Before rendering: the number, size and estimated write time of the frames (from the time
 // `previewExrSec` that writing preview.exr, an image of the same size, took), and a warning when
 // they may not fit in the free space of the output folder's file system.
-void reportPlannedOutputs(const Scene& scene, const RenderOutputs& r, double previewExrSec);
-
-// Writes steady.exr and steady.png, summary.json, frames/ and strip.png, in that order (small and
-// most valuable first), then summary.json again with the final "outputs" record. `summary()` gives
-// summary.json's content; "outputs" (frames expected/written, kept files, error) is added here.
-// A failure writing frames or the strip (full disk...) keeps every complete file, records it in
-// summary.json if it still fits, prints the error and what was kept, and sets the exit code to 2.
-// A failure writing steady.exr/.png or the first summary.json is thrown as UserError. A first
-// Ctrl-C/SIGTERM during the frame export stops it after the frame in progress (recorded the same
-// way; exit code 128 + the signal).
-OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& r,
-                                const std::function<nlohmann::json()>& summary);
+void reportPlannedOutputs(const PreparedRender& p, const RenderOutputs& r, double previewExrSec);
 
 // After the outputs are written: the share of the energy that reached the camera outside the
 // film's time range, on the frames' axis. Above kOutsideWarnFraction: a warning; everything
@@ -144,6 +105,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
 // arrivals (measured with a pilot pass) or to use "range": "auto". Returns the fraction (0 when
 // no energy reached the camera at all).
 inline constexpr double kOutsideWarnFraction = 0.05;
-double checkEnergyInsideFilm(const Scene& scene, const TransientFilm& film, TimeAxis axis, int threads);
+// The pilot runs with p.pilotSettings.
+double checkEnergyInsideFilm(const PreparedRender& p, const TransientFilm& film, TimeAxis axis);
 
 }  // namespace tpb::app

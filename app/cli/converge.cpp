@@ -5,6 +5,9 @@
 // Also the path-tracer back end of `tpb render --method pt` (cli_converge.h).
 #include "cli/converge.h"
 
+#include "cli/flags.h"
+#include "cli/summary.h"
+
 #include "cli/interrupt.h"
 #include "cli/commands.h"
 #include "base/error.h"
@@ -51,13 +54,11 @@ std::string fmt(const char* f, double v) {
 std::string csvNum(double v) { return std::isfinite(v) ? fmt("%.6g", v) : std::string(); }
 json jnum(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
-RenderSettings ptSettings(const Scene& scene, const RenderOverrides& ov, int spp) {
-    RenderSettings ps;
-    ps.seed = ov.seed.value_or(scene.desc.render.seed);
-    ps.maxDepth = scene.desc.render.maxDepth;  // --max-depth is applied to the description
-    ps.threads = ov.threads.value_or(scene.desc.render.threads);
+// The path tracer's settings: the prepared ones (seed, max depth, threads, --pt-free-flight), `spp`
+// camera paths per pixel.
+RenderSettings ptSettings(const PreparedRender& p, int spp) {
+    RenderSettings ps = p.settings;
     ps.samplesPerPixel = std::max(1, spp);
-    ps.equiangular = !ov.ptFreeFlight;
     return ps;
 }
 
@@ -102,9 +103,9 @@ void referenceFrame(const ReferenceVolume& ref, TimeAxis axis, int k, std::vecto
 // tpb render --method pt
 // ============================================================================================
 
-json ptSummary(const Scene& scene, const RenderSettings& ps, const TransientFilm& film, const ExportOptions& opt,
+json ptSummary(const PreparedRender& p, const RenderSettings& ps, const TransientFilm& film, const ExportOptions& opt,
                const PathTracerStats& st, const std::vector<std::pair<double, double>>& passTimes, double wall) {
-    json j = summaryHeader(scene, "pt", passTimes.size(), wall, film, opt);
+    json j = summaryHeader(p, "pt", passTimes.size(), wall, film, opt);
     j["settings"] = {{"samples_per_pixel", ps.samplesPerPixel}, {"max_depth", ps.maxDepth}, {"seed", ps.seed},
                      {"threads", ps.threads}, {"equiangular", ps.equiangular}};
     json per = json::array();
@@ -131,20 +132,19 @@ json ptSummary(const Scene& scene, const RenderSettings& ps, const TransientFilm
 
 }  // namespace
 
-void checkPathTracedRequest(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req) {
-    const double budget = ov.timeBudget.value_or(scene.desc.render.timeBudgetSec);
-    if (!(budget >= 0.0) || !std::isfinite(budget))
-        throw UserError("--time must be a finite number of seconds >= 0 (0 = no time budget)");
+void checkPathTracedRequest(const PreparedRender&, const PathTracedRenderRequest& req) {
+    // (the passes and the time budget were validated with the other settings: prepareRender)
     if (req.spp < 1) throw UserError("--spp must be >= 1");
 }
 
-void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req) {
-    checkPathTracedRequest(scene, ov, req);
-    const RenderSettings ps = ptSettings(scene, ov, req.spp);
-    const int64_t passes = ov.passes ? *ov.passes : (ov.timeBudget ? 0 : scene.desc.render.passes);
-    const double budget = ov.timeBudget.value_or(scene.desc.render.timeBudgetSec);
+void renderPathTraced(const PreparedRender& prepared, const PathTracedRenderRequest& req) {
+    checkPathTracedRequest(prepared, req);
+    const Scene& scene = *prepared.scene;
+    const RenderSettings ps = ptSettings(prepared, req.spp);
+    const int64_t passes = ps.passes;
+    const double budget = ps.timeBudgetSec;
     if (passes == 0 && budget == 0.0) std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
-    TransientFilm film(scene.camera.width, scene.camera.height, scene.time);
+    TransientFilm film(scene.camera.width, scene.camera.height, prepared.time);
     PathTracerStats st;
     std::vector<std::pair<double, double>> passTimes;  // (pass seconds, elapsed)
     const bool tty = isatty(STDERR_FILENO) && !req.quiet;
@@ -178,10 +178,10 @@ void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathT
                              "light is missing from this render\n", static_cast<long long>(st.laserSamples));
 
     const OutputReport rep = writeRenderOutputs(film, req, [&] {
-        return ptSummary(scene, ps, film, req.opt, st, passTimes, wall);
+        return ptSummary(prepared, ps, film, req.opt, st, passTimes, wall);
     });
-    warnFilmOverflow(scene, film);
-    const double outside = checkEnergyInsideFilm(scene, film, req.opt.axis, ps.threads);
+    warnFilmOverflow(prepared.source, film);
+    const double outside = checkEnergyInsideFilm(prepared, film, req.opt.axis);
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     const int frames = rep.framesWritten;
     if (!req.quiet)
@@ -207,11 +207,12 @@ struct ReferenceCmd {
     bool analytic = false, force = false, quiet = false;
 };
 
-std::string defaultReferencePath(const Scene& scene, const std::string& method) {
-    const std::string stem = fs::path(scene.desc.path).stem().string();
+std::string defaultReferencePath(const PreparedRender& p, const std::string& method) {
+    const Scene& scene = *p.scene;
+    const std::string stem = fs::path(p.source.path).stem().string();
     const std::string m = method == "analytic-single-scattering" ? "ss" : method;
     return "ref/" + stem + "-" + m + "-" + std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height) +
-           "x" + std::to_string(scene.time.bins) + "-d" + std::to_string(scene.desc.render.maxDepth) + ".tpbref";
+           "x" + std::to_string(p.time.bins) + "-d" + std::to_string(p.settings.maxDepth) + ".tpbref";
 }
 
 void printReference(const std::string& path, const ReferenceInfo& i) {
@@ -230,37 +231,35 @@ void printReference(const std::string& path, const ReferenceInfo& i) {
 
 void runReference(ReferenceCmd& c) {
     InterruptScope interrupts;  // Ctrl-C and SIGTERM: the finished passes are written (marked interrupted)
-    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    const PreparedRender prepared = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    const Scene* scene = prepared.scene.get();
     const std::string method = c.analytic ? "analytic-single-scattering" : c.method;
-    ReferenceInfo want = describeScene(*scene);
+    ReferenceInfo want = describeScene(*scene, prepared.time, prepared.source.path, prepared.settings);
     want.method = method;
     ReferenceJob job;
     job.method = method;
     if (c.analytic) {
         want.maxDepth = 1;
-        if (scene->desc.render.maxDepth != 1 && c.ov.maxDepth)
+        if (prepared.settings.maxDepth != 1 && c.ov.maxDepth)
             throw UserError("--analytic-single-scattering is single scattering: --max-depth must be 1 (or left out)");
     } else {
         if (!c.ov.passes && !c.ov.timeBudget) throw UserError("a reference needs --passes N or --time SECONDS");
         job.passes = c.ov.passes.value_or(0);
-        job.timeBudgetSec = c.ov.timeBudget.value_or(0.0);
-        if (job.passes < 0 || !(job.timeBudgetSec >= 0.0) || !std::isfinite(job.timeBudgetSec))
-            throw UserError("--passes and --time must be >= 0");
+        job.timeBudgetSec = c.ov.timeBudget.value_or(0.0);  // (both validated: prepareRender)
         want.requestedPasses = job.passes;
         want.requestedTimeSec = job.timeBudgetSec;
         if (method == "pt") {
-            job.pt = ptSettings(*scene, c.ov, c.spp);
+            job.pt = ptSettings(prepared, c.spp);
             want.seed = job.pt.seed;
             want.samplesPerPixel = job.pt.samplesPerPixel;
         } else {
-            job.beams = RenderSettings::fromScene(*scene);
-            c.ov.applyToSettings(job.beams);
+            job.beams = prepared.settings;
             want.seed = job.beams.seed;
             want.photonsPerPass = job.beams.photonsPerPass;
             want.beamRadius0 = job.beams.beamRadius0;
         }
     }
-    const std::string out = c.out.empty() ? defaultReferencePath(*scene, method) : c.out;
+    const std::string out = c.out.empty() ? defaultReferencePath(prepared, method) : c.out;
     if (!c.force && fileExists(out)) {
         try {
             const ReferenceInfo have = readReferenceInfo(out);
@@ -283,12 +282,13 @@ void runReference(ReferenceCmd& c) {
     ReferenceVolume ref;
     if (c.analytic) {
         if (!c.quiet) std::fprintf(stderr, "single-scattering quadrature, %d x %d rays per pixel...\n", c.subpixels, c.subpixels);
-        ref = singleScatteringReference(*scene, c.subpixels, c.ov.threads.value_or(0));
+        ref = singleScatteringReference(*scene, prepared.time, prepared.source.path, prepared.settings, c.subpixels,
+                                        c.ov.threads.value_or(0));
         throwIfInterrupted("during the single-scattering quadrature");
     } else {
         double lastPrint = 0.0;
         const bool tty = isatty(STDERR_FILENO) && !c.quiet;
-        ref = renderReference(*scene, job, &interruptFlag(), [&](int64_t passes, double elapsed) {
+        ref = renderReference(*scene, prepared.time, prepared.source.path, job, &interruptFlag(), [&](int64_t passes, double elapsed) {
             if (c.quiet) return;
             if (tty) {
                 std::fprintf(stderr, "\rreference: pass %lld, %.1f s ", static_cast<long long>(passes), elapsed);
@@ -367,13 +367,14 @@ struct MethodResult {
 
 struct ConvergeContext {
     const ConvergeCmd& cmd;
-    Scene& scene;
+    const Scene& scene;
     const ReferenceVolume& ref;
     TimeAxis axis;
     std::vector<uint8_t> mask;
     double floorVolume, floorSteady;  // the reference's own error (-1 unknown)
     double budget;                    // s per method, 0 = none
     int64_t passes;                   // per method, 0 = none
+    const PreparedRender& prepared;   // the settings and the film's time axis
 };
 
 // Runs one method, recording checkpoints; rendering time only (measuring is not counted).
@@ -381,11 +382,9 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
     const ConvergeCmd& c = cx.cmd;
     MethodResult res;
     res.method = method;
-    RenderSettings ps = ptSettings(cx.scene, c.ov, c.spp);
+    RenderSettings ps = ptSettings(cx.prepared, c.spp);
     if (method == "beams") {
-        RenderSettings ds = RenderSettings::fromScene(cx.scene);
-        c.ov.applyToSettings(ds);
-        res.driver = std::make_unique<Driver>(cx.scene, ds);
+        res.driver = std::make_unique<Driver>(cx.scene, cx.prepared.settings, cx.prepared.time);
     } else {
         if (cx.ref.info.method == "pt" && ps.seed == cx.ref.info.seed) {
             ps.seed = cx.ref.info.seed + 1;
@@ -394,7 +393,7 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
                             "are independent\n",
                             static_cast<unsigned long long>(cx.ref.info.seed), static_cast<unsigned long long>(ps.seed));
         }
-        res.ptFilm = std::make_unique<TransientFilm>(cx.scene.camera.width, cx.scene.camera.height, cx.scene.time);
+        res.ptFilm = std::make_unique<TransientFilm>(cx.scene.camera.width, cx.scene.camera.height, cx.prepared.time);
     }
     // Checkpoints: geometric in render time (or in passes without a time budget), plus --at, plus
     // the first --every-pass passes, plus the last pass.
@@ -505,9 +504,9 @@ std::string gnuplotScript(const ConvergeContext& cx, const std::vector<MethodRes
          "set ylabel 'relative RMSE against the reference'\n"
          "set grid xtics ytics mxtics mytics lc rgb '#dddddd'\n"
          "set key outside below\n";
-    std::string sceneName = fs::path(cx.scene.desc.path).filename().string();
+    std::string sceneName = fs::path(cx.prepared.source.path).filename().string();
     g << "set title \"" << sceneName << ", " << cx.scene.camera.width << "x" << cx.scene.camera.height << "x"
-      << cx.scene.time.bins << " bins, " << axisName << " time, delta emission"
+      << cx.prepared.time.bins << " bins, " << axisName << " time, delta emission"
       << (cx.mask.empty() ? "" : ", light pixels masked") << "\" noenhanced\n";
     std::vector<std::string> curves, curvesL1;
     auto color = [](const std::string& m) { return m == "beams" ? std::string("#c0392b") : std::string("#2471a3"); };
@@ -606,14 +605,16 @@ void runConverge(ConvergeCmd& c) {
     adopt(c.ov.bins, ref.info.bins, "--bins");
     adopt(c.ov.maxDepth, ref.info.maxDepth, "--max-depth");
     if (!adopted.empty() && !c.quiet) std::printf("from the reference: %s\n", adopted.c_str());
-    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    PreparedRender prepared = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    const Scene* scene = prepared.scene.get();
     // An automatic film range is fitted by a pilot pass: take the reference's (same bins) so that
-    // tiny differences of the fit do not make it incompatible.
-    if (scene->desc.film.autoRange && scene->time.bins == ref.info.bins) {
-        scene->time.startOpl = ref.info.startOpl;
-        scene->time.binWidth = ref.info.binWidth;
+    // tiny differences of the fit do not make it incompatible (the axis is decided here, before
+    // any film exists).
+    if (prepared.film.autoRange && prepared.time.bins == ref.info.bins) {
+        prepared.time.startOpl = ref.info.startOpl;
+        prepared.time.binWidth = ref.info.binWidth;
     }
-    ReferenceInfo want = describeScene(*scene);
+    ReferenceInfo want = describeScene(*scene, prepared.time, prepared.source.path, prepared.settings);
     requireCompatible(c.reference, ref.info, want);
     if (!c.quiet) {
         std::printf("reference ");
@@ -621,7 +622,7 @@ void runConverge(ConvergeCmd& c) {
     }
 
     ConvergeContext cx{c, *scene, ref, c.axis == "unwarped" ? TimeAxis::Unwarped : TimeAxis::Real, {}, -1.0, -1.0,
-                       c.ov.timeBudget.value_or(0.0), c.ov.passes.value_or(0)};
+                       c.ov.timeBudget.value_or(0.0), c.ov.passes.value_or(0), prepared};
     cx.mask = lightPixelMask(*scene, c.maskLights);
     const std::vector<uint8_t>* maskPtr = cx.mask.empty() ? nullptr : &cx.mask;
     cx.floorVolume = referenceSelfError(ref, cx.axis, false, maskPtr);
@@ -631,11 +632,7 @@ void runConverge(ConvergeCmd& c) {
         std::printf("masking %lld pixels within %.3g px of the point/spot lights' images\n", static_cast<long long>(n),
                     c.maskLights);
     }
-    // Every method's settings are checked before the folder is touched.
-    if (c.method != "pt") {
-        RenderSettings ds = RenderSettings::fromScene(*scene);
-        c.ov.applyToSettings(ds);
-    }
+    // Every method's settings were checked (prepareRender) before the folder is touched.
     OutputFiles files;
     files.files = {"convergence.csv", "convergence.json", "convergence.gp"};
     if (c.perFrame) files.files.push_back("convergence_frames.csv");
@@ -665,15 +662,15 @@ void runConverge(ConvergeCmd& c) {
 
     // ---- files
     writeCsv(c.out + "/convergence.csv", results);
-    if (c.perFrame) writePerFrameCsv(c.out + "/convergence_frames.csv", results, scene->time);
+    if (c.perFrame) writePerFrameCsv(c.out + "/convergence_frames.csv", results, prepared.time);
     json j;
-    j["scene"] = scene->desc.path;
+    j["scene"] = prepared.source.path;
     j["reference"] = {{"path", c.reference}, {"method", ref.info.method}, {"passes", ref.info.passes},
                       {"samples_per_pixel", ref.info.samplesPerPixel}, {"wall_seconds", ref.info.wallSeconds},
                       {"own_error_volume", jnum(cx.floorVolume)}, {"own_error_steady", jnum(cx.floorSteady)},
                       {"own_error_estimate", ref.info.selfErrorEstimate}};
     j["resolution"] = {scene->camera.width, scene->camera.height};
-    j["film"] = filmJson(*scene);
+    j["film"] = filmJson(prepared.time);
     j["axis"] = c.axis;
     j["emission"] = "delta";
     j["metric"] = "relative RMSE sqrt(sum (x - ref)^2 / sum ref^2) over pixels, RGB and (volume) bins";
@@ -725,7 +722,7 @@ void runConverge(ConvergeCmd& c) {
         os << '\n';
         json fj = json::array();
         for (int k : stripK) {
-            const double tns = (scene->time.startOpl + (k + 0.5) * scene->time.binWidth) / kC_m_per_ns;
+            const double tns = (prepared.time.startOpl + (k + 0.5) * prepared.time.binWidth) / kC_m_per_ns;
             os << k << ',' << csvNum(tns);
             json row = {{"bin", k}, {"t_ns", tns}};
             for (const MethodResult& m : results) {
@@ -811,7 +808,7 @@ void runConverge(ConvergeCmd& c) {
     if (!stripK.empty()) {
         std::printf("equal-time frames (%s): relative RMSE per frame at the end of each run\n", "equal_time.png");
         for (int k : stripK) {
-            std::printf("  bin %4d (%.3f ns)", k, (scene->time.startOpl + (k + 0.5) * scene->time.binWidth) / kC_m_per_ns);
+            std::printf("  bin %4d (%.3f ns)", k, (prepared.time.startOpl + (k + 0.5) * prepared.time.binWidth) / kC_m_per_ns);
             for (const MethodResult& m : results) std::printf("  %s %.4g", m.method.c_str(), m.finalPerFrame[k]);
             std::printf("\n");
         }

@@ -14,13 +14,13 @@ struct PathTracedRenderRequest : RenderOutputs {
 };
 
 // Checks what renderPathTraced will check, before anything is written (UserError).
-void checkPathTracedRequest(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req);
+void checkPathTracedRequest(const PreparedRender& prepared, const PathTracedRenderRequest& req);
 
-// Renders with the unbiased path tracer (core/integrators/path_tracer.h): passes = --passes (or the scene's),
+// Renders with the unbiased path tracer (core/integrators/path_tracer.h): passes and time budget from prepared.settings,
 // each `spp` paths per pixel, until --time if given; writes steady.exr/.png, frames/, strip.png and
 // summary.json ("method": "pt") into req.out. The first Ctrl-C or SIGTERM abandons the pass in
 // progress and writes the finished ones; a second quits (cli_interrupt.h). The caller holds an
 // InterruptScope and has claimed req.out (OutputFolder).
-void renderPathTraced(const Scene& scene, const RenderOverrides& ov, const PathTracedRenderRequest& req);
+void renderPathTraced(const PreparedRender& prepared, const PathTracedRenderRequest& req);
 
 }  // namespace tpb::app

@@ -1,8 +1,10 @@
 // `tpb info`: what a scene contains, which stages will run and why, and the memory they need.
 #include "cli/common.h"
+#include "cli/flags.h"
 #include "cli/interrupt.h"
 #include "cli/commands.h"
 
+#include <cmath>
 #include <cstdio>
 
 namespace tpb::app {
@@ -30,12 +32,13 @@ const char* lightName(LightType t) {
 
 void run(const std::string& path, const RenderOverrides& ov) {
     InterruptScope interrupts;  // the pilot of an automatic range polls Ctrl-C/SIGTERM
-    std::unique_ptr<Scene> s = loadAndBuild(path, ov);
-    RenderSettings ds = RenderSettings::fromScene(*s);
-    ov.applyToSettings(ds);
+    const PreparedRender p = loadAndBuild(path, ov);
+    const Scene* s = p.scene.get();
+    const RenderSettings& ds = p.settings;
     const Camera& cam = s->camera;
-    std::printf("scene      %s (version %d)\n", path.c_str(), s->desc.version);
-    std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam.width, cam.height, s->desc.camera.fovYDeg,
+    const double fovYDeg = 2.0 * std::atan(cam.tanHalfFovY) * 180.0 / kPi;
+    std::printf("scene      %s (version %d)\n", path.c_str(), p.source.version);
+    std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam.width, cam.height, fovYDeg,
                 cam.position.x, cam.position.y, cam.position.z);
     std::printf("bounds     (%.3g, %.3g, %.3g) - (%.3g, %.3g, %.3g), diagonal %.4g m\n", s->bounds.lo.x, s->bounds.lo.y,
                 s->bounds.lo.z, s->bounds.hi.x, s->bounds.hi.y, s->bounds.hi.z, s->bounds.diagonal());
@@ -61,10 +64,10 @@ void run(const std::string& path, const RenderOverrides& ov) {
     for (const Light& l : s->lights)
         std::printf("light      %s, power (%.3g %.3g %.3g) W, pulse at %.4g m OPL (%.4g ns)\n", lightName(l.type), l.power.x,
                     l.power.y, l.power.z, l.emitOpl, l.emitOpl / kC_m_per_ns);
-    const TimeBins& t = s->time;
+    const TimeBins& t = p.time;
     std::printf("film       %d bins of %.4g m OPL (%.4g ns), from %.4g to %.4g m (%.4g to %.4g ns)%s\n", t.bins, t.binWidth,
                 t.binWidth / kC_m_per_ns, t.startOpl, t.endOpl(), t.startOpl / kC_m_per_ns, t.endOpl() / kC_m_per_ns,
-                s->desc.film.autoRange ? " [auto]" : "");
+                p.film.autoRange ? " [auto]" : "");
     std::printf("memory     transient film (2 time axes, RGB float + steady double): %s\n",
                 humanBytes(filmBytes(cam.width, cam.height, t.bins)).c_str());
     std::printf("           per worker thread: pixel accumulator %s\n",

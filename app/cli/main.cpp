@@ -1,5 +1,6 @@
 // tpb: Transient Photon Beams. `tpb --help` lists the subcommands; `tpb <cmd> --help` each one's flags.
 #include "cli/interrupt.h"
+#include <CLI/CLI.hpp>
 #include "cli/commands.h"
 #include "base/error.h"
 

@@ -1,5 +1,7 @@
 // `tpb render`: headless progressive render to EXR frames + steady state + JSON summary.
 #include "cli/common.h"
+#include "cli/flags.h"
+#include "cli/summary.h"
 #include "cli/converge.h"
 #include "cli/interrupt.h"
 #include "cli/commands.h"
@@ -30,10 +32,11 @@ struct RenderCmd {
     int spp = 1;
 };
 
-nlohmann::json summaryJson(const Scene& scene, const Driver& drv, const ExportOptions& opt, double wallSec) {
+nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const ExportOptions& opt, double wallSec) {
     using nlohmann::json;
+    const Scene& scene = *p.scene;
     const auto hist = drv.history();
-    json j = summaryHeader(scene, "beams", hist.size(), wallSec, drv.film(), opt);
+    json j = summaryHeader(p, "beams", hist.size(), wallSec, drv.film(), opt);
     json stages = json::array();
     for (const auto& r : scene.stages.reasons) stages.push_back(r);
     j["stages"] = stages;
@@ -94,11 +97,15 @@ void checkFlagConflicts(const RenderCmd& c) {
 void run(RenderCmd& c) {
     InterruptScope interrupts;  // Ctrl-C and SIGTERM, from the start (the pilot polls them too)
     checkFlagConflicts(c);      // (each flag's range was checked when the command line was parsed)
-    std::unique_ptr<Scene> scene = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    // Every setting is resolved and checked (prepareRender) before the first file is written (no
+    // preview.exr is left behind by a bad --alpha or by photons that would not fit in memory).
+    const PreparedRender prepared = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    const Scene* scene = prepared.scene.get();
+    const RenderSettings& ds = prepared.settings;
 
     ExportOptions opt;
-    opt.axis = (scene->desc.render.unwarp || c.unwarp) && !c.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
-    opt.mode = (scene->desc.render.emission == EmissionMode::Continuous || c.continuous) && !c.delta
+    opt.axis = (ds.unwarp || c.unwarp) && !c.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
+    opt.mode = (ds.emission == EmissionMode::Continuous || c.continuous) && !c.delta
                    ? EmissionMode::Continuous : EmissionMode::Delta;
     opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
     opt.step = c.frameStep;
@@ -111,14 +118,10 @@ void run(RenderCmd& c) {
     outputs.stripEv = c.stripEv;
     outputs.spp = c.spp;
 
-    // Every setting is resolved and checked before the first file is written (no preview.exr is left
-    // behind by a bad --alpha or by photons that would not fit in memory).
-    RenderSettings ds = RenderSettings::fromScene(*scene);
-    c.ov.applyToSettings(ds);
-    if (c.method == "pt") checkPathTracedRequest(*scene, c.ov, outputs);
+    if (c.method == "pt") checkPathTracedRequest(prepared, outputs);
 
     // The folder is this render's from here on: locked, the previous render's outputs removed.
-    const OutputFolder folder(c.out, "render", renderOutputFiles(outputs, scene->time.bins));
+    const OutputFolder folder(c.out, "render", renderOutputFiles(outputs, prepared.time.bins));
     if (!c.quiet && !folder.removed().empty())
         std::printf("removed %zu files of an earlier render in %s (listed in its manifest)\n", folder.removed().size(),
                     c.out.c_str());
@@ -131,16 +134,16 @@ void run(RenderCmd& c) {
     writePngPreview(c.out + "/preview.png", scene->camera.width, scene->camera.height, preview);
     if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
     if (c.previewOnly) return;
-    reportPlannedOutputs(*scene, outputs, previewExrSec);
+    reportPlannedOutputs(prepared, outputs, previewExrSec);
 
     if (c.method == "pt") {  // same outputs, rendered by the path tracer (cli_converge.cpp)
-        renderPathTraced(*scene, c.ov, outputs);
+        renderPathTraced(prepared, outputs);
         return;
     }
 
     if (ds.passes == 0 && ds.timeBudgetSec == 0.0)
         std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
-    Driver drv(*scene, ds);
+    Driver drv(*scene, ds, prepared.time);
 
     const bool tty = isatty(STDERR_FILENO) && !c.quiet;
     const double t0 = nowSec();
@@ -187,8 +190,8 @@ void run(RenderCmd& c) {
                      static_cast<unsigned long long>(drv.completedPasses()));
 
     const OutputReport rep =
-        writeRenderOutputs(drv.film(), outputs, [&] { return summaryJson(*scene, drv, opt, wall); });
-    warnFilmOverflow(*scene, drv.film());
+        writeRenderOutputs(drv.film(), outputs, [&] { return summaryJson(prepared, drv, opt, wall); });
+    warnFilmOverflow(prepared.source, drv.film());
     int64_t regionOverflows = 0;
     for (const PassStats& p : drv.history()) regionOverflows += p.regionOverflows + p.camera.regionOverflows;
     if (regionOverflows > 0)
@@ -197,7 +200,7 @@ void run(RenderCmd& c) {
                      "(open or overlapping shapes crossed again and again); close those shapes or make them not "
                      "overlap\n",
                      static_cast<long long>(regionOverflows));
-    const double outside = checkEnergyInsideFilm(*scene, drv.film(), opt.axis, ds.threads);
+    const double outside = checkEnergyInsideFilm(prepared, drv.film(), opt.axis);
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     const int frames = rep.framesWritten;
     if (!c.quiet) {

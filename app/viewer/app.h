@@ -2,9 +2,12 @@
 // shows the film. The UI thread owns everything GL/ImGui; the driver's workers only write the film
 // (and wake the UI with glfwPostEmptyEvent after each pass); exports and the streak/profile reads
 // run on their own threads and hold the driver alive through a shared_ptr.
+//
+// Its own CMake target (tpb_viewer): no CLI11, no nlohmann. `tpb view`'s flags are registered in
+// app/cli/view_command.cpp, which prepares the render (prepareRender) and calls runViewer.
 #pragma once
-#include "cli/common.h"
 #include "render/driver.h"
+#include "render/prepare.h"
 #include "viewer/export.h"
 #include "viewer/gl.h"
 
@@ -20,9 +23,12 @@ struct GLFWwindow;
 
 namespace tpb::app {
 
+inline constexpr double kMaxExposureEv = 40.0;  // the Display section's exposure slider spans -40 to 40 EV
+inline constexpr int64_t kMaxWindowPx = 16384;   // beyond any OpenGL 3.3 framebuffer
+
+// What `tpb view` asks of the viewer beyond the prepared render (plain values, filled by the
+// command line: app/cli/view_command.cpp).
 struct ViewOptions {
-    std::string scene;
-    RenderOverrides ov;
     std::string screenshot, exportDir, exportFolder;
     std::vector<std::string> clicks;  // --click: controls to click before the screenshot, in order
     int64_t afterPasses = 1;
@@ -103,7 +109,7 @@ ExposureFit fitExposure(const std::vector<float>& rgb);
 
 class Viewer {
 public:
-    Viewer(const Scene& scene, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window);
+    Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window);
     ~Viewer();  // stops the driver and joins the helper threads (GL objects go with the members)
     void run();
 
@@ -146,6 +152,8 @@ private:
     void saveSnapshot(int fbWidth, int fbHeight);
 
     const Scene& scene_;
+    TimeBins time_;          // the film's time axis
+    std::string scenePath_;  // for the title and the info panel
     ViewOptions opt_;
     GLFWwindow* window_;
     ViewState st_;
@@ -207,5 +215,9 @@ private:
     int exitCode_ = 0;
 };
 
+
+// Opens the window and runs the viewer on a prepared render until it is closed (or, with
+// --screenshot, until the picture is taken).
+void runViewer(const PreparedRender& prepared, const ViewOptions& options);
 
 }  // namespace tpb::app

@@ -48,7 +48,7 @@ int peakEnergyBin(const std::vector<double>& energy) {
 
 void Viewer::restart(const RenderSettings& s, const std::string& why) {
     if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
-    driver_ = std::make_shared<Driver>(scene_, s);
+    driver_ = std::make_shared<Driver>(scene_, s, time_);
     ++generation_;
     edit_ = driver_->settings();
     driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
@@ -61,7 +61,7 @@ void Viewer::restart(const RenderSettings& s, const std::string& why) {
 }
 
 float Viewer::binCentreOpl(int bin) const {
-    return static_cast<float>(scene_.time.startOpl + (bin + 0.5) * scene_.time.binWidth);
+    return static_cast<float>(time_.startOpl + (bin + 0.5) * time_.binWidth);
 }
 
 FetchKey Viewer::frameKey() const {

@@ -2,6 +2,8 @@
 // the selected pixel's time profile bottom right). Layout follows the window size.
 #include "viewer/app.h"
 
+#include "base/error.h"
+
 #include <imgui_internal.h>  // ImGui::GetItemID (public from ImGui 1.88)
 #include <imgui_stdlib.h>
 
@@ -50,11 +52,11 @@ const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta 
 }  // namespace
 
 void Viewer::setBin(int bin) {
-    st_.bin = std::clamp(bin, 0, scene_.time.bins - 1);
+    st_.bin = std::clamp(bin, 0, time_.bins - 1);
     st_.autoBin = false;  // the user chose a time: no more automatic bin
 }
 
-void Viewer::setAutoBin(int bin) { st_.bin = std::clamp(bin, 0, scene_.time.bins - 1); }
+void Viewer::setAutoBin(int bin) { st_.bin = std::clamp(bin, 0, time_.bins - 1); }
 
 bool Viewer::section(const char* label, ImGuiTreeNodeFlags flags) {
     const bool open = ImGui::CollapsingHeader(label, flags);
@@ -93,7 +95,7 @@ void Viewer::handleKeys(const std::vector<int>& keys) {
             case GLFW_KEY_LEFT: setBin(st_.bin - 1); break;
             case GLFW_KEY_RIGHT: setBin(st_.bin + 1); break;
             case GLFW_KEY_HOME: setBin(0); break;
-            case GLFW_KEY_END: setBin(scene_.time.bins - 1); break;
+            case GLFW_KEY_END: setBin(time_.bins - 1); break;
             case GLFW_KEY_SPACE: st_.playing = !st_.playing; break;
             case GLFW_KEY_F12: snapRequested_ = true; break;
             default: break;
@@ -110,7 +112,7 @@ void Viewer::advancePlayback(double dt) {
     st_.playAccum += std::min(dt, 0.25) * st_.speed;
     while (st_.playAccum >= 1.0) {
         st_.playAccum -= 1.0;
-        if (st_.bin + 1 < scene_.time.bins) {
+        if (st_.bin + 1 < time_.bins) {
             ++st_.bin;
         } else if (st_.loop) {
             st_.bin = 0;
@@ -170,9 +172,9 @@ void Viewer::drawUi() {
 // the same control after it. Rows that come and go are reserved (shown disabled or as "-"), and
 // messages of any length go to the fixed-size, wrapped messages box below the controls (drawUi).
 void Viewer::drawControls() {
-    const TimeBins& tb = scene_.time;
+    const TimeBins& tb = time_;
     ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels
-    ImGui::TextWrapped("%s", scene_.desc.path.c_str());
+    ImGui::TextWrapped("%s", scenePath_.c_str());
     ImGui::TextWrapped("%d x %d px, %d bins, %.3f - %.3f ns", scene_.camera.width, scene_.camera.height, tb.bins,
                        tb.startOpl / kC_m_per_ns, tb.endOpl() / kC_m_per_ns);
     drawTimeSection();
@@ -230,7 +232,7 @@ void Viewer::drawControls() {
 
 void Viewer::drawTimeSection() {
     if (!section("Time", ImGuiTreeNodeFlags_DefaultOpen)) return;
-    const TimeBins& tb = scene_.time;
+    const TimeBins& tb = time_;
     int bin = st_.bin;
     if (ImGui::SliderInt("bin", &bin, 0, tb.bins - 1)) setBin(bin);
     track("bin");
@@ -366,20 +368,28 @@ void Viewer::drawSettingsSection() {
     track("pass limit (0: none)");
     if (!apply) return;
     const RenderSettings& cur = driver_->settings();
-    if (edit_.photonsPerPass < 1 || !(edit_.alpha > 0.0 && edit_.alpha <= 1.0) || !(edit_.beamRadius0 > 0.0) ||
-        edit_.passes < 0) {
-        status_ = "invalid setting (photons >= 1, alpha in (0, 1], radius > 0, passes >= 0): not applied";
-        edit_ = cur;
-        return;
-    }
     if (edit_.photonsPerPass == cur.photonsPerPass && edit_.alpha == cur.alpha &&
         edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
         return;
-    RenderSettings s = cur;  // everything else (seed, threads, radii ratio...) as before
-    s.photonsPerPass = edit_.photonsPerPass;
-    s.alpha = edit_.alpha;
-    s.beamRadius0 = edit_.beamRadius0;
-    s.passes = edit_.passes;
+    // The edited fields as overrides, checked by the one validate() (render_settings.h); everything
+    // else (seed, threads, surface radius...) as before.
+    SettingsOverrides o;
+    o.photons = edit_.photonsPerPass;
+    o.alpha = edit_.alpha;
+    o.radius = edit_.beamRadius0;
+    o.passes = edit_.passes;
+    RenderSettings s = cur;
+    s.apply(o);
+    std::vector<std::string> warnings;
+    try {
+        const double diag = scene_.bounds.diagonal() > 0.0 ? scene_.bounds.diagonal() : 1.0;
+        warnings = s.validate({nullptr, &o, diag});
+    } catch (const UserError& e) {
+        status_ = std::string("invalid setting: ") + e.what() + ": not applied";
+        edit_ = cur;
+        return;
+    }
+    for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
     restart(s, "settings changed: accumulation restarted");
 }
 
@@ -491,7 +501,7 @@ void Viewer::drawImagePanel() {
 }
 
 void Viewer::drawTimePanel() {
-    const int w = scene_.camera.width, bins = scene_.time.bins;
+    const int w = scene_.camera.width, bins = time_.bins;
     ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s", st_.selY, axisName(st_.axis),
                        modeName(st_.mode));
     const ImVec2 avail = ImGui::GetContentRegionAvail();

@@ -26,9 +26,6 @@ namespace tpb::app {
 
 namespace {
 
-constexpr double kMaxExposureEv = 40.0;  // the Display section's exposure slider spans -40 to 40 EV
-constexpr int64_t kMaxWindowPx = 16384;   // beyond any OpenGL 3.3 framebuffer
-
 std::string gGlfwError;
 std::atomic<bool> gInterrupted{false};
 
@@ -107,24 +104,26 @@ public:
 
 }  // namespace
 
-Viewer::Viewer(const Scene& scene, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window)
-    : scene_(scene), opt_(opt), window_(window) {
+Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt,
+               GLFWwindow* window)
+    : scene_(*prepared.scene), time_(prepared.time), scenePath_(prepared.source.path), opt_(opt), window_(window) {
+    const Scene& scene = scene_;
     program_.load(TPB_SHADER_DIR);
     const int maxTex = maxTextureSize();
-    if (scene.camera.width > maxTex || scene.camera.height > maxTex || scene.time.bins > maxTex)
+    if (scene.camera.width > maxTex || scene.camera.height > maxTex || time_.bins > maxTex)
         throw UserError("the film (" + std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height) +
-                        ", " + std::to_string(scene.time.bins) + " bins) exceeds the largest OpenGL texture (" +
+                        ", " + std::to_string(time_.bins) + " bins) exceeds the largest OpenGL texture (" +
                         std::to_string(maxTex) + "); lower --width/--height/--bins");
 
     // Initial view: the scene's render settings, then the flags (as `tpb render` does).
-    const RenderDesc& rd = scene.desc.render;
+    const RenderSettings& rd = settings;
     st_.axis = (rd.unwarp || opt.unwarp) && !opt.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
     st_.mode = (rd.emission == EmissionMode::Continuous || opt.continuous) && !opt.delta ? EmissionMode::Continuous
                                                                                         : EmissionMode::Delta;
     // --bin and --time were checked against the film (runView). Without them, the bin of peak
     // energy once light arrives (updateBinEnergy): bin 0 is often before any light.
     if (opt.bin) setBin(*opt.bin);
-    else if (opt.timeNs) setBin(scene.time.binOf(*opt.timeNs * kC_m_per_ns));
+    else if (opt.timeNs) setBin(time_.binOf(*opt.timeNs * kC_m_per_ns));
     st_.autoBin = !opt.bin && !opt.timeNs;
     if (opt.exposure) {
         st_.evFrame = st_.evSteady = static_cast<float>(*opt.exposure);
@@ -374,10 +373,11 @@ void checkShownTime(const ViewOptions& o, const TimeBins& tb) {
     }
 }
 
-void runView(const ViewOptions& o) {
-    std::unique_ptr<Scene> scene = loadAndBuild(o.scene, o.ov);
-    RenderSettings ds = RenderSettings::fromScene(*scene);
-    o.ov.applyToSettings(ds);
+}  // namespace
+
+void runViewer(const PreparedRender& prepared, const ViewOptions& o) {
+    const Scene* scene = prepared.scene.get();
+    RenderSettings ds = prepared.settings;
     const bool shot = !o.screenshot.empty();
     if (shot) {  // run exactly N passes, then take the picture
         ds.passes = o.afterPasses;
@@ -390,14 +390,14 @@ void runView(const ViewOptions& o) {
         throw UserError("--pixel " + std::to_string(o.pixel[0]) + " " + std::to_string(o.pixel[1]) +
                         " is outside the image: X is 0 to " + std::to_string(scene->camera.width - 1) + ", Y 0 to " +
                         std::to_string(scene->camera.height - 1));
-    checkShownTime(o, scene->time);  // --exposure, --after-passes, --time-budget: checked while parsing
+    checkShownTime(o, prepared.time);  // --exposure, --after-passes, --time-budget: checked while parsing
 
-    GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + scene->desc.path, !shot);
+    GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + prepared.source.path, !shot);
     ImGuiSession gui(window.get());
     gInterrupted = false;
     std::signal(SIGINT, onSigint);  // Ctrl-C closes the window like the close button
     try {
-        Viewer viewer(*scene, ds, o, window.get());
+        Viewer viewer(prepared, ds, o, window.get());
         viewer.run();
     } catch (...) {
         std::signal(SIGINT, SIG_DFL);
@@ -405,57 +405,6 @@ void runView(const ViewOptions& o) {
     }
     std::signal(SIGINT, SIG_DFL);
     // ~Viewer stopped the driver; ~ImGuiSession and ~GlfwWindow now release ImGui and the window.
-}
-
-}  // namespace
-
-void registerView(CLI::App& app) {
-    auto o = std::make_shared<ViewOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "view", "Interactive viewer: the render refines in the background while you scrub through time");
-    cmd->add_option("scene", o->scene, "Scene file (JSON)")->required();
-    o->ov.add(cmd);
-    // In the viewer --time is the time shown (ns); the render's time budget is --time-budget.
-    cmd->remove_option(cmd->get_option("--time"));
-    // Every flag is checked while parsing (cli_common.h flags::), as for `tpb render`: a bad value is
-    // refused with its range and exit code 2 before the scene loads or a window opens.
-    cmd->add_option("--time-budget", o->ov.timeBudget, "Render time budget in seconds")
-        ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), false, "seconds; 0 = no time budget"));
-    CLI::Option* shot = cmd->add_option("--screenshot", o->screenshot,
-                                        "Save a PNG of the window after --after-passes passes, then exit");
-    cmd->add_option("--after-passes", o->afterPasses, "Passes to render before the screenshot (default 1)")
-        ->needs(shot)
-        ->transform(flags::integer(1, INT64_MAX, "passes rendered before the screenshot"));
-    cmd->add_option("--export", o->exportDir,
-                    "With --screenshot: once the passes are done, export the current frame and the steady "
-                    "state to this folder by clicking the Export buttons")
-        ->needs(shot);
-    cmd->add_option("--export-folder", o->exportFolder, "The Export section's folder (default out/view)");
-    cmd->add_option("--click", o->clicks,
-                    "With --screenshot: once the passes are done, click this control before the screenshot, "
-                    "as 'Section/label' (e.g. 'View/Continuous emission', 'Export/Steady state'); repeatable, "
-                    "in order")
-        ->needs(shot)
-        ->expected(1)
-        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    CLI::Option* t = cmd->add_option(
-        "--time", o->timeNs, "Time shown, in ns, within the film (the bin containing it; default: the bin of peak energy)");
-    cmd->add_option("--bin", o->bin, "Time bin shown, 0 to bins - 1 (default: the bin of peak energy)")->excludes(t);
-    CLI::Option* unwarp = cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
-    cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)")->excludes(unwarp);
-    CLI::Option* continuous = cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
-    cmd->add_flag("--delta", o->delta, "Start with a delta pulse (the default)")->excludes(continuous);
-    // The exposure slider's range; leaving the flag out means automatic exposure.
-    cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)")
-        ->check(flags::number(-kMaxExposureEv, kMaxExposureEv, false, "EV; leave it out for automatic exposure"));
-    cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
-    cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
-    cmd->add_flag("--steady", o->steady, "Start on the steady-state image");
-    cmd->add_option("--pixel", o->pixel, "Selected pixel: X Y (time profile; Y is the streak row)")->expected(2);
-    cmd->add_option("--window-size", o->windowSize, "Window size: W H (default 1280 800)")
-        ->expected(2)
-        ->transform(flags::integer(64, kMaxWindowPx, "window pixels, width and height"));
-    cmd->callback([o] { runView(*o); });
 }
 
 }  // namespace tpb::app

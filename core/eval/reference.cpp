@@ -380,33 +380,35 @@ void requireCompatible(const std::string& path, const ReferenceInfo& ref, const 
     throw UserError(path, 0, "", msg);
 }
 
-ReferenceInfo describeScene(const Scene& scene) {
+ReferenceInfo describeScene(const Scene& scene, const TimeBins& time, const std::string& scenePath,
+                            const RenderSettings& settings) {
     ReferenceInfo i;
-    i.scene = scene.desc.path;
-    i.sceneHash = hashFile(scene.desc.path);
+    i.scene = scenePath;
+    i.sceneHash = hashFile(scenePath);
     i.width = scene.camera.width;
     i.height = scene.camera.height;
-    i.bins = scene.time.bins;
-    i.startOpl = scene.time.startOpl;
-    i.binWidth = scene.time.binWidth;
-    i.maxDepth = scene.desc.render.maxDepth;
-    i.seed = scene.desc.render.seed;
+    i.bins = time.bins;
+    i.startOpl = time.startOpl;
+    i.binWidth = time.binWidth;
+    i.maxDepth = settings.maxDepth;
+    i.seed = settings.seed;
     return i;
 }
 
 // ---- rendering -----------------------------------------------------------------------------------
 
-ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, const std::atomic<bool>* abort,
+ReferenceVolume renderReference(const Scene& scene, const TimeBins& time, const std::string& scenePath,
+                                const ReferenceJob& job, const std::atomic<bool>* abort,
                                 const std::function<void(int64_t, double)>& progress) {
     if (job.method != "pt" && job.method != "beams") throw UserError("reference method must be pt or beams");
     if (job.passes <= 0 && !(job.timeBudgetSec > 0.0)) throw UserError("a reference needs --passes or --time");
     ReferenceVolume r;
     ReferenceInfo& info = r.info;
-    info = describeScene(scene);
+    info = describeScene(scene, time, scenePath, job.method == "pt" ? job.pt : job.beams);
     info.method = job.method;
     info.requestedPasses = job.passes;
     info.requestedTimeSec = job.timeBudgetSec;
-    const int W = scene.camera.width, H = scene.camera.height, B = scene.time.bins;
+    const int W = scene.camera.width, H = scene.camera.height, B = time.bins;
     const size_t P = info.pixels();
     const double t0 = nowSec();
     auto budgetLeft = [&](int64_t done) {
@@ -427,7 +429,7 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
         info.maxDepth = ds.maxDepth;
         info.photonsPerPass = ds.photonsPerPass;
         info.beamRadius0 = ds.beamRadius0;
-        Driver drv(scene, ds);
+        Driver drv(scene, ds, time);
         int64_t done = 0;
         while (budgetLeft(done)) {
             if (!drv.runPass(static_cast<uint64_t>(done + 1))) break;
@@ -452,7 +454,7 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
         info.seed = ps.seed;
         info.maxDepth = ps.maxDepth;
         info.samplesPerPixel = std::max(1, ps.samplesPerPixel);
-        TransientFilm fa(W, H, scene.time), fb(W, H, scene.time);
+        TransientFilm fa(W, H, time), fb(W, H, time);
         int64_t done = 0;
         while (budgetLeft(done)) {
             const uint64_t pass = static_cast<uint64_t>(done + 1);
@@ -515,8 +517,9 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
     return r;
 }
 
-ReferenceVolume singleScatteringReference(const Scene& scene, int subpixels, int threads) {
-    const std::string where = scene.desc.path.empty() ? std::string("scene") : scene.desc.path;
+ReferenceVolume singleScatteringReference(const Scene& scene, const TimeBins& time, const std::string& scenePath,
+                                          const RenderSettings& settings, int subpixels, int threads) {
+    const std::string where = scenePath.empty() ? std::string("scene") : scenePath;
     auto refuse = [&](const std::string& why) {
         throw UserError(where, 0, "", "the analytic single-scattering reference needs exactly one point light in an "
                                       "infinite homogeneous scattering medium and no shapes: " + why);
@@ -524,8 +527,8 @@ ReferenceVolume singleScatteringReference(const Scene& scene, int subpixels, int
     if (scene.lights.size() != 1) refuse(std::to_string(scene.lights.size()) + " lights");
     const Light& light = scene.lights[0];
     if (light.type != LightType::Point) refuse("the light is not a point light");
-    if (!scene.shapes.empty() || !scene.desc.shapes.empty()) refuse(std::to_string(scene.desc.shapes.size()) + " shapes");
-    if (scene.desc.globalMedium < 0 || scene.regions.empty() || !scene.regions[0].hasMedium)
+    if (!scene.shapes.empty()) refuse(std::to_string(scene.shapes.size()) + " shapes");
+    if (scene.regions.empty() || !scene.regions[0].hasMedium)
         refuse("no global medium");
     const Region& region = scene.regions[0];
     if (!region.medium.scattering) refuse("the global medium does not scatter");
@@ -533,13 +536,13 @@ ReferenceVolume singleScatteringReference(const Scene& scene, int subpixels, int
 
     ReferenceVolume r;
     ReferenceInfo& info = r.info;
-    info = describeScene(scene);
+    info = describeScene(scene, time, scenePath, settings);
     info.method = "analytic-single-scattering";
     info.maxDepth = 1;
     info.passes = 0;
     info.selfErrorReal = info.selfErrorUnwarped = info.selfErrorSteady = 0.0;
     info.selfErrorEstimate = "quadrature (4-point Gauss-Legendre per piece, pieces cut at every bin edge)";
-    const int W = scene.camera.width, H = scene.camera.height, B = scene.time.bins;
+    const int W = scene.camera.width, H = scene.camera.height, B = time.bins;
     r.real.assign(info.volumeSize(), 0.0f);
     r.unwarped.assign(info.volumeSize(), 0.0f);
     r.steady.assign(info.pixels() * 3, 0.0f);
@@ -559,7 +562,7 @@ ReferenceVolume singleScatteringReference(const Scene& scene, int subpixels, int
             for (int j = 0; j < n; ++j)
                 for (int i = 0; i < n; ++i) {
                     const Ray ray = scene.camera.generate(x + (i + 0.5) / n, static_cast<double>(y) + (j + 0.5) / n);
-                    singleScatterRay(region.medium, region.ior, light, ray.o, ray.d, scene.time, w, real.data(),
+                    singleScatterRay(region.medium, region.ior, light, ray.o, ray.d, time, w, real.data(),
                                      unw.data(), steady, cuts);
                 }
             const size_t p = static_cast<size_t>(y) * W + x;

@@ -92,9 +92,10 @@ std::vector<std::string> cacheMismatches(const ReferenceInfo& ref, const Referen
 // Throws UserError "<path>: the reference does not match this run: ..." when mismatched.
 void requireCompatible(const std::string& path, const ReferenceInfo& ref, const ReferenceInfo& want);
 
-// Fills the film-related fields of an info from a built scene (resolution, bins, time range,
-// scene path and hash of scene.desc.path).
-ReferenceInfo describeScene(const Scene& scene);
+// Fills the film-related fields of an info from a built scene and its film's time axis
+// (resolution, bins, time range), the scene path and its hash, and the seed and max depth.
+ReferenceInfo describeScene(const Scene& scene, const TimeBins& time, const std::string& scenePath,
+                            const RenderSettings& settings);
 
 // ---- Rendering references --------------------------------------------------------------------
 
@@ -110,8 +111,9 @@ struct ReferenceJob {
 // to estimate its own error (self_diff2, self_error); method beams is one progressive run
 // (self-error unknown: its error is mostly kernel bias, which the spread does not show).
 // `progress(passes, elapsedSec)` after each pass. A set `abort` stops after the current pass
-// (info.interrupted). Does not set scene/sceneHash unless scene.desc.path names a readable file.
-ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, const std::atomic<bool>* abort = nullptr,
+// (info.interrupted). Does not set the scene hash unless scenePath names a readable file.
+ReferenceVolume renderReference(const Scene& scene, const TimeBins& time, const std::string& scenePath,
+                                const ReferenceJob& job, const std::atomic<bool>* abort = nullptr,
                                 const std::function<void(int64_t, double)>& progress = {});
 
 // Single scattering from a point light in an infinite homogeneous medium, by quadrature along
@@ -119,7 +121,8 @@ ReferenceVolume renderReference(const Scene& scene, const ReferenceJob& job, con
 // direction for the pixels next to the light's image). Both time axes, delta emission, and the
 // steady image. Throws UserError naming the scene file unless the scene is exactly that: one point
 // light, a scattering global medium, no shapes.
-ReferenceVolume singleScatteringReference(const Scene& scene, int subpixels = 4, int threads = 0);
+ReferenceVolume singleScatteringReference(const Scene& scene, const TimeBins& time, const std::string& scenePath,
+                                          const RenderSettings& settings, int subpixels = 4, int threads = 0);
 
 // ---- Measuring a film against a reference ----------------------------------------------------
 

@@ -33,8 +33,6 @@ public:
     // The integrator is settings.method's (makeIntegrator) unless one is given.
     Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time,
            std::unique_ptr<Integrator> integrator = nullptr);
-    // Transitional: the scene's own time axis.
-    Driver(const Scene& scene, const RenderSettings& settings) : Driver(scene, settings, scene.time) {}
     ~Driver();
 
     // Runs one pass synchronously (all threads). Returns false if aborted midway (film untouched

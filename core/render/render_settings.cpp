@@ -1,6 +1,11 @@
 #include "render/render_settings.h"
 
-#include "scene/scene.h"
+#include "base/error.h"
+#include "render/memory_budget.h"
+#include "scene/scene_loader.h"
+
+#include <cmath>
+#include <cstdio>
 
 namespace tpb {
 
@@ -39,11 +44,151 @@ RenderSettings RenderSettings::fromDesc(const RenderDesc& r, double sceneDiagona
     return s;
 }
 
-RenderSettings RenderSettings::fromScene(const Scene& scene) {
-    RenderSettings s = fromDesc(scene.desc.render, scene.bounds.diagonal());
-    s.beamRadius0 = scene.beamRadius0;
-    s.surfaceRadius0 = scene.surfaceRadius0;
-    return s;
+void RenderSettings::apply(const SettingsOverrides& o) {
+    if (o.method) method = *o.method;
+    if (o.passes) passes = *o.passes;
+    if (o.timeBudget) {
+        timeBudgetSec = *o.timeBudget;
+        if (!o.passes) passes = 0;  // a time budget alone means: as many passes as fit
+    }
+    if (o.photons) photonsPerPass = *o.photons;
+    if (o.radius) beamRadius0 = *o.radius;
+    if (o.alpha) alpha = *o.alpha;
+    if (o.threads) threads = *o.threads;
+    if (o.maxDepth) maxDepth = *o.maxDepth;
+    if (o.seed) seed = *o.seed;
+    if (o.samplesPerPixel) samplesPerPixel = *o.samplesPerPixel;
+    if (o.profile) profile = *o.profile;
+    if (o.beamLength) beamLength = *o.beamLength;
+    if (o.accel) accel = *o.accel;
+    if (o.equiangular) equiangular = *o.equiangular;
+}
+
+namespace {
+
+// One setting as validate() names it: by its flag when an override set it, else by its key in the
+// scene file's render block ("render.<key>", at the file and line where it was written).
+struct Field {
+    std::string key;   // in the render block: "alpha"
+    std::string flag;  // "--alpha"
+    bool overridden = false;
+};
+
+class Checker {
+public:
+    explicit Checker(const SettingsSource& src) : src_(src) {}
+
+    Field field(const std::string& key, const std::string& flag, bool overridden) const {
+        return {key, flag, overridden};
+    }
+    std::string name(const Field& f) const { return f.overridden ? f.flag : f.key; }
+    // Whether the value was given at all (a flag, or a key written in the file).
+    bool given(const Field& f) const {
+        return f.overridden || (src_.desc && src_.desc->locs.count("render." + f.key));
+    }
+    [[noreturn]] void fail(const Field& f, const std::string& message) const {
+        if (f.overridden) throw UserError(message);
+        const std::string key = "render." + f.key;
+        if (!src_.desc) throw UserError("", 0, key, message);
+        const auto it = src_.desc->locs.find(key);
+        if (it == src_.desc->locs.end()) throw UserError(src_.desc->path, 0, key, message);
+        throw UserError(it->second.file, it->second.line, key, message);
+    }
+    // "<name> <rule> (got <value>)" unless ok.
+    void check(bool ok, const Field& f, const std::string& rule, const std::string& got) const {
+        if (!ok) fail(f, name(f) + " " + rule + " (got " + got + ")");
+    }
+    void warn(const Field& f, const std::string& message) {
+        if (f.overridden || !src_.desc) warnings.push_back(f.overridden ? message : "render." + f.key + ": " + message);
+        else warnings.push_back(src_.desc->where("render." + f.key) + "render." + f.key + ": " + message);
+    }
+
+    std::vector<std::string> warnings;
+
+private:
+    const SettingsSource& src_;
+};
+
+}  // namespace
+
+std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
+    const SettingsOverrides none;
+    const SettingsOverrides& ov = src.overrides ? *src.overrides : none;
+    Checker c(src);
+
+    // ---- photons per pass, and the photon map they need ----
+    const Field photons = c.field("photons_per_pass", "--photons", ov.photons.has_value());
+    c.check(photonsPerPass >= 1, photons, "must be >= 1", std::to_string(photonsPerPass));
+    if (photonMapBytes(photonsPerPass) > maxFilmBytes())
+        c.fail(photons, c.name(photons) + " " + std::to_string(photonsPerPass) + " needs about " +
+                            humanBytes(photonMapBytes(photonsPerPass)) + " per pass for the photon map, more than " +
+                            humanBytes(maxFilmBytes()) + "; use fewer photons per pass and more passes");
+
+    // ---- kernel radii of pass 1, against the scene's diagonal ----
+    const bool fileRelative = src.desc && src.desc->render.radiusRelative;
+    const auto checkRadius = [&](double radiusM, const std::string& key, bool overridden, double fileValue) {
+        const bool relative = fileRelative && !overridden;
+        const Field f = c.field(relative ? key + "_relative" : key, "--radius", overridden);
+        const double shown = relative ? fileValue : radiusM;
+        c.check(radiusM > 0.0 && std::isfinite(radiusM), f, "must be > 0", shortNumber(shown));
+        if (!c.given(f)) return;
+        if (relative) {  // a fraction of the diagonal, known without the scene
+            if (fileValue > kMaxRadiusFraction)
+                c.fail(f, f.key + " " + shortNumber(fileValue) + " is too large: allowed (0, " +
+                              shortNumber(kMaxRadiusFraction) + "] (a fraction of the scene's diagonal). A kernel "
+                              "that wide makes every camera ray gather every beam or photon, so a pass costs rays x "
+                              "beams (minutes, with no better image); typical values are 0.001 to 0.02");
+            if (fileValue > kSlowRadiusFraction)
+                c.warn(f, f.key + " " + shortNumber(fileValue) + " is large (above " +
+                              shortNumber(kSlowRadiusFraction) + " of the scene's diagonal): passes get much slower "
+                              "as the kernel grows; typical values are 0.001 to 0.02");
+            return;
+        }
+        if (!(src.sceneDiagonal > 0.0)) return;  // absolute: checked once the scene is built
+        const double diag = src.sceneDiagonal, fraction = radiusM / diag;
+        char b[512];
+        if (fraction > kMaxRadiusFraction) {
+            std::snprintf(b, sizeof b,
+                          "%s %g m is %.0f%% of the scene's diagonal (%.4g m); allowed up to %.0f%% (%.4g m). A "
+                          "kernel that wide makes every camera ray gather every beam or photon, so a pass costs "
+                          "rays x beams (minutes, with no better image); typical radii are 0.1%% to 2%% of the "
+                          "diagonal (%.3g to %.3g m)",
+                          c.name(f).c_str(), radiusM, 100.0 * fraction, diag, 100.0 * kMaxRadiusFraction,
+                          kMaxRadiusFraction * diag, 0.001 * diag, 0.02 * diag);
+            c.fail(f, b);
+        }
+        if (fraction > kSlowRadiusFraction) {
+            std::snprintf(b, sizeof b,
+                          "%s %g m is %.0f%% of the scene's diagonal (%.4g m): passes get much slower as the kernel "
+                          "grows; typical radii are 0.1%% to 2%% of the diagonal (%.3g to %.3g m)",
+                          c.name(f).c_str(), radiusM, 100.0 * fraction, diag, 0.001 * diag, 0.02 * diag);
+            c.warn(f, b);
+        }
+    };
+    checkRadius(beamRadius0, "radius", ov.radius.has_value(), src.desc ? src.desc->render.radius : 0.0);
+    checkRadius(surfaceRadius0, "surface_radius", false, src.desc ? src.desc->render.surfaceRadius : 0.0);
+
+    // ---- the rest ----
+    c.check(alpha > 0.0 && alpha <= 1.0, c.field("alpha", "--alpha", ov.alpha.has_value()), "must be in (0, 1]",
+            shortNumber(alpha));
+    c.check(passes >= 0, c.field("passes", "--passes", ov.passes.has_value()),
+            "must be >= 0 (0 = until the time budget or Ctrl-C)", std::to_string(passes));
+    c.check(timeBudgetSec >= 0.0 && std::isfinite(timeBudgetSec),
+            c.field("time_budget_s", "--time", ov.timeBudget.has_value()),
+            "must be a finite number of seconds >= 0 (0 = no time budget)", shortNumber(timeBudgetSec));
+    c.check(maxDepth >= 1, c.field("max_depth", "--max-depth", ov.maxDepth.has_value()),
+            "must be >= 1 (1 = single scattering)", std::to_string(maxDepth));
+    c.check(samplesPerPixel >= 1, c.field("samples_per_pixel", "--spp", ov.samplesPerPixel.has_value()),
+            "must be >= 1", std::to_string(samplesPerPixel));
+    const Field thr = c.field("threads", "--threads", ov.threads.has_value());
+    c.check(threads >= 0, thr, "must be >= 0 (0 = all cores)", std::to_string(threads));
+    if (threads > maxUsefulThreads()) {
+        c.warn(thr, c.name(thr) + " " + std::to_string(threads) + " is more than " + std::to_string(kThreadsPerCoreCap) +
+                        " x the " + std::to_string(maxUsefulThreads() / kThreadsPerCoreCap) +
+                        " cores of this machine: using " + std::to_string(maxUsefulThreads()) + " (0 = all cores)");
+        threads = maxUsefulThreads();
+    }
+    return c.warnings;
 }
 
 }  // namespace tpb

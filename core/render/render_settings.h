@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace tpb {
 
@@ -26,7 +27,35 @@ enum class Method {
 const char* methodName(Method m);                       // "beams" | "pt" | "preview"
 std::optional<Method> parseMethod(std::string_view s);  // accepts the names above
 
-class Scene;
+// Command-line (or viewer) overrides of the scene file's render block: what is set replaces the
+// file's value. width/height/bins change the film's shape: they are applied to the description
+// before the scene is built (applyFilmShape, prepare.h); the rest to RenderSettings (apply()).
+struct SettingsOverrides {
+    std::optional<Method> method;
+    std::optional<int64_t> passes, photons;
+    std::optional<double> timeBudget;  // s; given without passes it means "as many passes as fit"
+    std::optional<double> radius;      // m, absolute: the volume kernel of pass 1 (--radius)
+    std::optional<double> alpha;
+    std::optional<int> threads, maxDepth, samplesPerPixel;
+    std::optional<uint64_t> seed;
+    std::optional<TimeProfile> profile;
+    std::optional<BeamLength> beamLength;
+    std::optional<AccelBackend> accel;
+    std::optional<bool> equiangular;
+    // ---- the film's shape ----
+    std::optional<int> width, height, bins;
+};
+
+// Where the values of a RenderSettings came from, for validate()'s messages: a value the
+// overrides set is named by its flag ("--alpha ..."), one written in the scene file by its file,
+// line and key ("scene.json:12: render.alpha: ...").
+struct SettingsSource {
+    const SceneDesc* desc = nullptr;               // the file's render block and its locs
+    const SettingsOverrides* overrides = nullptr;  // flags
+    // The built scene's bounding diagonal (m); 0 = not known yet (the loader): absolute radii are
+    // then only checked to be > 0, relative ones against their fraction of the diagonal.
+    double sceneDiagonal = 0.0;
+};
 
 struct RenderSettings {
     Method method = Method::Beams;
@@ -65,8 +94,15 @@ struct RenderSettings {
     // The scene description's "render" block, radii resolved against the scene's bounding
     // diagonal (m) when they are relative.
     static RenderSettings fromDesc(const RenderDesc& r, double sceneDiagonal);
-    // Transitional: from a built scene that still carries its description.
-    static RenderSettings fromScene(const Scene& scene);
+    // Applies the overrides that are set (not the film's shape).
+    void apply(const SettingsOverrides& o);
+    // The one range check of the render settings: photons >= 1 and within the photon-map memory
+    // budget, kernel radii > 0 and at most kMaxRadiusFraction of the scene's diagonal (warned about
+    // above kSlowRadiusFraction), alpha in (0, 1], passes >= 0, a finite time budget >= 0, max
+    // depth >= 1, samples per pixel >= 1, threads >= 0 (capped at maxUsefulThreads(), with a
+    // warning). Throws UserError naming where the bad value came from (SettingsSource); returns
+    // the warnings, each "file:line: render.key: ..." or "--flag ...".
+    std::vector<std::string> validate(const SettingsSource& source);
 };
 
 }  // namespace tpb

@@ -12,10 +12,28 @@
 
 namespace tpb {
 
-TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int threads, const PilotControl& control) {
+OplRange autoTimeRange(const Scene& s) {
+    double emit = kInf;
+    for (const Light& l : s.lights) emit = std::min(emit, l.emitOpl);
+    if (!std::isfinite(emit)) emit = 0.0;
+    double maxIor = 1.0;
+    for (const Region& r : s.regions) maxIor = std::max(maxIor, r.ior);
+    const Bounds3 g = s.geometry.bounds();
+    double diag = g.valid() ? g.diagonal() : s.bounds.diagonal();
+    if (!(diag > 0.0)) diag = 1.0;
+    // Lights to the scene and back to the camera, with a few bounces: a generous window.
+    const double camDist = g.valid() ? glm::length(s.camera.position - g.center()) : 0.0;
+    OplRange w;
+    w.startOpl = emit;
+    w.endOpl = emit + maxIor * (2.5 * diag) + camDist;
+    return w;
+}
+
+TimeRangeFit measureArrivalRange(const Scene& scene, const RenderSettings& settings, int64_t pilotPhotons,
+                                 const PilotControl& control) {
     TimeRangeFit fit;
-    double t0, t1;
-    autoTimeRange(scene, t0, t1);
+    const OplRange window = autoTimeRange(scene);
+    const double t0 = window.startOpl, t1 = window.endOpl;
     fit.heuristicStart = t0;
     fit.heuristicEnd = t1;
     fit.startOpl = t0;
@@ -29,15 +47,15 @@ TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int t
 
     // Histogram over a window 4x wider than the heuristic one.
     TimeBins wide{t0, 4.0 * (t1 - t0) / 4096.0, 4096};
-    threads = resolveThreads(threads);
+    const int threads = resolveThreads(settings.threads);
     PhotonTraceSettings pt;
-    pt.seed = scene.desc.render.seed ^ 0x9E3779B97F4A7C15ull;
+    pt.seed = settings.seed ^ 0x9E3779B97F4A7C15ull;
     pt.pass = 0;
     pt.photons = pilotPhotons;
-    pt.maxDepth = scene.desc.render.maxDepth;
+    pt.maxDepth = settings.maxDepth;
     pt.storeBeams = scene.stages.beams;
     pt.storeSurfacePhotons = scene.stages.surfacePhotons;
-    pt.beamLength = scene.desc.render.beamLength;
+    pt.beamLength = settings.beamLength;
     pt.threads = threads;
     pt.maxMapBytes = maxFilmBytes();
     progress(0.0);
@@ -53,9 +71,9 @@ TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int t
     cs.pass = 0;
     // Generous kernels (a low-noise pilot), never wider than kPilotMaxRadiusFraction of the diagonal:
     // the render's own radius may be huge, and the pilot only needs the arrival times.
-    const double beamRadius = std::min(std::max(scene.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
-    const double surfaceRadius = std::min(std::max(scene.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
-    cs.maxDepth = scene.desc.render.maxDepth;
+    const double beamRadius = std::min(std::max(settings.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
+    const double surfaceRadius = std::min(std::max(settings.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
+    cs.maxDepth = settings.maxDepth;
     EstimatorPass ep;
     ep.threads = threads;
     std::unique_ptr<VolumeEstimator> volume = makeVolumeEstimator("beam2d");
@@ -129,20 +147,27 @@ TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int t
     return fit;
 }
 
-TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads, const PilotControl& control) {
-    if (!scene.desc.film.autoRange) {
-        TimeRangeFit fit;
-        autoTimeRange(scene, fit.startOpl, fit.endOpl);
-        fit.heuristicStart = fit.startOpl;
-        fit.heuristicEnd = fit.endOpl;
-        return fit;
+FilmTimeAxis filmTimeAxis(const Scene& scene, const FilmDesc& film, const RenderSettings& pilotSettings,
+                          const PilotOptions& pilot) {
+    FilmTimeAxis axis;
+    const OplRange window = autoTimeRange(scene);
+    axis.fit.startOpl = axis.fit.heuristicStart = window.startOpl;
+    axis.fit.endOpl = axis.fit.heuristicEnd = window.endOpl;
+    axis.time.bins = film.bins;
+    if (!film.autoRange) {
+        axis.time.startOpl = film.startOpl;
+        axis.time.binWidth = film.binWidthOpl;
+        return axis;
     }
-    const TimeRangeFit fit = measureArrivalRange(scene, pilotPhotons, threads, control);
-    if (fit.fromPilot) {
-        scene.time.startOpl = fit.startOpl;
-        scene.time.binWidth = (fit.endOpl - fit.startOpl) / scene.time.bins;
+    axis.time.startOpl = window.startOpl;
+    axis.time.binWidth = (window.endOpl - window.startOpl) / film.bins;
+    if (!pilot.run) return axis;
+    axis.fit = measureArrivalRange(scene, pilotSettings, pilot.photons, pilot.control);
+    if (axis.fit.fromPilot) {
+        axis.time.startOpl = axis.fit.startOpl;
+        axis.time.binWidth = (axis.fit.endOpl - axis.fit.startOpl) / film.bins;
     }
-    return fit;
+    return axis;
 }
 
 }  // namespace tpb

@@ -1,3 +1,7 @@
+// The film's time axis, decided once before the film exists (filmTimeAxis): the explicit range of
+// the scene's "film" block, or for "range": "auto" a heuristic window from the scene's size,
+// refined by a pilot pass.
+//
 // Automatic film time range ("film": {"range": "auto"}): a pilot pass (photons of pass 0 and a
 // sparse grid of camera pixels, rendered into a wide, fine histogram) measures when energy arrives,
 // and the film is fitted from the earliest to the latest arrival that carries energy: the
@@ -8,6 +12,8 @@
 // order of the diagonal made it rays x beams, minutes without output). It polls an abort flag
 // (Ctrl-C, SIGTERM) and reports its progress.
 #pragma once
+#include "estimators/time_splat.h"
+#include "render/render_settings.h"
 #include "scene/scene.h"
 
 #include <atomic>
@@ -29,12 +35,36 @@ struct PilotControl {
     std::function<void(double fraction)> progress;     // 0..1, called on the calling thread only
 };
 
-// Measures the arrival-time range of the energy reaching the camera with a pilot pass, without
-// changing the scene (also for scenes with an explicit range: what range would cover them).
-TimeRangeFit measureArrivalRange(const Scene& scene, int64_t pilotPhotons, int threads,
+// A window of optical path lengths (m).
+struct OplRange {
+    double startOpl = 0.0, endOpl = 0.0;
+};
+
+// Earliest/latest useful OPL from the scene's size alone: the lights' pulse to the scene and back
+// to the camera, with a few bounces (the window "range": "auto" starts from).
+OplRange autoTimeRange(const Scene& scene);
+
+// Measures the arrival-time range of the energy reaching the camera with a pilot pass (also for
+// scenes with an explicit range: what range would cover them). It reads the seed, max depth, beam
+// length, radii and threads of `settings`.
+TimeRangeFit measureArrivalRange(const Scene& scene, const RenderSettings& settings, int64_t pilotPhotons,
                                  const PilotControl& control = {});
 
-// Fits scene.time (keeping its number of bins) when the scene asks for an automatic range.
-TimeRangeFit fitTimeRange(Scene& scene, int64_t pilotPhotons, int threads, const PilotControl& control = {});
+struct PilotOptions {
+    bool run = true;         // false: "range": "auto" keeps the heuristic window (tests, tools)
+    int64_t photons = 4000;  // photons of the pilot pass
+    PilotControl control;
+};
+
+struct FilmTimeAxis {
+    TimeBins time;     // the film's axis (film.bins bins)
+    TimeRangeFit fit;  // what the pilot measured (the heuristic window when it did not run)
+};
+
+// The film's time axis: the explicit range of `film`, or for film.autoRange the heuristic window
+// refined by the pilot (when pilot.run; the pilot's settings are `pilotSettings`). An interrupted
+// pilot leaves the heuristic window (fit.interrupted is set: the caller decides).
+FilmTimeAxis filmTimeAxis(const Scene& scene, const FilmDesc& film, const RenderSettings& pilotSettings,
+                          const PilotOptions& pilot = {});
 
 }  // namespace tpb

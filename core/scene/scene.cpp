@@ -28,10 +28,6 @@ Region makeRegion(const MediumDesc* m, double iorOverride) {
     return r;
 }
 
-double resolveRadius(double value, bool relative, double diagonal) {
-    return relative ? value * diagonal : value;
-}
-
 // Does a camera ray through (px, py), followed through mirrors and both branches of dielectric and
 // null boundaries, reach a diffuse surface?
 bool reachesDiffuse(const Scene& s, Ray ray, int depth) {
@@ -64,14 +60,14 @@ struct SurfaceProbe {
 // Refuses dielectric/null shapes nested deeper than a RegionStack holds, naming the chain. A
 // point just inside each shape's surface finds the shapes around it (the deepest point of a
 // properly nested scene lies inside its innermost shape).
-void checkNesting(const Scene& s, const std::vector<SurfaceProbe>& probes) {
+void checkNesting(const Scene& s, const SceneDesc& desc, const std::vector<SurfaceProbe>& probes) {
     for (const SurfaceProbe& pr : probes) {
         const std::vector<int> around = s.shapesAround(pr.p - 4.0 * s.rayEps * pr.n);
         if (static_cast<int>(around.size()) < RegionStack::kCapacity) continue;
         std::string chain;
         for (int sh : around) chain += (chain.empty() ? "\"" : " > \"") + s.shapes[sh].name + "\"";
         const std::string key = "shapes[" + std::to_string(pr.shape) + "]";
-        throw UserError(s.desc.where(key) + key + ": \"" + s.shapes[pr.shape].name + "\" is the innermost of " +
+        throw UserError(desc.where(key) + key + ": \"" + s.shapes[pr.shape].name + "\" is the innermost of " +
                         std::to_string(around.size()) + " nested dielectric/null shapes (outermost first: " + chain +
                         "); at most " + std::to_string(RegionStack::kCapacity - 1) +
                         " can nest (the region stack holds the outside and " + std::to_string(RegionStack::kCapacity - 1) +
@@ -119,9 +115,8 @@ bool Scene::cameraSeesDiffuse() const {
     return false;
 }
 
-std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
+std::unique_ptr<const Scene> Scene::build(const SceneDesc& d) {
     auto s = std::make_unique<Scene>();
-    s->desc = d;
 
     for (const MaterialDesc& m : d.materials) s->materials.push_back({m.type, m.albedo, m.specular, m.ior});
 
@@ -232,26 +227,10 @@ std::unique_ptr<Scene> Scene::build(const SceneDesc& d) {
         if (l.type == LightType::AreaQuad) s->bounds.expand(l.corner + l.edgeU + l.edgeV);
     }
     s->bounds.expand(s->camera.position);
-    double diag = s->bounds.diagonal();
-    if (!(diag > 0.0)) diag = 1.0;
     s->rayEps = 1e-5 * std::max(1.0, s->geometry.bounds().valid() ? s->geometry.bounds().diagonal() : 1.0);
-    s->beamRadius0 = resolveRadius(d.render.radius, d.render.radiusRelative, diag);
-    s->surfaceRadius0 = resolveRadius(d.render.surfaceRadius, d.render.radiusRelative, diag);
-
-    // Film time axis.
-    s->time.bins = d.film.bins;
-    if (d.film.autoRange) {
-        double t0, t1;
-        autoTimeRange(*s, t0, t1);
-        s->time.startOpl = t0;
-        s->time.binWidth = (t1 - t0) / d.film.bins;
-    } else {
-        s->time.startOpl = d.film.startOpl;
-        s->time.binWidth = d.film.binWidthOpl;
-    }
 
     // Where the camera and the lights sit (inside glass or a medium container, or outside).
-    checkNesting(*s, probes);
+    checkNesting(*s, d, probes);
     s->cameraRegions = s->regionsAt(s->camera.position);
     for (const Light& l : s->lights) s->lightPlacement.push_back(placeLight(*s, l));
 
@@ -381,21 +360,6 @@ int Scene::pickLight(double u, double& pdf) const {
     const int i = std::min<int>(static_cast<int>(it - lightCdf.begin()), static_cast<int>(lights.size()) - 1);
     pdf = lightCdf[i] - (i > 0 ? lightCdf[i - 1] : 0.0);
     return i;
-}
-
-void autoTimeRange(const Scene& s, double& startOpl, double& endOpl) {
-    double emit = kInf;
-    for (const Light& l : s.lights) emit = std::min(emit, l.emitOpl);
-    if (!std::isfinite(emit)) emit = 0.0;
-    double maxIor = 1.0;
-    for (const Region& r : s.regions) maxIor = std::max(maxIor, r.ior);
-    const Bounds3 g = s.geometry.bounds();
-    double diag = g.valid() ? g.diagonal() : s.bounds.diagonal();
-    if (!(diag > 0.0)) diag = 1.0;
-    // Lights to the scene and back to the camera, with a few bounces: a generous window.
-    const double camDist = g.valid() ? glm::length(s.camera.position - g.center()) : 0.0;
-    startOpl = emit;
-    endOpl = emit + maxIor * (2.5 * diag) + camDist;
 }
 
 }  // namespace tpb

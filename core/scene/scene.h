@@ -1,6 +1,8 @@
 // The render scene, built from a SceneDesc (parse -> describe -> build): geometry, materials,
 // regions (volumes with an index of refraction and an optional homogeneous medium), lights,
-// camera, the film's time axis and the kernel radii. Also decides which stages a scene needs.
+// camera. Also decides which stages a scene needs. Built once, then used as `const Scene&`: it keeps
+// no copy of its description (the render settings, the film's time axis and where a key was written
+// live beside it: render_settings.h, time_range.h, prepare.h).
 #pragma once
 #include "scene/camera.h"
 #include "scene/geometry.h"
@@ -78,9 +80,8 @@ struct LightPlacement {
 
 class Scene {
 public:
-    static std::unique_ptr<Scene> build(const SceneDesc& desc);
+    static std::unique_ptr<const Scene> build(const SceneDesc& desc);
 
-    SceneDesc desc;
     Geometry geometry;
     std::vector<Material> materials;
     std::vector<ShapeInfo> shapes;
@@ -88,10 +89,7 @@ public:
     std::vector<Light> lights;
     std::vector<double> lightCdf;  // light selection proportional to luminance of power
     Camera camera;
-    TimeBins time;
     Bounds3 bounds;        // of geometry, lights and camera
-    double beamRadius0 = 0.01;     // m, pass 1
-    double surfaceRadius0 = 0.02;  // m, pass 1
     // Offset along the normal for rays leaving a surface: float triangles need ~1e-5 of the scene
     // size to never re-hit the surface they start on (measured in tests/scene/test_geometry.cpp).
     double rayEps = 1e-5;
@@ -138,8 +136,5 @@ public:
     RegionStack cameraRegions;                  // where the camera sits
     std::vector<LightPlacement> lightPlacement;  // where each light's photons start
 };
-
-// Earliest/latest useful OPL for the automatic film range.
-void autoTimeRange(const Scene& scene, double& startOpl, double& endOpl);
 
 }  // namespace tpb

@@ -91,6 +91,8 @@
 // ==================================================================================================
 #include "scene/scene_loader.h"
 
+#include "render/render_settings.h"
+
 #include "base/error.h"
 #include "io/json.h"
 
@@ -738,13 +740,11 @@ void readLight(Context& ctx, const JsonValue& obj, const std::string& path, Ligh
     b.finish();
 }
 
+// Types only here; the ranges are RenderSettings::validate()'s (render_settings.h), the one check
+// of the render settings, called at the end with this file's locations.
 void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     Bag b(ctx, obj, "render", "render settings");
-    r.photonsPerPass = b.integer("photons_per_pass", 1, INT64_MAX).value_or(r.photonsPerPass);
-    if (photonMapBytes(r.photonsPerPass) > maxFilmBytes())
-        b.fail("photons_per_pass", "photons_per_pass " + std::to_string(r.photonsPerPass) + " needs about " +
-                                       humanBytes(photonMapBytes(r.photonsPerPass)) + " per pass for the photon map, more than " +
-                                       humanBytes(maxFilmBytes()) + "; use fewer photons per pass and more passes");
+    r.photonsPerPass = b.integer("photons_per_pass", INT64_MIN, INT64_MAX).value_or(r.photonsPerPass);
 
     // Both radii share RenderDesc::radiusRelative.
     const std::optional<double> abs = b.number("radius"), rel = b.number("radius_relative");
@@ -760,30 +760,13 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     if (rel || sRel) r.radiusRelative = true;
     if (auto v = abs ? abs : rel) r.radius = *v;
     if (auto v = sAbs ? sAbs : sRel) r.surfaceRadius = *v;
-    b.check(r.radius > 0.0, abs ? "radius" : "radius_relative", "must be > 0");
-    b.check(r.surfaceRadius > 0.0, sAbs ? "surface_radius" : "surface_radius_relative", "must be > 0");
-    if (abs) b.checkCoordinates("radius", {r.radius});
-    if (sAbs) b.checkCoordinates("surface_radius", {r.surfaceRadius});
-    // Relative radii are checked here; absolute ones once the scene's diagonal is known (the CLI).
-    for (const auto& [key, value] : {std::pair<const char*, double>{"radius_relative", rel.value_or(0.0)},
-                                     std::pair<const char*, double>{"surface_radius_relative", sRel.value_or(0.0)}}) {
-        if (value > kMaxRadiusFraction)
-            b.fail(key, std::string(key) + " " + shortNumber(value) + " is too large: allowed (0, " +
-                            shortNumber(kMaxRadiusFraction) + "] (a fraction of the scene's diagonal). A kernel that "
-                            "wide makes every camera ray gather every beam or photon, so a pass costs rays x beams "
-                            "(minutes, with no better image); typical values are 0.001 to 0.02");
-        if (value > kSlowRadiusFraction)
-            b.warnAbout(key, std::string(key) + " " + shortNumber(value) + " is large (above " +
-                                 shortNumber(kSlowRadiusFraction) + " of the scene's diagonal): passes get much "
-                                 "slower as the kernel grows; typical values are 0.001 to 0.02");
-    }
+    if (abs && r.radius > 0.0) b.checkCoordinates("radius", {r.radius});
+    if (sAbs && r.surfaceRadius > 0.0) b.checkCoordinates("surface_radius", {r.surfaceRadius});
 
     r.alpha = b.number("alpha", r.alpha);
-    b.check(r.alpha > 0.0 && r.alpha <= 1.0, "alpha", "must be in (0, 1]");
-    r.passes = static_cast<int>(b.integer("passes", 0, INT_MAX).value_or(r.passes));
+    r.passes = static_cast<int>(b.integer("passes", INT_MIN, INT_MAX).value_or(r.passes));
     r.timeBudgetSec = b.number("time_budget_s", r.timeBudgetSec);
-    b.check(r.timeBudgetSec >= 0.0, "time_budget_s", "must be >= 0 (0 = no budget)");
-    r.maxDepth = static_cast<int>(b.integer("max_depth", 1, INT_MAX).value_or(r.maxDepth));
+    r.maxDepth = static_cast<int>(b.integer("max_depth", INT_MIN, INT_MAX).value_or(r.maxDepth));
     if (const JsonValue* s = b.get("seed")) {
         if (!s->isNumber()) b.wrongType("seed", "an integer");
         uint64_t seed = 0;
@@ -798,15 +781,7 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
         }
         r.seed = seed;
     }
-    r.threads = static_cast<int>(b.integer("threads", 0, INT_MAX).value_or(r.threads));
-    if (r.threads > maxUsefulThreads()) {
-        b.warnAbout("threads", "threads " + std::to_string(r.threads) + " is more than " +
-                                   std::to_string(kThreadsPerCoreCap) + " x the " +
-                                   std::to_string(maxUsefulThreads() / kThreadsPerCoreCap) +
-                                   " cores of this machine: using " + std::to_string(maxUsefulThreads()) +
-                                   " (0 = all cores)");
-        r.threads = maxUsefulThreads();
-    }
+    r.threads = static_cast<int>(b.integer("threads", INT_MIN, INT_MAX).value_or(r.threads));
     r.emission = b.choice<EmissionMode>("emission", {{"delta", EmissionMode::Delta}, {"continuous", EmissionMode::Continuous}},
                                         "emission")
                      .value_or(r.emission);
@@ -818,6 +793,12 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
                                         "beam_length")
                        .value_or(r.beamLength);
     b.finish();
+
+    // The ranges (the scene's diagonal is not known yet: absolute radii are checked against it
+    // once the scene is built, prepare.h). A thread count above the cores is capped.
+    RenderSettings settings = RenderSettings::fromDesc(r, 0.0);
+    for (std::string& w : settings.validate({&ctx.desc, nullptr, 0.0})) ctx.desc.warnings.push_back(std::move(w));
+    r.threads = settings.threads;
 }
 
 // Each element of the array under `key` must be an object; calls read(element, "key[i]").

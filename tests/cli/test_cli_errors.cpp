@@ -904,17 +904,20 @@ TEST_F(CliErrors, CtrlCStopsThePilotPass) {
 
 // Item 6, at its root: the pilot polls the abort flag and reports its progress.
 TEST_F(CliErrors, PilotPollsTheAbortFlagAndReportsProgress) {
-    const std::unique_ptr<tpb::Scene> scene = tpb::Scene::build(tpb::loadSceneFromString(insideScene(), "scene.json"));
+    const tpb::SceneDesc desc = tpb::loadSceneFromString(insideScene(), "scene.json");
+    const std::unique_ptr<const tpb::Scene> scene = tpb::Scene::build(desc);
+    tpb::RenderSettings settings = tpb::RenderSettings::fromDesc(desc.render, scene->bounds.diagonal());
+    settings.threads = 2;
     std::atomic<bool> abort{true};
     tpb::PilotControl pc;
     pc.abort = &abort;
-    tpb::TimeRangeFit fit = tpb::measureArrivalRange(*scene, 4000, 2, pc);
+    tpb::TimeRangeFit fit = tpb::measureArrivalRange(*scene, settings, 4000, pc);
     EXPECT_TRUE(fit.interrupted);
     EXPECT_FALSE(fit.fromPilot);
     abort = false;
     std::vector<double> progress;
     pc.progress = [&](double f) { progress.push_back(f); };
-    fit = tpb::measureArrivalRange(*scene, 4000, 2, pc);
+    fit = tpb::measureArrivalRange(*scene, settings, 4000, pc);
     EXPECT_FALSE(fit.interrupted);
     EXPECT_TRUE(fit.fromPilot);
     ASSERT_GE(progress.size(), 3u);

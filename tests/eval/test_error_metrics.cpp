@@ -17,6 +17,7 @@
 #include "eval/reference.h"
 #include "base/rng.h"
 #include "scene/scene_loader.h"
+#include "support/test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -51,8 +52,8 @@ struct TempCleanup {
     }
 } gTempCleanup;
 
-std::unique_ptr<Scene> sceneFrom(const std::string& json, const std::string& path = "test.json") {
-    return Scene::build(loadSceneFromString(json, path));
+test::TestScene sceneFrom(const std::string& json, const std::string& path = "test.json") {
+    return test::testSceneFrom(json, path);
 }
 
 std::string readText(const std::string& path) {
@@ -424,7 +425,7 @@ double maskedRmse(const std::vector<float>& x, const std::vector<float>& ref, co
 
 TEST(Reference, SingleScatteringQuadratureAgreesWithThePathTracer) {
     auto scene = sceneFrom(kPointMedium);
-    const ReferenceVolume exact = singleScatteringReference(*scene, 4, 2);
+    const ReferenceVolume exact = singleScatteringReference(*scene, scene.time, scene.source.path, scene.settings, 4, 2);
     EXPECT_EQ(exact.info.method, "analytic-single-scattering");
     EXPECT_EQ(exact.info.maxDepth, 1);
     // Energy bookkeeping: the bins hold what arrives inside the film, the steady image everything.
@@ -443,7 +444,7 @@ TEST(Reference, SingleScatteringQuadratureAgreesWithThePathTracer) {
     job.pt.maxDepth = 1;
     job.pt.threads = 2;
     job.passes = 160;
-    const ReferenceVolume pt = renderReference(*scene, job);
+    const ReferenceVolume pt = renderReference(*scene, scene.time, scene.source.path, job);
     EXPECT_EQ(pt.info.passes, 160);
     EXPECT_EQ(pt.info.halfA, 80);
     EXPECT_GT(pt.info.selfErrorReal, 0.0);
@@ -452,7 +453,7 @@ TEST(Reference, SingleScatteringQuadratureAgreesWithThePathTracer) {
     // estimate has a 1 / h singularity (heavy tails) and the quadrature is least accurate.
     const std::vector<uint8_t> mask = lightPixelMask(*scene, 2.5);
     ASSERT_GT(std::count(mask.begin(), mask.end(), uint8_t(0)), 150);
-    const size_t B3 = static_cast<size_t>(scene->time.bins) * 3;
+    const size_t B3 = static_cast<size_t>(scene.time.bins) * 3;
     const double eSteady = maskedRmse(pt.steady, exact.steady, mask, 3);
     const double eReal = maskedRmse(pt.real, exact.real, mask, B3);
     const double eUnw = maskedRmse(pt.unwarped, exact.unwarped, mask, B3);
@@ -486,11 +487,11 @@ TEST(Reference, SingleScatteringRefusesOtherScenes) {
                       "\"materials\": {\"w\": {\"type\": \"diffuse\"}}, \"shapes\": [{\"type\": \"quad\", \"corner\": "
                       "[-1, -1, -1], \"edge_u\": [2, 0, 0], \"edge_v\": [0, 0, 2], \"material\": \"w\"}],\n  ");
     auto s1 = sceneFrom(withShape, "with_shape.json");
-    expectUserErrorMentioning([&] { singleScatteringReference(*s1); }, {"with_shape.json", "1 shapes"});
+    expectUserErrorMentioning([&] { singleScatteringReference(*s1, s1.time, s1.source.path, s1.settings); }, {"with_shape.json", "1 shapes"});
     std::string twoLights = kPointMedium;
     twoLights.replace(twoLights.find("1}],"), 4, "1}, {\"type\": \"point\", \"position\": [1, 0, 0], \"power\": 1}],");
     auto s2 = sceneFrom(twoLights, "two_lights.json");
-    expectUserErrorMentioning([&] { singleScatteringReference(*s2); }, {"two_lights.json", "2 lights"});
+    expectUserErrorMentioning([&] { singleScatteringReference(*s2, s2.time, s2.source.path, s2.settings); }, {"two_lights.json", "2 lights"});
 }
 
 // ---- 4. path tracer vs photon beams ------------------------------------------------------------
@@ -572,7 +573,7 @@ Comparison compare(const Moments& a, const Moments& b, const std::vector<size_t>
 
 TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
     auto scene = sceneFrom(kFogBox, "fog_box.json");
-    const int W = scene->camera.width, H = scene->camera.height, B = scene->time.bins;
+    const int W = scene->camera.width, H = scene->camera.height, B = scene.time.bins;
     const size_t P = static_cast<size_t>(W) * H, size = P * (2 * B + 1) * 3;
     ASSERT_TRUE(scene->stages.beams && scene->stages.surfacePhotons);
 
@@ -581,7 +582,7 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
     ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.seed = 3;
     ps.samplesPerPixel = 16;
-    ps.maxDepth = scene->desc.render.maxDepth;
+    ps.maxDepth = scene.settings.maxDepth;
     const int ptPasses = 40;
     Moments pt(size);
     std::vector<double> est(size);
@@ -592,7 +593,7 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
         std::fill(est.begin(), est.end(), 0.0);
         parallelFor(static_cast<int64_t>(P), threads, [&](int64_t p, int t) {
             PixelAccumulator& acc = accs[t];
-            pathTracePixel(*scene, ps, pass, scene->time, static_cast<int>(p % W), static_cast<int>(p / W), acc, stats[t]);
+            pathTracePixel(*scene, ps, pass, scene.time, static_cast<int>(p % W), static_cast<int>(p / W), acc, stats[t]);
             for (int a = 0; a < 2; ++a)
                 for (int k = 0; k < B; ++k)
                     for (int c = 0; c < 3; ++c) est[slot(B, p, a * B + k, c)] = acc.bin(static_cast<TimeAxis>(a), k)[c];
@@ -609,10 +610,10 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
     std::vector<double> vol[2];
     std::vector<float> steady;
     for (int run = 0; run < runs; ++run) {
-        RenderSettings ds = RenderSettings::fromScene(*scene);
+        RenderSettings ds = scene.settings;
         ds.seed = 100 + run;
         ds.threads = threads;
-        Driver drv(*scene, ds);
+        Driver drv(*scene, ds, scene.time);
         for (int p = 1; p <= passes; ++p) ASSERT_TRUE(drv.runPass(p));
         EXPECT_EQ(drv.film().stats.rejectedSamples.load(), 0);
         drv.film().volume(TimeAxis::Real, EmissionMode::Delta, vol[0]);

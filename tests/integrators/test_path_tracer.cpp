@@ -9,6 +9,7 @@
 #include "integrators/path_tracer.h"
 #include "scene/scene.h"
 #include "support/scene_builder.h"
+#include "support/test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -168,8 +169,9 @@ struct Estimates {
     }
 };
 
-Estimates estimate(const Scene& scene, const RenderSettings& s, int passes, PathTracerStats& st) {
-    const TimeBins& tb = scene.time;
+Estimates estimate(const test::TestScene& t, const RenderSettings& s, int passes, PathTracerStats& st) {
+    const Scene& scene = *t;
+    const TimeBins& tb = t.time;
     Estimates e;
     e.pixels = scene.camera.width * scene.camera.height;
     e.bins = tb.bins;
@@ -344,7 +346,7 @@ TEST(PathTracer, SingleScatteringMatchesQuadrature) {
     setFilm(d, start, width, bins);
     d.globalMedium = addMedium(d, im.sigS, im.sigT - im.sigS, im.g, im.ior);
     d.lights.push_back(pointLight(im.light, im.power, im.emit));
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
 
     RenderSettings s;
     s.maxDepth = 64;  // the path tracer's depth unless set below
@@ -353,7 +355,7 @@ TEST(PathTracer, SingleScatteringMatchesQuadrature) {
     s.maxDepth = 1;  // single scattering exactly
     const int passes = 32;
     PathTracerStats st;
-    const Estimates e = estimate(*scene, s, passes, st);
+    const Estimates e = estimate(scene, s, passes, st);
     EXPECT_EQ(st.rejected, 0);
     EXPECT_EQ(st.cameraPaths, int64_t(passes) * W * H * s.samplesPerPixel);
     EXPECT_EQ(st.depthLimited, st.cameraPaths);  // every path scatters once, then stops
@@ -451,7 +453,7 @@ TEST(PathTracer, EquiangularAgreesWithFreeFlightAndCutsTheVarianceNearThePointLi
     b.camera(Vec3(0.2, 0.1, 3.0), Vec3(0.0), 40.0, W, H).film(0.0, 0.5, 24);
     b.globalMedium(b.medium(Color(0.30, 0.40, 0.50), Color(0.10, 0.05, 0.20), 0.4, 1.33));
     b.pointLight(Vec3(0.0), Color(10.0, 8.0, 6.0), 0.3);
-    auto scene = Scene::build(b.desc());
+    auto scene = test::prepareTestScene(b.desc());
     double lx, ly;
     ASSERT_TRUE(scene->camera.project(Vec3(0.0), lx, ly));
 
@@ -465,9 +467,9 @@ TEST(PathTracer, EquiangularAgreesWithFreeFlightAndCutsTheVarianceNearThePointLi
         const int passes = 32;
         PathTracerStats stEq, stFf;
         s.equiangular = true;
-        const Estimates eq = estimate(*scene, s, passes, stEq);
+        const Estimates eq = estimate(scene, s, passes, stEq);
         s.equiangular = false;
-        const Estimates ff = estimate(*scene, s, passes, stFf);
+        const Estimates ff = estimate(scene, s, passes, stFf);
         EXPECT_GT(stEq.equiangularSamples, 0);
         EXPECT_EQ(stFf.equiangularSamples, 0);
         EXPECT_EQ(stEq.rejected + stFf.rejected, 0);
@@ -541,14 +543,14 @@ TEST(PathTracer, FirstArrivalIsGeometricPathLengthWithMirror) {
     addQuad(d, Vec3(-100, 0, -100), Vec3(0, 0, 200), Vec3(200, 0, 0), white);
     addQuad(d, Vec3(-5, 0, zm), Vec3(10, 0, 0), Vec3(0, 2, 0), mirror);
     d.lights.push_back(pointLight(L, Color(10.0), emit));
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
 
     RenderSettings s;
     s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 3;
     s.samplesPerPixel = 16;
     s.threads = 2;
-    TransientFilm film(W, H, scene->time);
+    TransientFilm film(W, H, scene.time);
     PathTracerStats st;
     renderPathTracerPass(*scene, s, 1, film, &st);
     EXPECT_EQ(st.rejected, 0);
@@ -611,13 +613,13 @@ TEST(PathTracer, FirstArrivalThroughGlassSlab) {
     addQuad(d, Vec3(-50, 0, -50), Vec3(0, 0, 100), Vec3(100, 0, 0), white);
     addBox(d, Vec3(-20, y0, -20), Vec3(20, y1, 20), glass);
     d.lights.push_back(pointLight(L, Color(5.0), emit));
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
 
     RenderSettings s;
     s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 11;
     s.samplesPerPixel = 24;
-    TransientFilm film(W, H, scene->time);
+    TransientFilm film(W, H, scene.time);
     renderPathTracerPass(*scene, s, 1, film);
     EXPECT_EQ(film.stats.rejectedSamples.load(), 0);
 
@@ -716,8 +718,8 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
     {   // A film that cuts both ends: part of the energy falls outside on both axes.
         SceneDesc d = cornellDesc(16);
         setFilm(d, 3.0, 0.1, 20);
-        auto scene = Scene::build(d);
-        TransientFilm film(16, 16, scene->time);
+        auto scene = test::prepareTestScene(d);
+        TransientFilm film(16, 16, scene.time);
         PathTracerStats st;
         EXPECT_EQ(renderPathTracer(*scene, s, 1, passes, film, &st), passes);
         EXPECT_EQ(st.rejected, 0);
@@ -738,10 +740,10 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
     {   // A film covering every path (bounded depth): per pixel and channel, steady = sum of bins.
         SceneDesc d = cornellDesc(16);
         setFilm(d, 0.0, 2.0, 60);
-        auto scene = Scene::build(d);
+        auto scene = test::prepareTestScene(d);
         RenderSettings s2 = s;
         s2.maxDepth = 6;  // OPL < 8 segments * 1.5 * box diagonal + camera distance < 120
-        TransientFilm film(16, 16, scene->time);
+        TransientFilm film(16, 16, scene.time);
         PathTracerStats st;
         renderPathTracer(*scene, s2, 1, passes, film, &st);
         EXPECT_GT(st.depthLimited, 0);
@@ -781,7 +783,7 @@ TEST(PathTracer, DiffuseSphereFurnace) {
     const int wall = addMaterial(d, MaterialType::Diffuse, Color(a));
     addSphere(d, Vec3(0.0), R, wall);
     d.lights.push_back(pointLight(Vec3(0.0), power, emit));
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
     const Color expected = a * power / (4.0 * kPiT * R * R) / (kPiT * (1.0 - a));
 
     RenderSettings s;
@@ -790,7 +792,7 @@ TEST(PathTracer, DiffuseSphereFurnace) {
     s.samplesPerPixel = 8;
     const int passes = 16;
     PathTracerStats st;
-    const Estimates e = estimate(*scene, s, passes, st);
+    const Estimates e = estimate(scene, s, passes, st);
     EXPECT_EQ(st.rejected, 0);
     ZTally tFurnace("furnace: image mean");
     for (int c = 0; c < 3; ++c) {
@@ -847,7 +849,7 @@ TEST(PathTracer, AreaLightDirectAndNextEventMatchQuadrature) {
     area.power = Color(3.0, 2.0, 1.0);
     area.emitOpl = emit;
     d.lights.push_back(area);
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
     const Color Le = area.power / (kPiT * 4.0 * half * half);
 
     RenderSettings s;
@@ -857,7 +859,7 @@ TEST(PathTracer, AreaLightDirectAndNextEventMatchQuadrature) {
     s.maxDepth = 1;  // direct lighting only
     const int passes = 16;
     PathTracerStats st;
-    const Estimates e = estimate(*scene, s, passes, st);
+    const Estimates e = estimate(scene, s, passes, st);
     EXPECT_EQ(st.rejected, 0);
 
     // Own quadrature of the irradiance from the quad at a floor point.
@@ -961,7 +963,7 @@ TEST(PathTracer, SpotAndPointLightsMatchAnalyticIrradiance) {
     spot.spotFalloffDeg = fallDeg;
     d.lights.push_back(spot);
     d.lights.push_back(pointLight(pointPos, pointPower, 0.0));
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
 
     // Radiant intensity of the spot: Phi f / int f dw, f the smoothstep profile between the cutoff
     // and falloff cones; int_0^1 (3x^2 - 2x^3) dx = 1/2 gives int f dw in closed form.
@@ -986,7 +988,7 @@ TEST(PathTracer, SpotAndPointLightsMatchAnalyticIrradiance) {
     s.maxDepth = 1;
     const int passes = 16;
     PathTracerStats st;
-    const Estimates e = estimate(*scene, s, passes, st);
+    const Estimates e = estimate(scene, s, passes, st);
     EXPECT_EQ(st.rejected, 0);
     ZTally tSpot("spot + point NEE: floor pixels");
     int lit = 0;
@@ -1028,7 +1030,7 @@ TEST(PathTracer, NullBoundedMediumSingleScattering) {
     const int med = addMedium(d, sigS, sigT - sigS, g, ior);
     addSphere(d, C, R, null, med);
     d.lights.push_back(pointLight(L, power, emit));
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
 
     RenderSettings s;
     s.maxDepth = 64;  // the path tracer's depth unless set below
@@ -1037,7 +1039,7 @@ TEST(PathTracer, NullBoundedMediumSingleScattering) {
     s.maxDepth = 1;
     const int passes = 24;
     PathTracerStats st;
-    const Estimates e = estimate(*scene, s, passes, st);
+    const Estimates e = estimate(scene, s, passes, st);
     EXPECT_EQ(st.rejected, 0);
 
     // Own reference: midpoint rule along the chord, bin of each node on both axes.
@@ -1122,12 +1124,12 @@ TEST(PathTracer, NullBoundedMediumSingleScattering) {
 TEST(PathTracer, OneAndTwoThreadsGiveIdenticalFilms) {
     SceneDesc d = cornellDesc(32);  // 4 tiles
     setFilm(d, 2.0, 0.25, 24);
-    auto scene = Scene::build(d);
+    auto scene = test::prepareTestScene(d);
     RenderSettings s;
     s.maxDepth = 64;  // the path tracer's depth unless set below
     s.seed = 17;
     s.samplesPerPixel = 2;
-    TransientFilm f1(32, 32, scene->time), f2(32, 32, scene->time);
+    TransientFilm f1(32, 32, scene.time), f2(32, 32, scene.time);
     PathTracerStats st1, st2;
     s.threads = 1;
     renderPathTracer(*scene, s, 1, 2, f1, &st1);

@@ -28,6 +28,7 @@
 #include "base/progressive.h"
 #include "scene/scene_loader.h"
 #include "support/temp_dir.h"
+#include "support/test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -49,8 +50,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::unique_ptr<Scene> sceneFrom(const std::string& json, const std::string& path = "stability.json") {
-    return Scene::build(loadSceneFromString(json, path));
+test::TestScene sceneFrom(const std::string& json, const std::string& path = "stability.json") {
+    return test::testSceneFrom(json, path);
 }
 
 std::string num(double v) {
@@ -164,11 +165,13 @@ struct ImageIntegral {
 // The reference of the file comment: 3D midpoint quadrature over the kernel cylinder.
 // sigmaT < 0: the box's sigma_s + sigma_a; 0 gives the sigma_t -> 0 limit (per unit sigma_s when
 // c.sigmaS = 1).
-ImageIntegral cylinderReference(const LaserBox& c, const Scene& sc, int nz = 1200, int nr = 12, int nphi = 24,
-                                double sigmaT = -1.0) {
+ImageIntegral cylinderReference(const LaserBox& c, const test::TestScene& t, int nz = 1200, int nr = 12,
+                                int nphi = 24, double sigmaT = -1.0) {
+    const Scene& sc = *t;
+    const TimeBins& time = t.time;
     ImageIntegral ref;
-    ref.bins[0].assign(sc.time.bins, 0.0);
-    ref.bins[1].assign(sc.time.bins, 0.0);
+    ref.bins[0].assign(time.bins, 0.0);
+    ref.bins[1].assign(time.bins, 0.0);
     const Vec3 wb = glm::normalize(c.dir);
     double t0, t1;
     EXPECT_TRUE(boxInterval(c.laser, wb, c.boxLo, c.boxHi, t0, t1));
@@ -201,10 +204,10 @@ ImageIntegral cylinderReference(const LaserBox& c, const Scene& sc, int nz = 120
                 const double f = c.sigmaS * hg.eval(-glm::dot(w, wb)) * c.power / (kPi * r * r) *
                                  std::exp(-st * (sr + sb)) / (dist * dist) * rho * dr * dphi * dz;
                 ref.steady += f;
-                const int kr = sc.time.binOf(c.emit + entry + c.ior * (sr + sb));
-                const int ku = sc.time.binOf(c.emit + c.ior * sb);
-                if (kr >= 0 && kr < sc.time.bins) ref.bins[0][kr] += f;
-                if (ku >= 0 && ku < sc.time.bins) ref.bins[1][ku] += f;
+                const int kr = time.binOf(c.emit + entry + c.ior * (sr + sb));
+                const int ku = time.binOf(c.emit + c.ior * sb);
+                if (kr >= 0 && kr < time.bins) ref.bins[0][kr] += f;
+                if (ku >= 0 && ku < time.bins) ref.bins[1][ku] += f;
             }
         }
     }
@@ -230,7 +233,7 @@ ImageIntegral imageIntegral(const TransientFilm& film, const Camera& cam) {
 }
 
 struct Rendered {
-    std::unique_ptr<Scene> scene;
+    test::TestScene scene;
     std::unique_ptr<Driver> driver;
     std::vector<PassStats> passes;
 };
@@ -239,10 +242,10 @@ Rendered renderScene(const std::string& json, int passes, int threads = 2,
                      const std::function<void(RenderSettings&)>& tweak = {}) {
     Rendered r;
     r.scene = sceneFrom(json);
-    RenderSettings ds = RenderSettings::fromScene(*r.scene);
+    RenderSettings ds = r.scene.settings;
     ds.threads = threads;
     if (tweak) tweak(ds);
-    r.driver = std::make_unique<Driver>(*r.scene, ds);
+    r.driver = std::make_unique<Driver>(*r.scene, ds, r.scene.time);
     for (int p = 1; p <= passes; ++p) EXPECT_TRUE(r.driver->runPass(p));
     r.passes = r.driver->history();
     return r;
@@ -260,7 +263,7 @@ struct PassRunner {
     BeamLength beamLength = BeamLength::Short;
     int64_t beams = 0;
 
-    explicit PassRunner(const Scene& s) : scene(s), film(s.camera.width, s.camera.height, s.time) {}
+    explicit PassRunner(const test::TestScene& s) : scene(*s), film(s->camera.width, s->camera.height, s.time) {}
     void run(uint64_t pass) {
         PhotonTraceSettings pt;
         pt.seed = seed;
@@ -298,7 +301,7 @@ struct PassRunner {
 ImageIntegral checkLaserBox(const LaserBox& c, const char* what, double tolSteady, double tolBin,
                             double sigmaScale = 1.0, int radialSteps = 12) {
     auto sc = sceneFrom(c.json());
-    PassRunner run(*sc);
+    PassRunner run(sc);
     run.photons = c.photons;
     run.radius = c.radius;
     run.seed = c.seed;
@@ -308,7 +311,7 @@ ImageIntegral checkLaserBox(const LaserBox& c, const char* what, double tolStead
     // sigmaScale != 1: radiance per unit sigma_s against the sigma_t -> 0 limit (no attenuation).
     LaserBox unit = c;
     unit.sigmaS = c.sigmaS / sigmaScale;
-    const ImageIntegral ref = cylinderReference(unit, *sc, 1200, radialSteps, 24, sigmaScale != 1.0 ? 0.0 : -1.0);
+    const ImageIntegral ref = cylinderReference(unit, sc, 1200, radialSteps, 24, sigmaScale != 1.0 ? 0.0 : -1.0);
     ImageIntegral got = imageIntegral(run.film, sc->camera);
     got.steady /= sigmaScale;
     for (auto& b : got.bins)
@@ -320,7 +323,7 @@ ImageIntegral checkLaserBox(const LaserBox& c, const char* what, double tolStead
     for (int a = 0; a < 2; ++a) {
         double worst = 0.0;
         int worstK = -1;
-        for (int k = 0; k < sc->time.bins; ++k) {
+        for (int k = 0; k < sc.time.bins; ++k) {
             const double e = std::abs(got.bins[a][k] - ref.bins[a][k]);
             if (e > worst) { worst = e; worstK = k; }
         }
@@ -341,13 +344,13 @@ ImageIntegral checkLaserBox(const LaserBox& c, const char* what, double tolStead
 TEST(StabilityOrientation, LaserPointingAtTheCameraFillsOneBinPerPixel) {
     LaserBox c;  // laser at z = -3.4 towards the camera at the origin
     auto sc = sceneFrom(c.json());
-    PassRunner run(*sc);
+    PassRunner run(sc);
     run.photons = c.photons;
     run.radius = c.radius;
     for (int p = 1; p <= c.passes; ++p) run.run(p);
     const TransientFilm& film = run.film;
     expectFiniteFilm(film, "toward");
-    const int B = film.bins(), kGeo = sc->time.binOf(c.emit + 3.4);
+    const int B = film.bins(), kGeo = sc.time.binOf(c.emit + 3.4);
     ASSERT_EQ(kGeo, 68);
     std::vector<double> vol;
     film.volume(TimeAxis::Real, EmissionMode::Delta, vol);
@@ -472,6 +475,7 @@ TEST(StabilityEmptyMedium, UnboundedBeamsOfAPointLightMatchTheClosedForm) {
       "render": {"photons_per_pass": 3000, "radius": 0.03, "alpha": 1, "max_depth": 1, "seed": 5}})";
     Rendered r = renderScene(json, 32);
     const Scene& sc = *r.scene;
+    const TimeBins& time = r.scene.time;
     expectFiniteFilm(r.driver->film(), "point light, sigma 1e-12");
     EXPECT_GT(r.passes[0].beams, 2900);
     EXPECT_EQ(r.passes[0].beamPieces, r.passes[0].beams * static_cast<int64_t>(beamPieceCount(1e11, 0.03)));
@@ -479,7 +483,7 @@ TEST(StabilityEmptyMedium, UnboundedBeamsOfAPointLightMatchTheClosedForm) {
     r.driver->film().volume(TimeAxis::Real, EmissionMode::Delta, vol);
     std::vector<float> steady;
     r.driver->film().steadyImage(steady);
-    const int W = 8, B = sc.time.bins;
+    const int W = 8, B = time.bins;
     double errSteady = 0.0, refSteady = 0.0, totalGot = 0.0, totalRef = 0.0, errBins = 0.0, refBins = 0.0;
     for (int y = 0; y < W; ++y)
         for (int x = 0; x < W; ++x) {
@@ -499,8 +503,8 @@ TEST(StabilityEmptyMedium, UnboundedBeamsOfAPointLightMatchTheClosedForm) {
                     };
                     ref += k * (kPi / 2.0 + std::atan(sStar / h)) / h;
                     for (int b = 0; b < B; ++b) {
-                        const double t0 = sc.time.startOpl + b * sc.time.binWidth;
-                        bins[b] += k * (mass(t0 + sc.time.binWidth) - mass(t0));
+                        const double t0 = time.startOpl + b * time.binWidth;
+                        bins[b] += k * (mass(t0 + time.binWidth) - mass(t0));
                     }
                 }
             const size_t p = static_cast<size_t>(y) * W + x;
@@ -673,7 +677,7 @@ TEST(StabilityTimeBins, FineCoarseAndPartialFilmsConserveEnergy) {
     c.passes = 8;
     c.bins = 128;  // [0.475, 6.875): everything
     auto full = sceneFrom(c.json());
-    const ImageIntegral ref = cylinderReference(c, *full);
+    const ImageIntegral ref = cylinderReference(c, full);
     // Reference mass arriving in [lo, hi) of real time (linear within the 0.05 m reference bins).
     const auto frac = [&](double lo, double hi) {
         double m = 0.0;
@@ -686,7 +690,7 @@ TEST(StabilityTimeBins, FineCoarseAndPartialFilmsConserveEnergy) {
     };
     const auto render = [&](const LaserBox& cc) {
         auto sc = sceneFrom(cc.json());
-        auto run = std::make_unique<PassRunner>(*sc);
+        auto run = std::make_unique<PassRunner>(sc);
         run->photons = cc.photons;
         run->radius = cc.radius;
         run->seed = cc.seed;
@@ -760,7 +764,7 @@ TEST(StabilityLongTimes, FirstArrivalBinAfterTenKilometresOfPath) {
     c.bins = 200;
     c.passes = 4;
     auto sc = sceneFrom(c.json());
-    PassRunner run(*sc);
+    PassRunner run(sc);
     run.photons = c.photons;
     run.radius = c.radius;
     run.beamLength = c.beamLength;
@@ -853,7 +857,7 @@ TEST(StabilityIor, GlassSlabDelaysArrivalsByEtaMinusOneTimesThickness) {
     };
     const auto render = [&](double n, std::vector<double>& vol) {
         auto sc = sceneFrom(json(n));
-        PassRunner run(*sc);
+        PassRunner run(sc);
         run.photons = 4000;
         run.radius = 0.015;
         run.photonDepth = 3;  // glass entry, glass exit, then the fog beam (null boundaries use no depth)
@@ -941,13 +945,13 @@ TEST(StabilityIor, SlowMediumTimeIsEtaTimesDistance) {
         c.bins = 200;
         c.passes = 2;
         auto sc = sceneFrom(c.json());
-        PassRunner run(*sc);
+        PassRunner run(sc);
         run.photons = 1;
         run.radius = c.radius;
         run.beamLength = BeamLength::Long;
         for (int p = 1; p <= c.passes; ++p) run.run(p);
         expectFiniteFilm(run.film, "slow medium");
-        const int k = sc->time.binOf(c.emit + 1.0 + n * 2.4);
+        const int k = sc.time.binOf(c.emit + 1.0 + n * 2.4);
         std::vector<double> vol;
         run.film.volume(TimeAxis::Real, EmissionMode::Delta, vol);
         double in = 0.0, other = 0.0;
@@ -1051,10 +1055,10 @@ TEST(StabilityAlbedoOne, PhotonMapOverTheMemoryBudgetStopsTheRenderWithAMessage)
       "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
       "render": {"photons_per_pass": 2000, "max_depth": 100000000, "passes": 3, "seed": 8}})";
     auto sc = sceneFrom(json);
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
     ds.maxPhotonMapBytes = 4u << 20;  // 4 MiB: about 40k beams, while one photon alone would store 1e8
-    Driver drv(*sc, ds);
+    Driver drv(*sc, ds, sc.time);
     const double t0 = nowSec();
     drv.start();
     drv.wait();
@@ -1075,7 +1079,7 @@ TEST(StabilityAlbedoOne, PhotonMapOverTheMemoryBudgetStopsTheRenderWithAMessage)
     // (2000 x 96 x ~100 B = 19 MB).
     ds.maxDepth = 48;
     ds.maxPhotonMapBytes = 64u << 20;
-    Driver ok(*sc, ds);
+    Driver ok(*sc, ds, sc.time);
     ok.start();
     ok.wait();
     EXPECT_FALSE(ok.failure()) << ok.failureMessage();
@@ -1226,7 +1230,7 @@ TEST(StabilityDegenerate, CameraInsideAMediumBox) {
     auto sc = sceneFrom(json);
     EXPECT_EQ(sc->cameraRegions.top(), 1);
     EXPECT_EQ(sc->lightPlacement[0].regions.top(), 1);
-    PassRunner run(*sc);
+    PassRunner run(sc);
     run.photons = 4000;
     run.radius = 0.06;
     run.photonDepth = 1;
@@ -1282,7 +1286,7 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
         beam2d.prepare(*sc, map, ep);
         CameraPassEstimators est;
         if (!beam2d.empty()) est.volume = &beam2d;
-        TransientFilm film(16, 16, sc->time);
+        TransientFilm film(16, 16, sc.time);
         CameraPassSettings cs;
         CameraPassScratch scratch;
         scratch.acc.reset(film.bins());
@@ -1331,10 +1335,10 @@ TEST(StabilityConcurrent, ViewerReadsWhileTheDriverRenders) {
       "lights": [{"type": "point", "position": [0, 1.8, 0], "power": 20}],
       "render": {"photons_per_pass": 1500, "radius_relative": 0.01, "surface_radius_relative": 0.03, "seed": 9}})";
     auto sc = sceneFrom(json);
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
     ds.passes = 0;  // until stopped
-    Driver drv(*sc, ds);
+    Driver drv(*sc, ds, sc.time);
     std::atomic<int> callbacks{0};
     std::atomic<bool> done{false};
     std::atomic<int64_t> badValues{0}, reads{0};

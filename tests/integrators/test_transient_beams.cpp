@@ -8,6 +8,7 @@
 #include "photons/photon_tracer.h"
 #include "eval/reference.h"
 #include "scene/scene_loader.h"
+#include "support/test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -17,9 +18,7 @@ using namespace tpb;
 
 namespace {
 
-std::unique_ptr<Scene> sceneFrom(const std::string& json) {
-    return Scene::build(loadSceneFromString(json, "test.json"));
-}
+test::TestScene sceneFrom(const std::string& json) { return test::testSceneFrom(json, "test.json"); }
 
 // Point light pulse at the origin in an infinite grey medium; the camera looks past the light.
 const char* kSingleScatter = R"({
@@ -35,7 +34,8 @@ const char* kSingleScatter = R"({
 // Independent reference: the single-scattered radiance along a camera ray, binned by OPL = s + d(s):
 //   L = int_0^inf sigma_s e^{-sigma_t s} p(cos) Phi / (4 pi d^2) e^{-sigma_t d} ds.
 // Returns the un-binned integral (the steady-state reference).
-double singleScatterReference(const Scene& sc, const Ray& ray, std::vector<double>& bins, double weight) {
+double singleScatterReference(const test::TestScene& t, const Ray& ray, std::vector<double>& bins, double weight) {
+    const Scene& sc = *t;
     const Medium& m = sc.regions[0].medium;
     const Light& l = sc.lights[0];
     const double st = m.sigma_t.x, ss = m.sigma_s.x;
@@ -50,8 +50,8 @@ double singleScatterReference(const Scene& sc, const Ray& ray, std::vector<doubl
         const double d = glm::length(v);
         const double cosT = glm::dot(v / d, -ray.d);
         const double L = ss * std::exp(-st * s) * m.phase.eval(cosT) * l.power.x / (4.0 * kPi * d * d) * std::exp(-st * d);
-        const int k = sc.time.binOf(s + d + l.emitOpl);
-        if (k >= 0 && k < sc.time.bins) bins[k] += weight * L * h;
+        const int k = t.time.binOf(s + d + l.emitOpl);
+        if (k >= 0 && k < t.time.bins) bins[k] += weight * L * h;
         total += weight * L * h;
     }
     return total;
@@ -62,8 +62,8 @@ struct Rendered {
     std::vector<float> steady;
 };
 
-Rendered render(const Scene& sc, RenderSettings ds, int passes, TimeAxis axis = TimeAxis::Real) {
-    Driver drv(sc, ds);
+Rendered render(const test::TestScene& sc, RenderSettings ds, int passes, TimeAxis axis = TimeAxis::Real) {
+    Driver drv(*sc, ds, sc.time);
     for (int p = 1; p <= passes; ++p) EXPECT_TRUE(drv.runPass(p));
     Rendered r;
     drv.film().volume(axis, EmissionMode::Delta, r.volume);
@@ -91,7 +91,7 @@ std::string denseScene() {
 
 TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
     auto sc = sceneFrom(kSingleScatter);
-    const int W = sc->camera.width, H = sc->camera.height, B = sc->time.bins;
+    const int W = sc->camera.width, H = sc->camera.height, B = sc.time.bins;
     // Reference: average over a 6x6 stratified grid inside each pixel.
     std::vector<double> ref(static_cast<size_t>(W) * H * B, 0.0), refSteady(static_cast<size_t>(W) * H, 0.0);
     for (int y = 0; y < H; ++y)
@@ -101,11 +101,11 @@ TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
             for (int j = 0; j < g; ++j)
                 for (int i = 0; i < g; ++i)
                     refSteady[static_cast<size_t>(y) * W + x] += singleScatterReference(
-                        *sc, sc->camera.generate(x + (i + 0.5) / g, y + (j + 0.5) / g), bins, 1.0 / (g * g));
+                        sc, sc->camera.generate(x + (i + 0.5) / g, y + (j + 0.5) / g), bins, 1.0 / (g * g));
             for (int k = 0; k < B; ++k) ref[(static_cast<size_t>(y) * W + x) * B + k] = bins[k];
         }
 
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
     auto errors = [&](const Rendered& r, double& steadyErr, double& binErr) {
         double se = 0.0, sr = 0.0, be = 0.0, br = 0.0;
@@ -123,8 +123,8 @@ TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
         binErr = std::sqrt(be / br);
     };
     double s8, b8, s128, b128;
-    errors(render(*sc, ds, 8), s8, b8);
-    errors(render(*sc, ds, 128), s128, b128);
+    errors(render(sc, ds, 8), s8, b8);
+    errors(render(sc, ds, 128), s128, b128);
     std::printf("single scattering: relative RMSE steady %.4f -> %.4f, per bin %.4f -> %.4f (8 -> 128 passes)\n", s8, s128,
                 b8, b128);
     EXPECT_LT(s128, 0.03);
@@ -135,7 +135,7 @@ TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
     RenderSettings dl = ds;
     dl.beamLength = BeamLength::Long;
     double sl, bl;
-    errors(render(*sc, dl, 64), sl, bl);
+    errors(render(sc, dl, 64), sl, bl);
     EXPECT_LT(sl, 0.03);
     EXPECT_LT(bl, 0.08);
 }
@@ -144,9 +144,9 @@ TEST(TransientBeams, SteadyStateEqualsBeforePlusBinsPlusAfterOnBothAxes) {
     // A denser medium and a long film, so that no energy arrives after the film's end on the real
     // axis; on the unwarped axis much of it arrives before the film's start (kept per pixel).
     auto sc = sceneFrom(denseScene());
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
-    Driver drv(*sc, ds);
+    Driver drv(*sc, ds, sc.time);
     for (int p = 1; p <= 4; ++p) ASSERT_TRUE(drv.runPass(p));
     std::vector<float> steady;
     drv.film().steadyImage(steady);
@@ -159,7 +159,7 @@ TEST(TransientBeams, SteadyStateEqualsBeforePlusBinsPlusAfterOnBothAxes) {
         drv.film().volume(axis, EmissionMode::Continuous, cont);
         drv.film().beforeImage(axis, before);
         drv.film().afterImage(axis, after);
-        const int B = sc->time.bins;
+        const int B = sc.time.bins;
         const double outFrac = drv.film().stats.outside[a].load() /
                                (drv.film().stats.inside[a].load() + drv.film().stats.outside[a].load());
         for (size_t p = 0; p < steady.size() / 3; ++p)
@@ -194,11 +194,11 @@ TEST(TransientBeams, ContinuousEmissionIsTheStepResponseOnBothAxes) {
                                        "\"start_m\": 0.0, \"bin_width_m\": 0.1, \"bins\": 52");
     auto sc = sceneFrom(late);
     auto wide = sceneFrom(early);
-    const ReferenceVolume ref = singleScatteringReference(*wide, 3, 2);
-    const int W = sc->camera.width, H = sc->camera.height, B = sc->time.bins, BW = wide->time.bins, skip = 32;
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    const ReferenceVolume ref = singleScatteringReference(*wide, wide.time, wide.source.path, wide.settings, 3, 2);
+    const int W = sc->camera.width, H = sc->camera.height, B = sc.time.bins, BW = wide.time.bins, skip = 32;
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
-    Driver drv(*sc, ds);
+    Driver drv(*sc, ds, sc.time);
     for (int p = 1; p <= 64; ++p) ASSERT_TRUE(drv.runPass(p));
     for (TimeAxis axis : {TimeAxis::Real, TimeAxis::Unwarped}) {
         std::vector<double> cont;
@@ -249,33 +249,33 @@ TEST(TransientBeams, LongBeamsInAnUnboundedMediumLoseNothingTheFilmShows) {
     const std::string longer = replaced(json, "\"bins\": 60", "\"bins\": 180");
     auto sc = sceneFrom(json);
     auto sc3 = sceneFrom(longer);
-    ASSERT_LT(10.0 * sc->bounds.diagonal(), sc->time.endOpl() / 2);  // the old cut was well inside the film
+    ASSERT_LT(10.0 * sc->bounds.diagonal(), sc.time.endOpl() / 2);  // the old cut was well inside the film
 
     PhotonTraceSettings pt;
     pt.photons = 2000;
     pt.maxDepth = 1;
     pt.beamLength = BeamLength::Long;
     pt.storeSurfacePhotons = false;
-    pt.filmEndOpl = sc->time.endOpl();
+    pt.filmEndOpl = sc.time.endOpl();
     const PhotonMap map = tracePhotons(*sc, pt);
     ASSERT_EQ(map.beams.size(), 2000u);
     const Medium& m = sc->regions[0].medium;
     Color cut(0.0);
     for (const Beam& b : map.beams) {
-        EXPECT_GE(b.opl0 + b.length, sc->time.endOpl() * (1 - 1e-12));
+        EXPECT_GE(b.opl0 + b.length, sc.time.endOpl() * (1 - 1e-12));
         cut += b.power * m.transmittance(b.length);
     }
     EXPECT_NEAR(map.cutFlux.x, cut.x, 1e-12 * cut.x);
     // All beams start at the light at t = 0 with the same length: the cut share is exp(-sigma_t L).
-    EXPECT_NEAR(map.cutFlux.x / map.emittedFlux.x, std::exp(-m.sigma_t.x * sc->time.endOpl()), 1e-9);
+    EXPECT_NEAR(map.cutFlux.x / map.emittedFlux.x, std::exp(-m.sigma_t.x * sc.time.endOpl()), 1e-9);
 
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
     ds.beamLength = BeamLength::Long;
     ds.beamRadius0 = 0.2;
-    const Rendered a = render(*sc, ds, 2);
-    const Rendered b = render(*sc3, ds, 2);
-    const int B = sc->time.bins, B3 = sc3->time.bins;
+    const Rendered a = render(sc, ds, 2);
+    const Rendered b = render(sc3, ds, 2);
+    const int B = sc.time.bins, B3 = sc3.time.bins;
     double total = 0.0, diff = 0.0;
     for (size_t p = 0; p < a.steady.size() / 3; ++p)
         for (int k = 0; k < B; ++k) {
@@ -293,13 +293,13 @@ TEST(TransientBeams, LongBeamsInAnUnboundedMediumLoseNothingTheFilmShows) {
 
 TEST(TransientBeams, BruteForceAndEmbreeQueriesGiveIdenticalFilms) {
     auto sc = sceneFrom(kSingleScatter);
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
     ds.maxDepth = 4;
     ds.accel = AccelBackend::Embree;
-    const Rendered a = render(*sc, ds, 2);
+    const Rendered a = render(sc, ds, 2);
     ds.accel = AccelBackend::BruteForce;
-    const Rendered b = render(*sc, ds, 2);
+    const Rendered b = render(sc, ds, 2);
     ASSERT_EQ(a.volume.size(), b.volume.size());
     double total = 0.0;
     for (size_t i = 0; i < a.volume.size(); ++i) {
@@ -328,11 +328,11 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
       "render": {"photons_per_pass": 3000, "radius_relative": 0.01, "surface_radius_relative": 0.03, "seed": 9}
     })";
     auto sc = sceneFrom(scene);
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 1;
-    const Rendered a = render(*sc, ds, 2);
+    const Rendered a = render(sc, ds, 2);
     ds.threads = 2;
-    const Rendered b = render(*sc, ds, 2);
+    const Rendered b = render(sc, ds, 2);
     ASSERT_EQ(a.volume.size(), b.volume.size());
     for (size_t i = 0; i < a.volume.size(); ++i) ASSERT_EQ(a.volume[i], b.volume[i]) << i;
     EXPECT_EQ(a.steady, b.steady);
@@ -340,13 +340,13 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
 
 TEST(TransientBeams, ExactAndUniformProfilesCarryTheSameEnergy) {
     auto sc = sceneFrom(denseScene());
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
     ds.profile = TimeProfile::Exact;
-    const Rendered a = render(*sc, ds, 2);
+    const Rendered a = render(sc, ds, 2);
     ds.profile = TimeProfile::Uniform;
-    const Rendered b = render(*sc, ds, 2);
-    const int B = sc->time.bins;
+    const Rendered b = render(sc, ds, 2);
+    const int B = sc.time.bins;
     for (size_t p = 0; p < a.steady.size() / 3; ++p) {
         EXPECT_EQ(a.steady[p * 3], b.steady[p * 3]);
         double sa = 0.0, sb = 0.0;
@@ -367,13 +367,13 @@ TEST(TransientBeams, FirstArrivalOnASurfaceMatchesGeometricOpticalPath) {
       "render": {"photons_per_pass": 200000, "surface_radius": 0.025, "radius": 0.01, "max_depth": 1, "seed": 5}
     })";
     auto sc = sceneFrom(scene);
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
-    Driver drv(*sc, ds);
+    Driver drv(*sc, ds, sc.time);
     ASSERT_TRUE(drv.runPass(1));
     std::vector<double> vol;
     drv.film().volume(TimeAxis::Real, EmissionMode::Delta, vol);
-    const int W = 16, H = 16, B = sc->time.bins;
+    const int W = 16, H = 16, B = sc.time.bins;
     const double r = ds.surfaceRadius0;
     int checked = 0;
     for (int y = 0; y < H; ++y)
@@ -394,9 +394,9 @@ TEST(TransientBeams, FirstArrivalOnASurfaceMatchesGeometricOpticalPath) {
                     tMax = std::max(tMax, t);
                 }
             // Photon within r of the hit point: its OPL differs by at most r.
-            const double t0 = sc->time.startOpl + first * sc->time.binWidth;
+            const double t0 = sc.time.startOpl + first * sc.time.binWidth;
             EXPECT_LE(t0, tMax + r) << x << "," << y;
-            EXPECT_GE(t0 + sc->time.binWidth, tMin - r) << x << "," << y;
+            EXPECT_GE(t0 + sc.time.binWidth, tMin - r) << x << "," << y;
             ++checked;
         }
     EXPECT_GT(checked, 150);  // pixels that received photons in this pass (of 256)
@@ -413,7 +413,7 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
     // the kernel, which is what the exact profile models.
     json = replaced(json, "\"sigma_s\": 0.4, \"sigma_a\": 0.1", "\"sigma_s\": 3.0, \"sigma_a\": 0.5");
     auto sc = sceneFrom(json);
-    const int W = sc->camera.width, H = sc->camera.height, B = sc->time.bins;
+    const int W = sc->camera.width, H = sc->camera.height, B = sc.time.bins;
     std::vector<double> ref(static_cast<size_t>(W) * H * B, 0.0);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
@@ -421,7 +421,7 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
             const int g = 4;
             for (int j = 0; j < g; ++j)
                 for (int i = 0; i < g; ++i)
-                    singleScatterReference(*sc, sc->camera.generate(x + (i + 0.5) / g, y + (j + 0.5) / g), bins, 1.0 / (g * g));
+                    singleScatterReference(sc, sc->camera.generate(x + (i + 0.5) / g, y + (j + 0.5) / g), bins, 1.0 / (g * g));
             for (int k = 0; k < B; ++k) ref[(static_cast<size_t>(y) * W + x) * B + k] = bins[k];
         }
     auto binError = [&](const Rendered& r) {
@@ -433,13 +433,13 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
         }
         return std::sqrt(e / n);
     };
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
     ds.alpha = 1.0;  // keep the kernel wide: the time smearing is what is compared
     ds.profile = TimeProfile::Exact;
-    const double exact = binError(render(*sc, ds, 48));
+    const double exact = binError(render(sc, ds, 48));
     ds.profile = TimeProfile::Uniform;
-    const double uniform = binError(render(*sc, ds, 48));
+    const double uniform = binError(render(sc, ds, 48));
     std::printf("per-bin relative RMSE with 0.01 m bins and r = 0.15 m: exact profile %.4f, uniform spread %.4f\n", exact,
                 uniform);
     EXPECT_LT(exact, uniform);

@@ -18,7 +18,7 @@
 #include "integrators/preview.h"
 #include "render/driver.h"
 #include "scene/scene_loader.h"
-#include "render/time_range.h"
+#include "render/prepare.h"
 
 #include <gtest/gtest.h>
 
@@ -78,17 +78,26 @@ struct Fnv {
 
 Signature filmSignature(const TransientFilm& film);
 
+// The scene as the CLI prepares it, the pilot (for "range": "auto") with 1500 photons on 2 threads.
+PreparedRender prepareFixed(const SceneDesc& d) {
+    SettingsOverrides o;
+    o.threads = 2;
+    PrepareOptions opt;
+    opt.pilot.photons = 1500;
+    return prepareRender(d, o, opt);
+}
+
 Signature renderSignature(const std::string& scenePath) {
     SceneDesc d = loadScene(scenePath);
     d.camera.width = d.camera.height = 32;
     d.film.bins = 24;
     d.render.photonsPerPass = 1500;
     d.render.seed = 7;
-    auto scene = Scene::build(d);
-    fitTimeRange(*scene, 1500, 2);
-    RenderSettings ds = RenderSettings::fromScene(*scene);
+    const PreparedRender p = prepareFixed(d);
+    const Scene* scene = p.scene.get();
+    RenderSettings ds = p.settings;
     ds.threads = 2;
-    Driver drv(*scene, ds);
+    Driver drv(*scene, ds, p.time);
     for (int p = 1; p <= 2; ++p) EXPECT_TRUE(drv.runPass(p)) << scenePath;
     return filmSignature(drv.film());
 }
@@ -100,15 +109,15 @@ Signature pathTracerSignature(const std::string& scenePath) {
     d.camera.width = d.camera.height = 32;
     d.film.bins = 24;
     d.render.seed = 7;
-    auto scene = Scene::build(d);
-    fitTimeRange(*scene, 1500, 2);
+    const PreparedRender p = prepareFixed(d);
+    const Scene* scene = p.scene.get();
     RenderSettings ps;
     ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.seed = 7;
     ps.samplesPerPixel = 1;
     ps.maxDepth = 8;
     ps.threads = 2;
-    TransientFilm film(scene->camera.width, scene->camera.height, scene->time);
+    TransientFilm film(scene->camera.width, scene->camera.height, p.time);
     EXPECT_EQ(renderPathTracer(*scene, ps, 1, 2, film), 2) << scenePath;
     Signature sig = filmSignature(film);
     Fnv fnv;

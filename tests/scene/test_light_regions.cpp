@@ -17,6 +17,7 @@
 #include "integrators/path_tracer.h"
 #include "photons/photon_tracer.h"
 #include "scene/scene_loader.h"
+#include "support/test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -30,7 +31,7 @@ namespace {
 
 constexpr double kPiT = 3.14159265358979323846;
 
-std::unique_ptr<Scene> sceneFrom(const std::string& json) { return Scene::build(loadSceneFromString(json, "test.json")); }
+test::TestScene sceneFrom(const std::string& json) { return test::testSceneFrom(json, "test.json"); }
 
 std::string vec(const Vec3& v) {
     char buf[160];
@@ -97,13 +98,14 @@ struct Outside {
 
 // Photons and beams of passes 1..passes stored outside the cage. A surface photon is outside when
 // the point 0.1 mm off it on the side it arrived from is not in the cage.
-Outside storedOutside(const Scene& sc, const Cage& cage, int passes, size_t& photons, size_t& beams) {
+Outside storedOutside(const test::TestScene& t, const Cage& cage, int passes, size_t& photons, size_t& beams) {
+    const Scene& sc = *t;
     Outside out;
     photons = beams = 0;
     for (int pass = 1; pass <= passes; ++pass) {
         PhotonTraceSettings ts;
-        ts.photons = sc.desc.render.photonsPerPass;
-        ts.seed = sc.desc.render.seed;
+        ts.photons = t.settings.photonsPerPass;
+        ts.seed = t.settings.seed;
         ts.pass = static_cast<uint64_t>(pass);
         ts.storeBeams = sc.stages.beams;
         ts.threads = 2;
@@ -133,10 +135,11 @@ ImageSum sumOf(const std::vector<float>& img) {
 
 // The beam renderer (passes 1..2) and the path tracer (16 paths per pixel) on the scene; both
 // images must be exactly zero since the camera sees only the outside of the cage.
-void expectDarkOutside(const Scene& sc) {
-    RenderSettings ds = RenderSettings::fromScene(sc);
+void expectDarkOutside(const test::TestScene& t) {
+    const Scene& sc = *t;
+    RenderSettings ds = t.settings;
     ds.threads = 2;
-    Driver drv(sc, ds);
+    Driver drv(sc, ds, t.time);
     for (int p = 1; p <= 2; ++p) ASSERT_TRUE(drv.runPass(p));
     std::vector<float> img;
     drv.film().steadyImage(img);
@@ -153,7 +156,7 @@ void expectDarkOutside(const Scene& sc) {
     ps.samplesPerPixel = 16;
     ps.threads = 2;
     ps.seed = 3;
-    TransientFilm film(sc.camera.width, sc.camera.height, sc.time);
+    TransientFilm film(sc.camera.width, sc.camera.height, t.time);
     PathTracerStats st;
     renderPathTracer(sc, ps, 1, 1, film, &st);
     film.steadyImage(img);
@@ -170,9 +173,9 @@ void expectLitInside(std::string json) {
     json.replace(json.find(res), res.size(), R"("resolution": [8, 8])");
     json.replace(json.find(photons), photons.size(), R"("photons_per_pass": 2000)");
     const auto sc = sceneFrom(json);
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
-    Driver drv(*sc, ds);
+    Driver drv(*sc, ds, sc.time);
     ASSERT_TRUE(drv.runPass(1));
     std::vector<float> img;
     drv.film().steadyImage(img);
@@ -185,7 +188,7 @@ void expectLitInside(std::string json) {
 
 // The box holds its light to the last photon: many photons and beams stored, none outside the
 // box, both renderers' images of the outside exactly dark, and the inside lit.
-static void expectBoxHoldsItsLight(const Scene& sc, const Cage& cage, const std::string& json) {
+static void expectBoxHoldsItsLight(const test::TestScene& sc, const Cage& cage, const std::string& json) {
     size_t photons, beams;
     const Outside out = storedOutside(sc, cage, 2, photons, beams);
     EXPECT_GT(photons, 20000u);
@@ -202,9 +205,9 @@ TEST(ClosedBox, PointLightInFogLightsNothingOutsideTheBox) {
     const Cage cage;
     const std::string json = closedBoxScene(cage, R"({"type": "point", "position": [0.1, 0.5, 0.05], "power": 10})", true, 20000);
     const auto sc = sceneFrom(json);
-    ASSERT_GT(sc->beamRadius0, 0.05);
-    ASSERT_GT(sc->surfaceRadius0, 0.05);
-    expectBoxHoldsItsLight(*sc, cage, json);
+    ASSERT_GT(sc.settings.beamRadius0, 0.05);
+    ASSERT_GT(sc.settings.surfaceRadius0, 0.05);
+    expectBoxHoldsItsLight(sc, cage, json);
 }
 
 TEST(ClosedBox, AreaLightFillingTheCeilingOfATiltedBoxLightsNothingOutside) {
@@ -219,7 +222,7 @@ TEST(ClosedBox, AreaLightFillingTheCeilingOfATiltedBoxLightsNothingOutside) {
     const std::string json = closedBoxScene(cage, light, true, 20000);
     const auto sc = sceneFrom(json);
     ASSERT_LT(glm::dot(sc->lights[0].normal, cage.toWorld(Vec3(0.0, 1.0, 0.0))), -0.999);  // emits into the box
-    expectBoxHoldsItsLight(*sc, cage, json);
+    expectBoxHoldsItsLight(sc, cage, json);
 }
 
 TEST(ClosedBox, BouncesAtTheEdgesOfATiltedBoxLeaveFromInside) {
@@ -350,10 +353,10 @@ std::vector<double> blockSums(const std::vector<float>& img, int w, int h) {
     return blocks;
 }
 
-std::vector<float> beamImage(const Scene& sc, int64_t* beams = nullptr) {
-    RenderSettings ds = RenderSettings::fromScene(sc);
+std::vector<float> beamImage(const test::TestScene& sc, int64_t* beams = nullptr) {
+    RenderSettings ds = sc.settings;
     ds.threads = 2;
-    Driver drv(sc, ds);
+    Driver drv(*sc, ds, sc.time);
     for (int p = 1; p <= 2; ++p) EXPECT_TRUE(drv.runPass(p));
     if (beams) *beams = drv.lastPass().beams;
     std::vector<float> img;
@@ -361,13 +364,14 @@ std::vector<float> beamImage(const Scene& sc, int64_t* beams = nullptr) {
     return img;
 }
 
-std::vector<float> pathTracedImage(const Scene& sc) {
+std::vector<float> pathTracedImage(const test::TestScene& t) {
+    const Scene& sc = *t;
     RenderSettings ps;
     ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.samplesPerPixel = 128;
     ps.threads = 2;
-    ps.seed = sc.desc.render.seed;
-    TransientFilm film(sc.camera.width, sc.camera.height, sc.time);
+    ps.seed = t.settings.seed;
+    TransientFilm film(sc.camera.width, sc.camera.height, t.time);
     renderPathTracer(sc, ps, 1, 1, film);
     std::vector<float> img;
     film.steadyImage(img);
@@ -402,12 +406,12 @@ TEST(AreaLightRegions, FogInANullBoxAroundTheLightLooksLikeTheSameFogEverywhere)
     const auto a1 = sceneFrom(roomScene(false, 7)), a2 = sceneFrom(roomScene(false, 8)), b1 = sceneFrom(roomScene(true, 7));
     ASSERT_EQ(b1->lightPlacement[0].regions.top(), b1->shapes[1].interiorRegion);  // the light sits in the fog box
     int64_t beamsA = 0, beamsB = 0;
-    const std::vector<float> ia1 = beamImage(*a1, &beamsA), ia2 = beamImage(*a2), ib1 = beamImage(*b1, &beamsB);
+    const std::vector<float> ia1 = beamImage(a1, &beamsA), ia2 = beamImage(a2), ib1 = beamImage(b1, &beamsB);
     EXPECT_GT(beamsB, beamsA * 9 / 10);
     expectSameImage(ia1, ia2, ib1, 24, 24, "photon beams");
     // The path tracer connects to the light through the null box on its own (shadow rays cross
     // null boundaries); it must agree too.
-    expectSameImage(pathTracedImage(*a1), pathTracedImage(*a2), pathTracedImage(*b1), 24, 24, "path tracer");
+    expectSameImage(pathTracedImage(a1), pathTracedImage(a2), pathTracedImage(b1), 24, 24, "path tracer");
 }
 
 TEST(AreaLightRegions, ALightAcrossAFogBoxFaceEmitsIntoItFromItsInsidePartOnly) {
@@ -527,11 +531,11 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
     EXPECT_TRUE(map.photons.empty());
 
     CameraPassSettings cs;
-    CameraPassScratch scratch{PixelAccumulator(sc->time.bins), {}};
+    CameraPassScratch scratch{PixelAccumulator(sc.time.bins), {}};
     CameraPassStats cst;
     for (int y = 0; y < 4; ++y)
         for (int x = 0; x < 4; ++x) {
-            renderPixel(*sc, CameraPassEstimators{}, cs, sc->time, x, y, scratch, cst);
+            renderPixel(*sc, CameraPassEstimators{}, cs, sc.time, x, y, scratch, cst);
             scratch.acc.clearTouched();
         }
     EXPECT_EQ(cst.regionOverflows, 16);
@@ -539,17 +543,17 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
     RenderSettings ps;
     ps.maxDepth = 64;  // the path tracer's depth unless set below
     ps.threads = 1;
-    TransientFilm film(4, 4, sc->time);
+    TransientFilm film(4, 4, sc.time);
     PathTracerStats pst;
     renderPathTracer(*sc, ps, 1, 1, film, &pst);
     EXPECT_EQ(pst.regionOverflows, 16);
     EXPECT_EQ(pst.shadowRays, 0);  // the paths never reached the wall
 
     // The driver's pass statistics carry both counts (for summary.json).
-    RenderSettings ds = RenderSettings::fromScene(*sc);
+    RenderSettings ds = sc.settings;
     ds.photonsPerPass = 300;
     ds.threads = 1;
-    Driver drv(*sc, ds);
+    Driver drv(*sc, ds, sc.time);
     ASSERT_TRUE(drv.runPass(1));
     EXPECT_EQ(drv.lastPass().regionOverflows, 300);
     EXPECT_EQ(drv.lastPass().camera.regionOverflows, 16);

@@ -44,7 +44,7 @@ double fresnelReference(double cosI, double etaI, double etaT) {
 
 // A scene with one glass sphere of radius 1 at the origin (region 1 inside, index 1.5).
 struct GlassSphere {
-    std::unique_ptr<Scene> scene;
+    std::unique_ptr<const Scene> scene;
     int shape = -1;
     GlassSphere() {
         SceneBuilder b;

@@ -58,7 +58,7 @@ void addQuad(SceneDesc& d, const Vec3& corner, const Vec3& u, const Vec3& v, int
 }
 
 // A unit sphere of the given material at the origin.
-std::unique_ptr<Scene> sphereScene(MaterialType t, const Color& spec = Color(1.0)) {
+std::unique_ptr<const Scene> sphereScene(MaterialType t, const Color& spec = Color(1.0)) {
     SceneDesc d = baseDesc();
     addSphere(d, Vec3(0.0), 1.0, addMaterial(d, t, spec));
     return Scene::build(d);

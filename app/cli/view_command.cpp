@@ -1,0 +1,79 @@
+// `tpb view`: the viewer's flags (CLI11). Prepares the render as `tpb render` does (loadAndBuild)
+// and hands it, with the plain ViewOptions, to the viewer (app/viewer, its own target).
+#include "cli/commands.h"
+#include "cli/common.h"
+#include "cli/flags.h"
+#include "viewer/app.h"
+
+#include <limits>
+#include <memory>
+#include <string>
+
+namespace tpb::app {
+
+namespace {
+
+struct ViewCmd {
+    std::string scene;
+    RenderOverrides ov;
+    ViewOptions view;
+};
+
+void run(const ViewCmd& c) {
+    const PreparedRender prepared = loadAndBuild(c.scene, c.ov);
+    runViewer(prepared, c.view);
+}
+
+}  // namespace
+
+void registerView(CLI::App& app) {
+    auto c = std::make_shared<ViewCmd>();
+    ViewOptions* o = &c->view;
+    CLI::App* cmd = app.add_subcommand(
+        "view", "Interactive viewer: the render refines in the background while you scrub through time");
+    cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
+    c->ov.add(cmd);
+    // In the viewer --time is the time shown (ns); the render's time budget is --time-budget.
+    cmd->remove_option(cmd->get_option("--time"));
+    // Every flag is checked while parsing (cli_common.h flags::), as for `tpb render`: a bad value is
+    // refused with its range and exit code 2 before the scene loads or a window opens.
+    cmd->add_option("--time-budget", c->ov.timeBudget, "Render time budget in seconds")
+        ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), false, "seconds; 0 = no time budget"));
+    CLI::Option* shot = cmd->add_option("--screenshot", o->screenshot,
+                                        "Save a PNG of the window after --after-passes passes, then exit");
+    cmd->add_option("--after-passes", o->afterPasses, "Passes to render before the screenshot (default 1)")
+        ->needs(shot)
+        ->transform(flags::integer(1, INT64_MAX, "passes rendered before the screenshot"));
+    cmd->add_option("--export", o->exportDir,
+                    "With --screenshot: once the passes are done, export the current frame and the steady "
+                    "state to this folder by clicking the Export buttons")
+        ->needs(shot);
+    cmd->add_option("--export-folder", o->exportFolder, "The Export section's folder (default out/view)");
+    cmd->add_option("--click", o->clicks,
+                    "With --screenshot: once the passes are done, click this control before the screenshot, "
+                    "as 'Section/label' (e.g. 'View/Continuous emission', 'Export/Steady state'); repeatable, "
+                    "in order")
+        ->needs(shot)
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    CLI::Option* t = cmd->add_option(
+        "--time", o->timeNs, "Time shown, in ns, within the film (the bin containing it; default: the bin of peak energy)");
+    cmd->add_option("--bin", o->bin, "Time bin shown, 0 to bins - 1 (default: the bin of peak energy)")->excludes(t);
+    CLI::Option* unwarp = cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
+    cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)")->excludes(unwarp);
+    CLI::Option* continuous = cmd->add_flag("--continuous", o->continuous, "Start with continuous emission");
+    cmd->add_flag("--delta", o->delta, "Start with a delta pulse (the default)")->excludes(continuous);
+    // The exposure slider's range; leaving the flag out means automatic exposure.
+    cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)")
+        ->check(flags::number(-kMaxExposureEv, kMaxExposureEv, false, "EV; leave it out for automatic exposure"));
+    cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
+    cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
+    cmd->add_flag("--steady", o->steady, "Start on the steady-state image");
+    cmd->add_option("--pixel", o->pixel, "Selected pixel: X Y (time profile; Y is the streak row)")->expected(2);
+    cmd->add_option("--window-size", o->windowSize, "Window size: W H (default 1280 800)")
+        ->expected(2)
+        ->transform(flags::integer(64, kMaxWindowPx, "window pixels, width and height"));
+    cmd->callback([c] { run(*c); });
+}
+
+}  // namespace tpb::app

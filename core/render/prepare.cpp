@@ -1,0 +1,75 @@
+#include "render/prepare.h"
+
+#include "base/error.h"
+#include "render/memory_budget.h"
+
+#include <algorithm>
+#include <climits>
+
+namespace tpb {
+
+std::string SceneSource::where(const std::string& keyPath) const {
+    auto it = locs.find(keyPath);
+    if (it != locs.end() && it->second.line > 0) return it->second.file + ":" + std::to_string(it->second.line) + ": ";
+    return path.empty() ? std::string() : path + ": ";
+}
+
+std::string SceneSource::keyWhere(const std::string& keyPath) const {
+    std::string w = where(keyPath);  // "file:line: "
+    if (w.size() >= 2) w.resize(w.size() - 2);
+    return w + ": " + keyPath;
+}
+
+void applyFilmShape(SceneDesc& d, const SettingsOverrides& o) {
+    if (o.width) d.camera.width = *o.width;
+    if (o.height) d.camera.height = *o.height;
+    if (o.bins && *o.bins < 1) throw UserError("--bins must be >= 1");
+    if (o.bins) {
+        // Keep the film's time range, change its resolution.
+        if (!d.film.autoRange) d.film.binWidthOpl = d.film.binWidthOpl * d.film.bins / *o.bins;
+        d.film.bins = *o.bins;
+    }
+    if (d.camera.width < 1 || d.camera.height < 1 || d.film.bins < 1)
+        throw UserError("--width, --height and --bins must be >= 1");
+    const uint64_t need = filmBytes(d.camera, d.film.bins);
+    if (need > maxFilmBytes())
+        throw UserError("the film would need " + humanBytes(need) + " but at most " + humanBytes(maxFilmBytes()) +
+                        " is allowed; lower --width/--height/--bins");
+    if (static_cast<int64_t>(d.camera.width) * d.camera.height > INT_MAX)
+        throw UserError("--width x --height is " + std::to_string(static_cast<int64_t>(d.camera.width) * d.camera.height) +
+                        " pixels, more than " + std::to_string(INT_MAX) + "; lower --width/--height");
+}
+
+PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides, const PrepareOptions& options) {
+    const auto warn = [&](const std::string& w) {
+        if (options.warn) options.warn(w);
+    };
+    for (const std::string& w : desc.warnings) warn(w);
+    applyFilmShape(desc, overrides);
+
+    PreparedRender p;
+    p.scene = Scene::build(desc);
+    const double diag = p.scene->bounds.diagonal() > 0.0 ? p.scene->bounds.diagonal() : 1.0;
+
+    // The settings: the file's, then the flags; checked once, now that the diagonal is known.
+    p.settings = RenderSettings::fromDesc(desc.render, diag);
+    p.settings.apply(overrides);
+    for (const std::string& w : p.settings.validate({&desc, &overrides, diag}))
+        if (std::find(desc.warnings.begin(), desc.warnings.end(), w) == desc.warnings.end()) warn(w);  // (the loader's)
+
+    // The pilot sees the file's settings (with --max-depth and --threads), whatever the other flags.
+    p.pilotSettings = RenderSettings::fromDesc(desc.render, diag);
+    if (overrides.maxDepth) p.pilotSettings.maxDepth = *overrides.maxDepth;
+    p.pilotSettings.threads = p.settings.threads;
+
+    const FilmTimeAxis axis = filmTimeAxis(*p.scene, desc.film, p.pilotSettings, options.pilot);
+    p.film = desc.film;
+    p.time = axis.time;
+    p.fit = axis.fit;
+    p.source.path = desc.path;
+    p.source.version = desc.version;
+    p.source.locs = std::move(desc.locs);
+    return p;
+}
+
+}  // namespace tpb
