@@ -237,7 +237,8 @@ TEST_P(PhysicalIntegrator, DiffusePlaneUnderPointLightMatchesClosedForm) {
     const Camera& cam = s.scene->camera;
 
     // Steady image, per pixel and channel: z-test of the pass mean against the reference (path
-    // tracer: only the sub-pixel jitter is random, the floor 1e-4 covers the 8x8 quadrature; beams:
+    // tracer: only the sub-pixel jitter is random, the floor 1e-4 covers the 8x8 quadrature's error,
+    // below the jitter noise; beams:
     // Poisson noise of the ~25 (far corner) to ~600 (under the light) photons per disc per pass,
     // i.e. 5 % to 20 % per pass, 1.3 % to 5 % for the mean of 16). 768 z values: |z| < 5 each
     // (P(|z| > 5) ~ 6e-7 for a normal mean, a Student t_15 has heavier tails: ~2e-4, 0.15 expected
@@ -274,7 +275,7 @@ TEST_P(PhysicalIntegrator, DiffusePlaneUnderPointLightMatchesClosedForm) {
     const double totalSe = std::sqrt(std::max(0.0, (t2 - passes * tm * tm) / (passes - 1.0)) / passes);
     std::printf("%s plane: mean z^2 %.3f over %d, worst z %.2f at pixel %d, total %.6g vs %.6g (%.2g se)\n",
                 methodLabel(method), z2 / nz, nz, worstZ, worst, sumMean, sumRef, (sumMean - sumRef) / totalSe);
-    EXPECT_GT(z2 / nz, beams ? 0.5 : 0.0);  // the path tracer's jitter noise is below the floor
+    EXPECT_GT(z2 / nz, 0.5);  // too small: the standard errors are overestimated (or passes repeat)
     EXPECT_LT(z2 / nz, 1.8);
     EXPECT_LT(std::abs(sumMean - sumRef), 4.0 * std::sqrt(totalSe * totalSe + 1e-8 * sumRef * sumRef));
     if (beams) {  // the disc average is the expectation; it differs from the point value by < 1.5 %
