@@ -1,6 +1,7 @@
 // Every integrator (integrators/integrator.h) on the analytic scenes, run the way the CLI and the
-// viewer run them: through the Driver, one film per run. Physically-based methods (photon beams,
-// the path tracer) are a TEST_P over Method, the geometry preview has its own checks:
+// viewer run them: through the Driver, one film per run, read from its snapshots (film_view.h).
+// Physically-based methods (photon beams, the path tracer) are a TEST_P over Method, the geometry
+// preview has its own checks:
 //   1. a diffuse plane under a point light in vacuum: per-pixel steady radiance against the closed
 //      form averaged over the pixel (and, for beams, over the surface kernel's disc), and every
 //      pixel's energy in the bins of its arrival times on both time axes;
@@ -8,8 +9,8 @@
 //      singleScatteringReference (eval/reference.h), steady image and per-bin volume;
 //   3. energy conservation in a closed diffuse sphere with the light at its centre (furnace);
 //   4. what the Driver promises for every method: pass i depends only on (seed, i) (passes 1..4 =
-//      merge of passes 1,2 and 3,4), the film does not depend on the thread count, an abort before
-//      a pass drops it and leaves the film as it was;
+//      merge of passes 1,2 and 3,4; passes 1,3 = passes 3,1), the film does not depend on the
+//      thread count, an abort before a pass drops it and leaves the film as it was;
 //   5. the preview's one pass is renderPreview() in the steady image, with nothing in the bins.
 //
 // The references are written here from the formulas (own pixel-footprint and kernel-disc
@@ -17,6 +18,7 @@
 // with the renderer. Statistical checks are z-tests on pixel means over independent passes (the
 // standard error from the spread of the passes), with fixed seeds.
 #include "eval/reference.h"
+#include "film/film_view.h"
 #include "integrators/integrator.h"
 #include "integrators/preview.h"
 #include "render/driver.h"
@@ -63,14 +65,15 @@ struct FilmValues {
     std::vector<float> before[2], after[2];
 };
 
-FilmValues read(const TransientFilm& film) {
+// Everything a test compares, read from one snapshot through the views (film_view.h).
+FilmValues read(const FilmSnapshot& snap) {
     FilmValues v;
-    film.volume(TimeAxis::Real, EmissionMode::Delta, v.real);
-    film.volume(TimeAxis::Unwarped, EmissionMode::Delta, v.unwarped);
-    film.steadyImage(v.steady);
+    v.real = volume(snap, TimeAxis::Real, EmissionMode::Delta);
+    v.unwarped = volume(snap, TimeAxis::Unwarped, EmissionMode::Delta);
+    v.steady = steadyImage(snap);
     for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped}) {
-        film.beforeImage(a, v.before[static_cast<int>(a)]);
-        film.afterImage(a, v.after[static_cast<int>(a)]);
+        v.before[static_cast<int>(a)] = beforeImage(snap, a);
+        v.after[static_cast<int>(a)] = afterImage(snap, a);
     }
     return v;
 }
@@ -116,7 +119,7 @@ PassSeries renderPasses(const RenderSetup& s, int passes) {
     for (int p = 1; p <= passes; ++p) {
         Driver drv(*s.scene, s.settings, s.time);
         EXPECT_TRUE(drv.runPass(static_cast<uint64_t>(p)));
-        FilmValues v = read(drv.film());
+        FilmValues v = read(*drv.snapshot());
         if (r.real.empty()) {
             r.real.assign(v.real.size(), 0.0);
             r.unwarped.assign(v.unwarped.size(), 0.0);
@@ -533,12 +536,55 @@ TEST_P(AnyIntegrator, FilmDoesNotDependOnThreadCount) {
         const RenderSetup s = consistencySetup(method, t + 1);
         Driver drv(*s.scene, s.settings, s.time);
         for (uint64_t p = 1; p <= 2; ++p) ASSERT_TRUE(drv.runPass(p));
-        v[t] = read(drv.film());
+        v[t] = read(*drv.snapshot());
     }
     if (method != Method::Preview) {
         EXPECT_GT(sumOf(v[0].real), 0.0) << methodLabel(method);
     }
     expectIdentical(v[0], v[1], methodLabel(method));
+}
+
+// Pass i depends only on (seed, i): a film of passes 1..4 equals the merge of a film of passes 1, 2
+// and a film of passes 3, 4 (TransientFilm::merge adds the double sums and pass counts: one extra
+// rounding per value, so 1e-12 relative; values below 1e-300 absolute compare as equal). Fails if:
+// an integrator carries state from one pass to the next (a random stream, a radius that shrinks per
+// call instead of per pass index, photons of an earlier pass), or merge drops pass counts.
+TEST_P(AnyIntegrator, PassesOneToFourAreTheMergeOfOneTwoAndThreeFour) {
+    const Method method = GetParam();
+    const RenderSetup s = consistencySetup(method, 2);
+    Driver all(*s.scene, s.settings, s.time), first(*s.scene, s.settings, s.time), second(*s.scene, s.settings, s.time);
+    for (uint64_t p = 1; p <= 4; ++p) ASSERT_TRUE(all.runPass(p));
+    for (uint64_t p = 1; p <= 2; ++p) ASSERT_TRUE(first.runPass(p));
+    for (uint64_t p = 3; p <= 4; ++p) ASSERT_TRUE(second.runPass(p));
+    first.film().merge(second.film());
+    EXPECT_EQ(first.film().minPasses(), 4);
+    const FilmValues a = read(*all.snapshot()), m = read(*first.snapshot());
+    auto close = [](double x, double y) {
+        return std::abs(x - y) <= 1e-12 * std::max(std::abs(x), std::abs(y)) + 1e-300;
+    };
+    for (int ax = 0; ax < 2; ++ax) {
+        const std::vector<double>& va = ax == 0 ? a.real : a.unwarped;
+        const std::vector<double>& vm = ax == 0 ? m.real : m.unwarped;
+        ASSERT_EQ(va.size(), vm.size());
+        size_t bad = 0, firstBad = 0;
+        for (size_t i = 0; i < va.size(); ++i)
+            if (!close(va[i], vm[i]) && bad++ == 0) firstBad = i;
+        EXPECT_EQ(bad, 0u) << methodLabel(method) << (ax == 0 ? " real" : " unwarped") << ": first at " << firstBad
+                           << ": " << va[firstBad] << " vs " << vm[firstBad];
+    }
+    // Steady, before and after are read as float images: equal up to the float conversion of two
+    // doubles 1e-12 apart (one float ulp: at most 2^-23 = 1.2e-7 relative, checked at 2.4e-7).
+    auto closeF = [](float x, float y) { return std::abs(x - y) <= 2.4e-7f * std::max(std::abs(x), std::abs(y)); };
+    for (size_t i = 0; i < a.steady.size(); ++i)
+        ASSERT_TRUE(closeF(a.steady[i], m.steady[i])) << methodLabel(method) << " " << i;
+    for (int ax = 0; ax < 2; ++ax)
+        for (size_t i = 0; i < a.before[ax].size(); ++i) {
+            ASSERT_TRUE(closeF(a.before[ax][i], m.before[ax][i])) << methodLabel(method) << " " << i;
+            ASSERT_TRUE(closeF(a.after[ax][i], m.after[ax][i])) << methodLabel(method) << " " << i;
+        }
+    if (method != Method::Preview) {
+        EXPECT_GT(sumOf(a.real), 0.0) << methodLabel(method);
+    }
 }
 
 // Pass i depends only on (seed, i), so the order passes run in does not matter: a film of passes 3
@@ -553,7 +599,7 @@ TEST_P(AnyIntegrator, PassOrderDoesNotMatter) {
     for (int o = 0; o < 2; ++o) {
         Driver drv(*s.scene, s.settings, s.time);
         for (uint64_t p : order[o]) ASSERT_TRUE(drv.runPass(p));
-        v[o] = read(drv.film());
+        v[o] = read(*drv.snapshot());
     }
     expectIdentical(v[0], v[1], methodLabel(method));
 }
@@ -566,13 +612,13 @@ TEST_P(AnyIntegrator, AbortBeforeAPassLeavesTheFilmUnchanged) {
     const RenderSetup s = consistencySetup(method, 2);
     Driver drv(*s.scene, s.settings, s.time);
     ASSERT_TRUE(drv.runPass(1));
-    const FilmValues before = read(drv.film());
+    const FilmValues before = read(*drv.snapshot());
     const int64_t passesBefore = drv.film().minPasses();
     drv.stop();  // no background run: only sets the abort flag
     EXPECT_FALSE(drv.runPass(2)) << methodLabel(method);
     EXPECT_EQ(drv.film().minPasses(), passesBefore);
     EXPECT_EQ(drv.history().size(), 1u);
-    expectIdentical(before, read(drv.film()), methodLabel(method));
+    expectIdentical(before, read(*drv.snapshot()), methodLabel(method));
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, AnyIntegrator,
@@ -588,7 +634,7 @@ TEST(PreviewIntegrator, OnePassIsRenderPreviewWithEmptyBins) {
     const RenderSetup s = consistencySetup(Method::Preview, 2);
     Driver drv(*s.scene, s.settings, s.time);
     ASSERT_TRUE(drv.runPass(1));
-    const FilmValues v = read(drv.film());
+    const FilmValues v = read(*drv.snapshot());
     const std::vector<float> preview = renderPreview(*s.scene, 2);
     ASSERT_EQ(v.steady.size(), preview.size());
     EXPECT_EQ(v.steady, preview);
