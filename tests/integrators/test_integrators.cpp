@@ -39,6 +39,8 @@ using tpb::test::SceneBuilder;
 namespace {
 
 // ---- scene setup: the one place that turns a description into what a render needs ---------------
+// (the scene, its settings for `method`, the film's time axis: when settings and the time axis come
+// from elsewhere, e.g. a prepareRender(), only this function changes).
 
 struct RenderSetup {
     std::unique_ptr<Scene> scene;
@@ -192,8 +194,8 @@ struct PlaneScene {
     SceneDesc desc() const {
         SceneBuilder b;
         b.camera(camera, Vec3(0.0), 40.0, W, H).film(0.0, binWidth, bins);
-        // 8 m x 8 m, normal +y: its edges are more than 2 m outside the view, so the kernel never
-        // reaches past them.
+        // 8 m x 8 m, normal +y: the view covers |x| < 1.6, -2.4 < z < 0.9 of it (checked in the
+        // test), so the kernel never reaches its edges.
         b.quad(Vec3(-4, 0, -4), Vec3(0, 0, 8), Vec3(8, 0, 0), b.diffuse(Color(albedo)));
         b.pointLight(light, power, emitOpl);
         return b.desc();
@@ -256,6 +258,7 @@ TEST_P(PhysicalIntegrator, DiffusePlaneUnderPointLightMatchesClosedForm) {
             double e = 0.0;
             overPixel(x, y, 8, [&](double px, double py, double w) {
                 const Vec3 p = hitPlane(cam.generate(px, py));
+                ASSERT_LT(std::max(std::abs(p.x), std::abs(p.z)), 3.0);  // > 1 m from the plane's edges
                 e += w * (beams ? ps.discIrradiance(p, ps.surfaceRadius) : ps.irradiance(p));
             });
             const size_t pix = static_cast<size_t>(y) * ps.W + x;
