@@ -25,6 +25,8 @@
 #include "scene/scene.h"
 #include "support/scene_builder.h"
 
+#include "support/test_scene.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -43,17 +45,18 @@ namespace {
 // from elsewhere, e.g. a prepareRender(), only this function changes).
 
 struct RenderSetup {
-    std::unique_ptr<Scene> scene;
+    std::unique_ptr<const Scene> scene;
     RenderSettings settings;
     TimeBins time;  // the film's time axis
 };
 
 RenderSetup prepare(const SceneDesc& desc, Method method) {
+    test::TestScene t = test::prepareTestScene(desc);
     RenderSetup s;
-    s.scene = Scene::build(desc);
-    s.settings = RenderSettings::fromScene(*s.scene);
+    s.scene = std::move(t.scene);
+    s.settings = t.settings;
     s.settings.method = method;
-    s.time = s.scene->time;
+    s.time = t.time;
     return s;
 }
 
@@ -369,7 +372,7 @@ TEST_P(PhysicalIntegrator, SingleScatteringMatchesQuadratureOracle) {
     s.settings.alpha = 1.0;
     const int passes = 16;
     const PassSeries r = renderPasses(s, passes);
-    const ReferenceVolume ref = singleScatteringReference(*s.scene, 4, 2);
+    const ReferenceVolume ref = singleScatteringReference(*s.scene, s.time, "test.json", s.settings, 4, 2);
 
     // Steady image: per pixel, and the image total (its standard error from the passes' totals).
     double z2 = 0.0;
