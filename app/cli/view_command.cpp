@@ -17,10 +17,15 @@ struct ViewCmd {
     std::string scene;
     RenderOverrides ov;
     ViewOptions view;
+    std::string method = "beams";
+    int spp = 1;
 };
 
 void run(const ViewCmd& c) {
-    const PreparedRender prepared = loadAndBuild(c.scene, c.ov);
+    PreparedRender prepared = loadAndBuild(c.scene, c.ov);
+    // The integrator the viewer's Driver runs (checked by the flag's IsMember when parsed).
+    prepared.settings.method = *parseMethod(c.method);
+    prepared.settings.samplesPerPixel = c.spp;
     runViewer(prepared, c.view);
 }
 
@@ -33,6 +38,12 @@ void registerView(CLI::App& app) {
         "view", "Interactive viewer: the render refines in the background while you scrub through time");
     cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
     c->ov.add(cmd);
+    cmd->add_option("--method", c->method,
+                    "Renderer shown live: beams (progressive photon beams) | pt (unbiased path tracer) | preview "
+                    "(geometry, steady only)")
+        ->check(CLI::IsMember({"beams", "pt", "preview"}));
+    cmd->add_option("--spp", c->spp, "--method pt: camera paths per pixel per pass")
+        ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
     // In the viewer --time is the time shown (ns); the render's time budget is --time-budget.
     cmd->remove_option(cmd->get_option("--time"));
     // Every flag is checked while parsing (cli_common.h flags::), as for `tpb render`: a bad value is

@@ -315,17 +315,30 @@ void Viewer::drawProgressSection() {
     else
         ImGui::ProgressBar(0.0f, ImVec2(-1, 0), "no pass limit");
     // Always these rows, with "-" until the first pass is in.
-    if (done > 0) {
+    if (s.method == Method::PathTracer) {
+        ImGui::Text("path tracer: %d sample%s per pixel per pass", s.samplesPerPixel, s.samplesPerPixel == 1 ? "" : "s");
+        if (done > 0)
+            ImGui::Text("camera paths per pass %lld  (%lld connections)", static_cast<long long>(last.paths.cameraPaths),
+                        static_cast<long long>(last.paths.shadowRays));
+        else
+            ImGui::TextDisabled("camera paths per pass -");
+    } else if (s.method == Method::Preview) {
+        ImGui::Text("geometry preview (steady image only)");
+        ImGui::TextDisabled(" ");
+    } else if (done > 0) {
         ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
         ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
                     static_cast<long long>(last.photons));
+    } else {
+        ImGui::TextDisabled(failed ? "kernel radius -" : "kernel radius -  (first pass in progress...)");
+        ImGui::TextDisabled("beams per pass -");
+    }
+    if (done > 0) {
         ImGui::Text("time per pass %.3f s", last.passSec);
         ImGui::TextDisabled("trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
                             last.cameraSec);
         ImGui::Text("total time %.2f s", last.elapsedSec);
     } else {
-        ImGui::TextDisabled(failed ? "kernel radius -" : "kernel radius -  (first pass in progress...)");
-        ImGui::TextDisabled("beams per pass -");
         ImGui::TextDisabled("time per pass -");
         ImGui::TextDisabled("trace -, build -, camera -");
         ImGui::TextDisabled("total time -");
@@ -350,6 +363,19 @@ void Viewer::drawProgressSection() {
 void Viewer::drawSettingsSection() {
     if (!section("Render settings")) return;
     hint("a change (Enter or leaving the field) restarts the accumulation");
+    // The integrator (render_settings.h Method): any of them runs in the same Driver, so the
+    // scrubbing, toggles and exports work the same for each.
+    const Method methods[] = {Method::Beams, Method::PathTracer, Method::Preview};
+    const char* methodLabels[] = {"photon beams", "path tracer", "geometry preview"};
+    int m = static_cast<int>(driver_->settings().method);
+    if (ImGui::Combo("method", &m, methodLabels, 3) && methods[m] != driver_->settings().method) {
+        RenderSettings s = driver_->settings();
+        s.method = methods[m];
+        edit_.method = s.method;
+        restart(s, std::string("method ") + methodName(s.method) + ": accumulation restarted");
+        return;
+    }
+    track("method");
     bool apply = false;
     const int64_t step = 1000, stepFast = 10000;
     ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);

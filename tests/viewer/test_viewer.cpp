@@ -408,6 +408,34 @@ TEST_F(ViewerTest, ExportEqualsIndependentRender) {
     }
 }
 
+// `tpb view --method pt` runs the path tracer in the viewer's Driver: its export of the shown bin
+// and its steady image equal `tpb render --method pt` with the same seed and passes (the same
+// integrator through the same Driver), and the picture is not black. Would fail if the viewer
+// ignored --method (the beams' film differs) or the path tracer's passes differed between the two.
+TEST_F(ViewerTest, PathTracerRunsLiveInTheViewer) {
+    const fs::path out = dir_ / "ref_pt";
+    const Proc ref = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs +
+                                  " --method pt -q -o " + q(out),
+                              out);
+    ASSERT_EQ(ref.code, 0) << ref.err;
+    const fs::path base = dir_ / "view_pt";
+    const Proc r = runXvfb(std::string(TPB_BINARY) + " view " + q(dir_ / "scene.json") + kRenderArgs + " --method pt" +
+                               " --bin " + std::to_string(bin()) + " --after-passes 2 --window-size 1280 800" +
+                               " --screenshot " + q(base.string() + ".png") + " --export " + q(base),
+                           base);
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const Exr got = readExrFile(base / viewerFrameName(bin(), "real_delta"));
+    const Exr want = readExrFile(out / "frames" / frameName(bin()));
+    ASSERT_EQ(got.w, want.w);
+    EXPECT_LE(maxRelDiff(got, want), 1e-6);
+    EXPECT_LE(maxRelDiff(readExrFile(base / "steady.exr"), readExrFile(out / "steady.exr")), 1e-6);
+    double sum = 0.0;
+    for (float v : got.rgb) sum += v;
+    EXPECT_GT(sum, 0.0) << "the path tracer's frame is black";
+    const Exr beams = readExrFile(reference(kModes[0]) / "frames" / frameName(bin()));
+    EXPECT_GT(maxRelDiff(got, beams), 1e-3) << "the viewer showed the photon beams' film, not the path tracer's";
+}
+
 // The unwarping and emission toggles change the picture (same film, another view of it).
 TEST_F(ViewerTest, TogglesChangeThePicture) {
     const Proc& r0 = view(kModes[0]);
