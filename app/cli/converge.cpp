@@ -144,33 +144,34 @@ void renderPathTraced(const PreparedRender& prepared, const PathTracedRenderRequ
     const int64_t passes = ps.passes;
     const double budget = ps.timeBudgetSec;
     if (passes == 0 && budget == 0.0) std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
-    TransientFilm film(scene.camera.width, scene.camera.height, prepared.time);
-    PathTracerStats st;
+    // The path tracer through the same Driver as every integrator (threads, tiles, passes, time
+    // budget; a first Ctrl-C/SIGTERM stops after the pass in progress).
+    RenderSettings ds = ps;
+    ds.method = Method::PathTracer;
+    Driver drv(scene, ds, prepared.time);
     std::vector<std::pair<double, double>> passTimes;  // (pass seconds, elapsed)
     const bool tty = isatty(STDERR_FILENO) && !req.quiet;
     const double t0 = nowSec();
-    {
-        for (uint64_t pass = 1;; ++pass) {
-            if (interrupted()) break;
-            if (passes > 0 && static_cast<int64_t>(pass) > passes) break;
-            if (budget > 0.0 && nowSec() - t0 >= budget) break;
-            const double tp = nowSec();
-            renderPathTracerPass(scene, ps, pass, film, &st, &interruptFlag());
-            if (interrupted()) break;  // partial pass: the film stays per-tile consistent
-            const double now = nowSec();
-            passTimes.emplace_back(now - tp, now - t0);
-            if (req.quiet) continue;
-            if (tty)
-                std::fprintf(stderr, "\rpass %llu  %d spp/pass  %.2f s/pass  %.1f s ", static_cast<unsigned long long>(pass),
-                             ps.samplesPerPixel, now - tp, now - t0);
-            else if (pass == 1 || pass % 10 == 0 || (passes > 0 && static_cast<int64_t>(pass) == passes))
-                std::fprintf(stderr, "pass %llu: %.3f s\n", static_cast<unsigned long long>(pass), now - tp);
-        }
-        if (tty) std::fprintf(stderr, "\n");
-        if (interrupted() && !req.quiet)
-            std::fprintf(stderr, "interrupted by %s: writing the %zu finished passes\n", interruptName().c_str(),
-                         passTimes.size());
-    }
+    drv.start([&](const PassStats& p) {
+        passTimes.emplace_back(p.passSec, p.elapsedSec);
+        if (req.quiet) return;
+        if (tty)
+            std::fprintf(stderr, "\rpass %llu  %d spp/pass  %.2f s/pass  %.1f s ", static_cast<unsigned long long>(p.pass),
+                         ps.samplesPerPixel, p.passSec, p.elapsedSec);
+        else if (p.pass == 1 || p.pass % 10 == 0 || (passes > 0 && static_cast<int64_t>(p.pass) == passes))
+            std::fprintf(stderr, "pass %llu: %.3f s\n", static_cast<unsigned long long>(p.pass), p.passSec);
+    });
+    setInterruptDriver(&drv);
+    drv.wait();
+    setInterruptDriver(nullptr);
+    if (drv.failure()) std::rethrow_exception(drv.failure());
+    if (tty) std::fprintf(stderr, "\n");
+    if (interrupted() && !req.quiet)
+        std::fprintf(stderr, "interrupted by %s: writing the %zu finished passes\n", interruptName().c_str(),
+                     passTimes.size());
+    PathTracerStats st;
+    for (const PassStats& p : drv.history()) st += p.paths;
+    const TransientFilm& film = drv.film();
     const bool stoppedBySignal = interrupted();
     const double wall = nowSec() - t0;
     if (st.laserSamples > 0)
@@ -347,9 +348,8 @@ struct MethodResult {
     std::vector<Row> rows;
     PowerLawFit fitVolume, fitSteady, fitVolumeCorr, fitVolumeL1, fitSteadyL1;
     std::vector<double> finalPerFrame;
-    std::unique_ptr<Driver> driver;         // beams
-    std::unique_ptr<TransientFilm> ptFilm;  // pt
-    const TransientFilm& film() const { return driver ? driver->film() : *ptFilm; }
+    std::unique_ptr<Driver> driver;  // runs the method's integrator
+    const TransientFilm& film() const { return driver->film(); }
     std::vector<double> times() const {
         std::vector<double> t;
         for (const Row& r : rows) t.push_back(r.elapsed);
@@ -393,7 +393,8 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
                             "are independent\n",
                             static_cast<unsigned long long>(cx.ref.info.seed), static_cast<unsigned long long>(ps.seed));
         }
-        res.ptFilm = std::make_unique<TransientFilm>(cx.scene.camera.width, cx.scene.camera.height, cx.prepared.time);
+        ps.method = Method::PathTracer;
+        res.driver = std::make_unique<Driver>(cx.scene, ps, cx.prepared.time);
     }
     // Checkpoints: geometric in render time (or in passes without a time budget), plus --at, plus
     // the first --every-pass passes, plus the last pass.
@@ -414,7 +415,7 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
         r.cpu = cpu;
         r.passes = done;
         r.spp = method == "pt" ? done * ps.samplesPerPixel : done;
-        if (res.driver) r.radius = res.driver->lastPass().beamRadius;
+        if (method == "beams") r.radius = res.driver->lastPass().beamRadius;
         r.err = compareWithReference(res.film(), cx.ref, cx.axis, c.perFrame, cx.mask.empty() ? nullptr : &cx.mask);
         r.corrVolume = noiseCorrected(r.err.volume, cx.floorVolume);
         r.corrSteady = noiseCorrected(r.err.steady, cx.floorSteady);
@@ -429,12 +430,7 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
         if (cx.passes > 0 && static_cast<int64_t>(pass) > cx.passes) break;
         if (byTime && elapsed >= cx.budget) break;
         const double t0 = nowSec(), c0 = cpuSec();
-        if (res.driver) {
-            if (!res.driver->runPass(pass)) break;
-        } else {
-            renderPathTracerPass(cx.scene, ps, pass, *res.ptFilm, nullptr, &interruptFlag());
-            if (interrupted()) break;
-        }
+        if (!res.driver->runPass(pass)) break;  // any method: the integrator of its settings
         wall += nowSec() - t0;
         cpu += cpuSec() - c0;
         elapsed = cpuClock ? cpu : wall;

@@ -454,15 +454,20 @@ ReferenceVolume renderReference(const Scene& scene, const TimeBins& time, const 
         info.seed = ps.seed;
         info.maxDepth = ps.maxDepth;
         info.samplesPerPixel = std::max(1, ps.samplesPerPixel);
-        TransientFilm fa(W, H, time), fb(W, H, time);
+        // Two films of the same passes split by parity (odd / even), each run by a Driver: pass i
+        // depends only on (seed, i), so together they are the film of passes 1..done.
+        ps.method = Method::PathTracer;
+        Driver da(scene, ps, time), db(scene, ps, time);
         int64_t done = 0;
         while (budgetLeft(done)) {
             const uint64_t pass = static_cast<uint64_t>(done + 1);
-            renderPathTracerPass(scene, ps, pass, pass % 2 == 1 ? fa : fb, nullptr, abort);
-            if (abort && abort->load()) break;  // the interrupted pass is partial: left in its film (per tile)
+            if (!(pass % 2 == 1 ? da : db).runPass(pass)) break;
+            if (abort && abort->load()) break;  // checked between passes: every finished pass is whole
             ++done;
             if (progress) progress(done, nowSec() - t0);
         }
+        const TransientFilm& fa = da.film();
+        const TransientFilm& fb = db.film();
         info.passes = done;
         info.interrupted = abort && abort->load();
         const double na = static_cast<double>((done + 1) / 2), nb = static_cast<double>(done / 2);

@@ -21,7 +21,7 @@ CameraPassStats& CameraPassStats::operator+=(const CameraPassStats& o) {
     return *this;
 }
 
-void renderPixel(const Scene& scene, const CameraPassEstimators& est, const CameraPassSettings& s, const TimeBins& time,
+void renderPixel(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,
                  int x, int y, CameraPassScratch& scratch, CameraPassStats& stats) {
     const uint64_t pixelIndex = static_cast<uint64_t>(y) * scene.camera.width + x;
     Rng rng(s.seed, Stream::Camera, s.pass, pixelIndex);
@@ -79,7 +79,7 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
     }
 }
 
-void renderTile(const Scene& scene, const CameraPassEstimators& est, const CameraPassSettings& s, TransientFilm& film,
+void renderTile(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, TransientFilm& film,
                 int tile, CameraPassScratch& scratch, CameraPassStats& stats) {
     const TileRect r = film.tileRect(tile);
     TransientFilm::TileWriter writer(film, tile);

@@ -11,7 +11,9 @@
 
 namespace tpb {
 
-struct CameraPassSettings {
+// The arguments of one camera pass (filled by the photon-beams integrator from RenderSettings and
+// the pass index; the kernel radii and time profile belong to the estimators: EstimatorPass).
+struct CameraPassParams {
     uint64_t seed = 1;
     uint64_t pass = 1;
     int maxDepth = 16;
@@ -38,12 +40,12 @@ struct CameraPassScratch {
 };
 
 // Renders one pixel's estimate for this pass into `scratch.acc` (no film access).
-void renderPixel(const Scene& scene, const CameraPassEstimators& est, const CameraPassSettings& s, const TimeBins& time,
+void renderPixel(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,
                  int x, int y, CameraPassScratch& scratch, CameraPassStats& stats);
 
 // Renders the pixels of `tile` into the film (the film's TileWriter locks that tile): for tools and
 // tests; the Driver runs the photon beams integrator (integrators/photon_beams.h) instead.
-void renderTile(const Scene& scene, const CameraPassEstimators& est, const CameraPassSettings& s, TransientFilm& film,
+void renderTile(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, TransientFilm& film,
                 int tile, CameraPassScratch& scratch, CameraPassStats& stats);
 
 }  // namespace tpb

@@ -337,41 +337,4 @@ void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, 
     }
 }
 
-void renderPathTracerPass(const Scene& scene, const RenderSettings& s, uint64_t pass, TransientFilm& film,
-                          PathTracerStats* stats, const std::atomic<bool>* abort) {
-    TPB_CHECK(film.width() == scene.camera.width && film.height() == scene.camera.height);
-    const int threads = resolveThreads(s.threads);
-    std::vector<PixelAccumulator> accs(static_cast<size_t>(threads), PixelAccumulator(film.bins()));
-    // Per-tile tallies, summed in tile order: the stats do not depend on the thread count either.
-    std::vector<PathTracerStats> tileStats(static_cast<size_t>(film.tileCount()));
-    parallelFor(film.tileCount(), threads, [&](int64_t tile, int t) {
-        PixelAccumulator& acc = accs[static_cast<size_t>(t)];
-        PathTracerStats& st = tileStats[static_cast<size_t>(tile)];
-        const TileRect r = film.tileRect(static_cast<int>(tile));
-        TransientFilm::TileWriter writer(film, static_cast<int>(tile));
-        for (int y = r.y0; y < r.y0 + r.h; ++y)
-            for (int x = r.x0; x < r.x0 + r.w; ++x) {
-                pathTracePixel(scene, s, pass, film.time(), x, y, acc, st);
-                writer.addPixel(x, y, acc);
-                acc.clearTouched();
-            }
-    }, abort);
-    PathTracerStats total;
-    for (const PathTracerStats& st : tileStats) total += st;
-    total.flushInto(film.stats);
-    if (stats) *stats += total;
-}
-
-int64_t renderPathTracer(const Scene& scene, const RenderSettings& s, uint64_t firstPass, int64_t passes,
-                         TransientFilm& film, PathTracerStats* stats, const std::atomic<bool>* abort) {
-    int64_t done = 0;
-    for (int64_t i = 0; i < passes; ++i) {
-        if (abort && abort->load()) break;
-        renderPathTracerPass(scene, s, firstPass + static_cast<uint64_t>(i), film, stats, abort);
-        if (abort && abort->load()) break;  // the pass may be incomplete
-        ++done;
-    }
-    return done;
-}
-
 }  // namespace tpb

@@ -77,17 +77,7 @@ struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or 
 void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, const TimeBins& time, int x,
                     int y, PixelAccumulator& acc, PathTracerStats& stats);
 
-// Renders one pass (samplesPerPixel samples per pixel, `pass` keys the RNG) into the film, whole
-// tiles per thread (TransientFilm::TileWriter), both time axes and the steady state. The film must
-// have the camera's resolution. Its stats receive the pass's tallies; `stats` (optional) too.
-// The film does not depend on the number of threads. A set `abort` stops handing out tiles.
-void renderPathTracerPass(const Scene& scene, const RenderSettings& s, uint64_t pass, TransientFilm& film,
-                          PathTracerStats* stats = nullptr, const std::atomic<bool>* abort = nullptr);
-
-// Passes firstPass, firstPass + 1, ..., firstPass + passes - 1 into the film (accumulating; the
-// film shows the average over passes). Returns the number of passes completed.
-int64_t renderPathTracer(const Scene& scene, const RenderSettings& s, uint64_t firstPass, int64_t passes,
-                         TransientFilm& film, PathTracerStats* stats = nullptr,
-                         const std::atomic<bool>* abort = nullptr);
+// Whole passes run through the Driver (render/driver.h) with Method::PathTracer: the integrator is
+// PathTracerIntegrator (integrators/path_tracer_integrator.h).
 
 }  // namespace tpb

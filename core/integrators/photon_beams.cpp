@@ -38,7 +38,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     const double t0 = wallSec();
 
     // 1. Photon pass (only the stages the scene needs).
-    PhotonTraceSettings pt;
+    PhotonPassParams pt;
     pt.seed = settings_.seed;
     pt.pass = ctx.pass;
     pt.photons = settings_.photonsPerPass;

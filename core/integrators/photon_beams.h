@@ -47,7 +47,7 @@ private:
     std::unique_ptr<VolumeEstimator> volume_;    // settings.volumeEstimator, kept across passes
     std::unique_ptr<SurfaceEstimator> surface_;  // settings.surfaceEstimator
     CameraPassEstimators estimators_;            // this pass's (null: stage off or nothing to gather)
-    CameraPassSettings camera_;
+    CameraPassParams camera_;
     std::vector<CameraPassScratch> scratch_;     // per thread
     std::vector<CameraPassStats> tileStats_;     // per tile, summed in tile order
 };

@@ -30,7 +30,7 @@ double openBeamLength(const Scene& scene, const Medium& m, double eta, double op
     return std::isfinite(sigmaScatter) ? std::min(wanted, 16.2 / sigmaScatter) : 10.0 * diag;
 }
 
-[[noreturn]] void mapTooLarge(const PhotonTraceSettings& s, const std::string& who) {
+[[noreturn]] void mapTooLarge(const PhotonPassParams& s, const std::string& who) {
     throw UserError("", 0, "render.photons_per_pass",
                     "pass " + std::to_string(s.pass) + ": " + who + " stored more than " + humanBytes(s.maxMapBytes) +
                         " of photon beams and surface photons, the memory limit (TPB_MAX_FILM_BYTES); lower "
@@ -42,7 +42,7 @@ uint64_t mapBytes(size_t beams, size_t photons) { return beams * sizeof(Beam) + 
 
 }  // namespace
 
-void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index, PhotonMap& out) {
+void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out) {
     Rng rng(s.seed, Stream::Photon, s.pass, static_cast<uint64_t>(index));
     double lightPdf;
     const int li = scene.pickLight(rng.uniform(), lightPdf);
@@ -138,7 +138,7 @@ void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index
     }
 }
 
-PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s, const std::atomic<bool>* abort) {
+PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std::atomic<bool>* abort) {
     // Fixed batches so the output order does not depend on the number of threads.
     constexpr int64_t kBatch = 1024;
     const int64_t batches = (s.photons + kBatch - 1) / kBatch;

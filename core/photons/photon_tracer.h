@@ -46,7 +46,9 @@ struct PhotonMap {
     int64_t regionOverflows = 0;   // photons ended because their region stack was full (RegionStack)
 };
 
-struct PhotonTraceSettings {
+// The arguments of one photon pass (not a settings copy: the photon-beams integrator fills them
+// from RenderSettings and the pass index, integrators/photon_beams.cpp).
+struct PhotonPassParams {
     uint64_t seed = 1;
     uint64_t pass = 0;
     int64_t photons = 1000;
@@ -64,11 +66,11 @@ struct PhotonTraceSettings {
     uint64_t maxMapBytes = 0;
 };
 
-PhotonMap tracePhotons(const Scene& scene, const PhotonTraceSettings& s,
+PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s,
                        const std::atomic<bool>* abort = nullptr);
 
 // Traces photon `index` of the pass (deterministic given seed, pass, index). Appends to `out`.
 // Throws UserError if this photon alone stores more than s.maxMapBytes.
-void tracePhoton(const Scene& scene, const PhotonTraceSettings& s, int64_t index, PhotonMap& out);
+void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out);
 
 }  // namespace tpb

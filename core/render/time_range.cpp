@@ -48,7 +48,7 @@ TimeRangeFit measureArrivalRange(const Scene& scene, const RenderSettings& setti
     // Histogram over a window 4x wider than the heuristic one.
     TimeBins wide{t0, 4.0 * (t1 - t0) / 4096.0, 4096};
     const int threads = resolveThreads(settings.threads);
-    PhotonTraceSettings pt;
+    PhotonPassParams pt;
     pt.seed = settings.seed ^ 0x9E3779B97F4A7C15ull;
     pt.pass = 0;
     pt.photons = pilotPhotons;
@@ -66,7 +66,7 @@ TimeRangeFit measureArrivalRange(const Scene& scene, const RenderSettings& setti
     }
     progress(kPhotonShare);
     const double diag = std::max(scene.bounds.diagonal(), 1e-6);
-    CameraPassSettings cs;
+    CameraPassParams cs;
     cs.seed = pt.seed;
     cs.pass = 0;
     // Generous kernels (a low-noise pilot), never wider than kPilotMaxRadiusFraction of the diagonal:

@@ -6,6 +6,7 @@
 // The references here are written from scratch in this file (own ray-plane/sphere code, own
 // Snell refraction, own Henyey-Greenstein, own Gauss-Legendre): only Camera::generate (the raster
 // to ray mapping) is shared with the renderer.
+#include "support/path_tracer_passes.h"
 #include "integrators/path_tracer.h"
 #include "scene/scene.h"
 #include "support/scene_builder.h"
@@ -552,7 +553,7 @@ TEST(PathTracer, FirstArrivalIsGeometricPathLengthWithMirror) {
     s.threads = 2;
     TransientFilm film(W, H, scene.time);
     PathTracerStats st;
-    renderPathTracerPass(*scene, s, 1, film, &st);
+    test::renderPathTracerPass(*scene, s, 1, film, &st);
     EXPECT_EQ(st.rejected, 0);
 
     int checked = 0, viaMirror = 0, empty = 0;
@@ -620,7 +621,7 @@ TEST(PathTracer, FirstArrivalThroughGlassSlab) {
     s.seed = 11;
     s.samplesPerPixel = 24;
     TransientFilm film(W, H, scene.time);
-    renderPathTracerPass(*scene, s, 1, film);
+    test::renderPathTracerPass(*scene, s, 1, film);
     EXPECT_EQ(film.stats.rejectedSamples.load(), 0);
 
     int checked = 0;
@@ -721,7 +722,7 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
         auto scene = test::prepareTestScene(d);
         TransientFilm film(16, 16, scene.time);
         PathTracerStats st;
-        EXPECT_EQ(renderPathTracer(*scene, s, 1, passes, film, &st), passes);
+        EXPECT_EQ(test::renderPathTracer(*scene, s, 1, passes, film, &st), passes);
         EXPECT_EQ(st.rejected, 0);
         EXPECT_GT(st.laserSamples, 0);
         double steady, binned[2];
@@ -745,7 +746,7 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
         s2.maxDepth = 6;  // OPL < 8 segments * 1.5 * box diagonal + camera distance < 120
         TransientFilm film(16, 16, scene.time);
         PathTracerStats st;
-        renderPathTracer(*scene, s2, 1, passes, film, &st);
+        test::renderPathTracer(*scene, s2, 1, passes, film, &st);
         EXPECT_GT(st.depthLimited, 0);
         std::vector<float> img;
         film.steadyImage(img);
@@ -1132,9 +1133,9 @@ TEST(PathTracer, OneAndTwoThreadsGiveIdenticalFilms) {
     TransientFilm f1(32, 32, scene.time), f2(32, 32, scene.time);
     PathTracerStats st1, st2;
     s.threads = 1;
-    renderPathTracer(*scene, s, 1, 2, f1, &st1);
+    test::renderPathTracer(*scene, s, 1, 2, f1, &st1);
     s.threads = 2;
-    renderPathTracer(*scene, s, 1, 2, f2, &st2);
+    test::renderPathTracer(*scene, s, 1, 2, f2, &st2);
     for (int a = 0; a < 2; ++a) {
         std::vector<double> v1, v2;
         f1.volume(static_cast<TimeAxis>(a), EmissionMode::Delta, v1);

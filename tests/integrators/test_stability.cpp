@@ -265,7 +265,7 @@ struct PassRunner {
 
     explicit PassRunner(const test::TestScene& s) : scene(*s), film(s->camera.width, s->camera.height, s.time) {}
     void run(uint64_t pass) {
-        PhotonTraceSettings pt;
+        PhotonPassParams pt;
         pt.seed = seed;
         pt.pass = pass;
         pt.photons = photons;
@@ -282,7 +282,7 @@ struct PassRunner {
         beam2d.prepare(scene, map, ep);
         CameraPassEstimators est;
         if (!beam2d.empty()) est.volume = &beam2d;
-        CameraPassSettings cs;
+        CameraPassParams cs;
         cs.seed = seed;
         cs.pass = pass;
         cs.maxDepth = cameraDepth;
@@ -616,7 +616,7 @@ TEST(StabilityThickMedium, SemiInfiniteSlabReflectsThePlaneAlbedoAndNothingPasse
       "lights": [{"type": "laser", "position": [0, 1, 0], "direction": [0, -1, 0], "power": 1}],
       "render": {"photons_per_pass": 20000, "radius": 0.01, "surface_radius": 0.05, "max_depth": 200, "seed": 9}})";
     auto sc = sceneFrom(json);
-    PhotonTraceSettings pt;
+    PhotonPassParams pt;
     pt.photons = 200000;
     pt.maxDepth = 200;
     pt.threads = 2;
@@ -917,7 +917,7 @@ TEST(StabilityIor, TotalInternalReflectionKeepsLightInside) {
                                  vec(Vec3(std::sin(a), std::cos(a), 0.0)) + R"(, "power": 1}]})";
         auto sc = sceneFrom(json);
         EXPECT_EQ(sc->lightPlacement[0].regions.top(), 1);  // the laser sits inside the glass
-        PhotonTraceSettings pt;
+        PhotonPassParams pt;
         pt.photons = 20000;
         pt.maxDepth = 2;  // glass -> top face -> gap (-> null boundary, no depth) -> fog
         const PhotonMap map = tracePhotons(*sc, pt);
@@ -974,7 +974,7 @@ TEST(StabilityAlbedoOne, InfiniteConservativeMediumRunsToMaxDepthWithConstantWei
       "media": {"m": {"sigma_s": 2.0, "g": 0.5}}, "global_medium": "m",
       "lights": [{"type": "point", "position": [0, 0, 0], "power": 4}]})";
     auto sc = sceneFrom(json);
-    PhotonTraceSettings pt;
+    PhotonPassParams pt;
     pt.photons = 20000;
     pt.maxDepth = 24;
     pt.threads = 2;
@@ -1007,7 +1007,7 @@ TEST(StabilityAlbedoOne, ClosedBoxFurnace) {
     };
     {
         auto sc = sceneFrom(json(0.5));
-        PhotonTraceSettings pt;
+        PhotonPassParams pt;
         pt.photons = 50000;
         pt.maxDepth = 1000;
         pt.threads = 2;
@@ -1023,7 +1023,7 @@ TEST(StabilityAlbedoOne, ClosedBoxFurnace) {
     }
     {
         auto sc = sceneFrom(json(1.0));
-        PhotonTraceSettings pt;
+        PhotonPassParams pt;
         pt.photons = 4000;
         pt.maxDepth = 48;
         pt.threads = 2;
@@ -1148,7 +1148,7 @@ TEST(StabilityDegenerate, LightInsideAGlassSphere) {
     EXPECT_EQ(sc->lightPlacement[0].regions.size, 2);
     EXPECT_EQ(sc->lightPlacement[0].regions.top(), 1);
     EXPECT_EQ(sc->cameraRegions.top(), 0);
-    PhotonTraceSettings pt;
+    PhotonPassParams pt;
     pt.photons = 20000;
     pt.maxDepth = 2;
     const PhotonMap map = tracePhotons(*sc, pt);
@@ -1287,7 +1287,7 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
         CameraPassEstimators est;
         if (!beam2d.empty()) est.volume = &beam2d;
         TransientFilm film(16, 16, sc.time);
-        CameraPassSettings cs;
+        CameraPassParams cs;
         CameraPassScratch scratch;
         scratch.acc.reset(film.bins());
         CameraPassStats stats;

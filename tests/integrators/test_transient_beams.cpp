@@ -251,7 +251,7 @@ TEST(TransientBeams, LongBeamsInAnUnboundedMediumLoseNothingTheFilmShows) {
     auto sc3 = sceneFrom(longer);
     ASSERT_LT(10.0 * sc->bounds.diagonal(), sc.time.endOpl() / 2);  // the old cut was well inside the film
 
-    PhotonTraceSettings pt;
+    PhotonPassParams pt;
     pt.photons = 2000;
     pt.maxDepth = 1;
     pt.beamLength = BeamLength::Long;

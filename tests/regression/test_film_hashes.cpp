@@ -14,6 +14,7 @@
 //     and a hash mismatch is a note. TPB_EXACT_HASHES=1 makes it exact everywhere.
 // A change that alters films on purpose re-records the file with TPB_UPDATE_HASHES=1 and says in
 // its commit message which scenes changed and why.
+#include "support/path_tracer_passes.h"
 #include "integrators/path_tracer.h"
 #include "integrators/preview.h"
 #include "render/driver.h"
@@ -118,7 +119,7 @@ Signature pathTracerSignature(const std::string& scenePath) {
     ps.maxDepth = 8;
     ps.threads = 2;
     TransientFilm film(scene->camera.width, scene->camera.height, p.time);
-    EXPECT_EQ(renderPathTracer(*scene, ps, 1, 2, film), 2) << scenePath;
+    EXPECT_EQ(test::renderPathTracer(*scene, ps, 1, 2, film), 2) << scenePath;
     Signature sig = filmSignature(film);
     Fnv fnv;
     fnv.h = std::stoull(sig.hash, nullptr, 16);

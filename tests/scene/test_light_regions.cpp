@@ -12,6 +12,7 @@
 //    counted overflows).
 // Inside/outside is decided here with the test's own rotation (Rodrigues), not with the renderer's
 // geometry.
+#include "support/path_tracer_passes.h"
 #include "render/driver.h"
 #include "base/error.h"
 #include "integrators/path_tracer.h"
@@ -103,7 +104,7 @@ Outside storedOutside(const test::TestScene& t, const Cage& cage, int passes, si
     Outside out;
     photons = beams = 0;
     for (int pass = 1; pass <= passes; ++pass) {
-        PhotonTraceSettings ts;
+        PhotonPassParams ts;
         ts.photons = t.settings.photonsPerPass;
         ts.seed = t.settings.seed;
         ts.pass = static_cast<uint64_t>(pass);
@@ -158,7 +159,7 @@ void expectDarkOutside(const test::TestScene& t) {
     ps.seed = 3;
     TransientFilm film(sc.camera.width, sc.camera.height, t.time);
     PathTracerStats st;
-    renderPathTracer(sc, ps, 1, 1, film, &st);
+    test::renderPathTracer(sc, ps, 1, 1, film, &st);
     film.steadyImage(img);
     const ImageSum pt = sumOf(img);
     EXPECT_EQ(pt.nonzero, 0) << "path-traced image of the outside: sum " << pt.sum;
@@ -372,7 +373,7 @@ std::vector<float> pathTracedImage(const test::TestScene& t) {
     ps.threads = 2;
     ps.seed = t.settings.seed;
     TransientFilm film(sc.camera.width, sc.camera.height, t.time);
-    renderPathTracer(sc, ps, 1, 1, film);
+    test::renderPathTracer(sc, ps, 1, 1, film);
     std::vector<float> img;
     film.steadyImage(img);
     return img;
@@ -423,7 +424,7 @@ TEST(AreaLightRegions, ALightAcrossAFogBoxFaceEmitsIntoItFromItsInsidePartOnly) 
       "shapes": [{"name": "fog box", "type": "box", "min": [-1, -1, -1], "max": [0, 1, 1], "material": "container", "interior_medium": "fog"}],
       "lights": [{"type": "area", "corner": [-0.5, 0.5, -0.25], "edge_u": [1, 0, 0], "edge_v": [0, 0, 0.5], "power": 1}]})");
     ASSERT_FALSE(sc->lightPlacement[0].uniform);
-    PhotonTraceSettings ts;
+    PhotonPassParams ts;
     ts.photons = 20000;
     ts.seed = 2;
     ts.pass = 1;
@@ -449,7 +450,7 @@ TEST(AreaLightRegions, ALightOnTheInsideOfAFogBoxCeilingEmitsIntoTheBox) {
       "materials": {"container": {"type": "null"}},
       "shapes": [{"name": "fog box", "type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": "container", "interior_medium": "fog"}],
       "lights": [{"type": "area", "corner": [-1, 1, -1], "edge_u": [2, 0, 0], "edge_v": [0, 0, 2], "power": 1}]})");
-    PhotonTraceSettings ts;
+    PhotonPassParams ts;
     ts.photons = 20000;
     ts.seed = 4;
     ts.pass = 1;
@@ -523,14 +524,14 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
       "materials": {"container": {"type": "null"}, "white": {"type": "diffuse"}},
       "shapes": [)" + quads + R"({"name": "wall", "type": "quad", "corner": [-1, -1, -9], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}],
       "lights": [{"type": "laser", "position": [0, 0, 0], "direction": [0, 0, -1], "power": 1}]})");
-    PhotonTraceSettings ts;
+    PhotonPassParams ts;
     ts.photons = 500;
     ts.pass = 1;
     const PhotonMap map = tracePhotons(*sc, ts);
     EXPECT_EQ(map.regionOverflows, 500);
     EXPECT_TRUE(map.photons.empty());
 
-    CameraPassSettings cs;
+    CameraPassParams cs;
     CameraPassScratch scratch{PixelAccumulator(sc.time.bins), {}};
     CameraPassStats cst;
     for (int y = 0; y < 4; ++y)
@@ -545,7 +546,7 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
     ps.threads = 1;
     TransientFilm film(4, 4, sc.time);
     PathTracerStats pst;
-    renderPathTracer(*sc, ps, 1, 1, film, &pst);
+    test::renderPathTracer(*sc, ps, 1, 1, film, &pst);
     EXPECT_EQ(pst.regionOverflows, 16);
     EXPECT_EQ(pst.shadowRays, 0);  // the paths never reached the wall
 
