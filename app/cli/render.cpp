@@ -136,7 +136,7 @@ void run(RenderCmd& c) {
     if (c.previewOnly) return;
     reportPlannedOutputs(prepared, outputs, previewExrSec);
 
-    if (c.method == "pt") {  // same outputs, rendered by the path tracer (cli_converge.cpp)
+    if (c.method == "pt") {  // same outputs, rendered by the path tracer (converge.cpp)
         renderPathTraced(prepared, outputs);
         return;
     }

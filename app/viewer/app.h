@@ -114,7 +114,7 @@ public:
     void run();
 
 private:
-    // session (view_data.cpp)
+    // session (data.cpp)
     void restart(const RenderSettings& s, const std::string& why);
     void updateFrame();
     void updateProfile();
@@ -127,7 +127,7 @@ private:
     FetchKey binEnergyKey() const;
     float binCentreOpl(int bin) const;
 
-    // UI (view_ui.cpp)
+    // UI (ui.cpp)
     void drawUi();
     void drawControls();
     void drawImagePanel();
@@ -144,7 +144,7 @@ private:
     void setBin(int bin);  // the user's choice: ends the automatic bin
     void setAutoBin(int bin);
 
-    // main loop (view_main.cpp)
+    // main loop (view.cpp)
     bool settled();  // nothing left to fetch, render or export
     void scriptedInput();  // screenshot mode: --click / --export, injected as ImGui mouse input
     void endFrameChecks();

@@ -1,5 +1,5 @@
 // Camera pass of Transient Photon Beams (paper Sec. 4): camera paths through specular surfaces,
-// the volume estimator (today the 2D beam kernel, estimators/beam2d.h) on every segment inside a
+// the volume estimator (by default the 2D beam kernel, estimators/beam2d.h) on every segment inside a
 // scattering medium, the surface estimator (transient progressive photon mapping,
 // estimators/surface_ppm.h) on the diffuse hit, visible emitters; every estimate is spread over
 // the time bins it covers (eqs. 12-15, time_splat.h) on both time axes.

@@ -1,6 +1,8 @@
-// Ray casting against the scene's surfaces. This is the only interface to Embree: no Embree type
-// appears outside geometry.cpp. Triangle meshes go to Embree triangle geometry; spheres are Embree
-// user geometry intersected analytically in double precision.
+// Ray casting against the scene's surfaces: the surfaces' only interface to Embree (no Embree type
+// appears in this header; the other Embree user is the beam accelerator, accel/beam_accel.cpp).
+// Triangle meshes go to Embree triangle geometry, their hit distance refined in double precision
+// against the triangle's plane; spheres are Embree user geometry intersected analytically in double
+// precision. A shape too large or too far away for Embree's float rays is refused (UserError).
 #pragma once
 #include "base/math.h"
 #include "scene/mesh.h"

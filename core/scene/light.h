@@ -1,6 +1,9 @@
-// Light sources and photon emission. Power is radiant flux (W, RGB); emitOpl the pulse instant as
-// optical path length (m). The region a photon starts in is the scene's business (Scene::
-// emissionRegions: where the emitting point lies, found from the light's LightPlacement).
+// Light sources and photon emission: point (uniform sphere), spot (uniform in the cutoff cone,
+// weighted by its smoothstep profile), area quad (uniform position, cosine-distributed direction:
+// Lambertian, one-sided, visible to the camera through areaRadiance) and laser (a collimated beam,
+// optionally of a radius). Power is radiant flux (W, RGB); emitOpl the pulse instant as optical
+// path length (m). The region a photon starts in is the scene's business (Scene::emissionRegions:
+// where the emitting point lies, found from the light's LightPlacement).
 #pragma once
 #include "base/math.h"
 #include "base/rng.h"
