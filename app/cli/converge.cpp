@@ -559,7 +559,7 @@ void writeEqualTimeStrip(const std::string& path, const ConvergeContext& cx, con
     for (int i = 0; i < K; ++i) {
         referenceFrame(cx.ref, cx.axis, bins[i], img);
         for (size_t p = 0; p < img.size(); p += 3)
-            lum.push_back(0.2126f * img[p] + 0.7152f * img[p + 1] + 0.0722f * img[p + 2]);
+            lum.push_back(static_cast<float>(luminance(Color(img[p], img[p + 1], img[p + 2]))));
     }
     std::sort(lum.begin(), lum.end());
     const float white = lum.empty() ? 0.0f : lum[static_cast<size_t>(0.995 * (lum.size() - 1))];

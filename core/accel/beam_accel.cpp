@@ -1,12 +1,15 @@
+// The photon-beam accelerators of accel/beam_accel.h: brute force, and Embree user geometry over the
+// beam pieces (the shared device of scene/embree_device.h; Embree errors are thrown as EmbreeError).
 #include "accel/beam_accel.h"
 
 #include "base/error.h"
+#include "scene/embree_device.h"
 
 #include <embree3/rtcore.h>
 
 #include <algorithm>
-#include <cstdio>
-#include <mutex>
+#include <cmath>
+#include <limits>
 
 namespace tpb {
 
@@ -65,18 +68,6 @@ private:
     std::vector<Piece> pieces_;
 };
 
-RTCDevice beamDevice() {
-    static RTCDevice device = [] {
-        RTCDevice d = rtcNewDevice(nullptr);
-        if (!d) {
-            std::fprintf(stderr, "error: cannot create the Embree device for photon beams\n");
-            std::abort();
-        }
-        return d;
-    }();
-    return device;
-}
-
 class EmbreeBeams final : public BeamAccel {
 public:
     ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
@@ -86,23 +77,34 @@ public:
         radius_ = radius;
         makePieces(beams, radius, pieces_);
         if (scene_) rtcReleaseScene(scene_);
-        scene_ = rtcNewScene(beamDevice());
-        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
-        RTCGeometry g = rtcNewGeometry(beamDevice(), RTC_GEOMETRY_TYPE_USER);
-        rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(pieces_.size()));
-        rtcSetGeometryUserData(g, this);
-        rtcSetGeometryBoundsFunction(g, &EmbreeBeams::boundsFn, this);
-        rtcSetGeometryIntersectFunction(g, &EmbreeBeams::intersectFn);
-        rtcSetGeometryOccludedFunction(g, &EmbreeBeams::occludedFn);
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(scene_, g);
-        rtcReleaseGeometry(g);
-        rtcCommitScene(scene_);
+        scene_ = nullptr;
+        try {
+            RTCDevice device = embreeDevice();
+            scene_ = rtcNewScene(device);
+            checkEmbree("creating the photon-beam scene");
+            rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
+            RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+            checkEmbree("creating the photon-beam geometry");
+            rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(pieces_.size()));
+            rtcSetGeometryUserData(g, this);
+            rtcSetGeometryBoundsFunction(g, &EmbreeBeams::boundsFn, this);
+            rtcSetGeometryIntersectFunction(g, &EmbreeBeams::intersectFn);
+            rtcSetGeometryOccludedFunction(g, &EmbreeBeams::occludedFn);
+            rtcCommitGeometry(g);
+            rtcAttachGeometry(scene_, g);
+            rtcReleaseGeometry(g);
+            rtcCommitScene(scene_);
+            checkEmbree("building the photon-beam BVH");
+        } catch (...) {
+            if (scene_) rtcReleaseScene(scene_);
+            scene_ = nullptr;  // candidates() then finds nothing rather than query a broken scene
+            throw;
+        }
     }
 
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits) const override {
         const size_t from = hits.size();
-        if (pieces_.empty()) return;
+        if (pieces_.empty() || !scene_) return;
         Context ctx;
         rtcInitIntersectContext(&ctx.base);
         ctx.self = this;

@@ -1,7 +1,8 @@
-// Ray casting with Embree 3. This is the only file that includes Embree.
+// Ray casting with Embree 3 (with accel/beam_accel.cpp, the only file that calls Embree's
+// geometry API).
 //
-// - One process-wide RTCDevice, created on first use; Embree errors are collected by an error
-//   callback and rethrown as std::runtime_error naming the operation.
+// - The device is the process-wide one of scene/embree_device.h; Embree errors are rethrown by
+//   checkEmbree() as EmbreeError naming the operation.
 // - Triangle meshes are Embree triangle geometry (float vertices). The positions kept here for
 //   normals and the double-precision refinement of t are the float-rounded ones, so that they
 //   describe exactly the triangles Embree intersects.
@@ -11,6 +12,7 @@
 //   into Impl::geoms.
 #include "scene/geometry.h"
 #include "base/error.h"
+#include "scene/embree_device.h"
 
 #include <embree3/rtcore.h>
 
@@ -25,64 +27,6 @@
 
 namespace tpb {
 namespace {
-
-// ---- device and errors ------------------------------------------------------------------------
-
-const char* errorName(RTCError code) {
-    switch (code) {
-        case RTC_ERROR_NONE: return "no error";
-        case RTC_ERROR_UNKNOWN: return "unknown error";
-        case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-        case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-        case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-        case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-        case RTC_ERROR_CANCELLED: return "cancelled";
-    }
-    return "unrecognised error";
-}
-
-// Message of the last Embree error raised on this thread (Embree calls the error function on the
-// thread that made the failing API call).
-thread_local std::string tlsEmbreeMessage;
-
-void onEmbreeError(void*, RTCError code, const char* str) {
-    tlsEmbreeMessage = std::string(errorName(code));
-    if (str && *str) tlsEmbreeMessage += std::string(": ") + str;
-}
-
-// Throws if an Embree call on this thread failed since the last check.
-void checkEmbree(RTCDevice device, const char* during) {
-    const RTCError code = rtcGetDeviceError(device);
-    if (code == RTC_ERROR_NONE) return;
-    std::string msg = tlsEmbreeMessage.empty() ? errorName(code) : tlsEmbreeMessage;
-    tlsEmbreeMessage.clear();
-    throw std::runtime_error(std::string("Embree error while ") + during + ": " + msg);
-}
-
-struct SharedDevice {
-    RTCDevice device = nullptr;
-    std::string failure;
-    SharedDevice() {
-        device = rtcNewDevice("verbose=0");
-        if (!device) {
-            failure = errorName(rtcGetDeviceError(nullptr));
-            return;
-        }
-        rtcSetDeviceErrorFunction(device, onEmbreeError, nullptr);
-    }
-    ~SharedDevice() {
-        // Scenes hold their own reference, so this is safe even if a Geometry outlives us.
-        if (device) rtcReleaseDevice(device);
-    }
-};
-
-RTCDevice sharedDevice() {
-    static SharedDevice shared;  // created on first use, thread-safe initialisation
-    if (!shared.device)
-        throw std::runtime_error("cannot create the Embree device (" + shared.failure +
-                                 "); Embree needs an x86-64 CPU with SSE2 or newer");
-    return shared.device;
-}
 
 // ---- float conversions ---------------------------------------------------------------------------
 
@@ -279,23 +223,23 @@ struct Geometry::Impl {
         rtcCommitGeometry(geom);
         rtcAttachGeometryByID(scene, geom, id);
         rtcReleaseGeometry(geom);  // the scene holds it now
-        checkEmbree(device, what);
+        checkEmbree(what);
         geoms.push_back(info);
         return id;
     }
 };
 
 Geometry::Geometry() : impl_(std::make_unique<Impl>()) {
-    impl_->device = sharedDevice();
+    impl_->device = embreeDevice();
     impl_->scene = rtcNewScene(impl_->device);
-    checkEmbree(impl_->device, "creating the scene");
+    checkEmbree("creating the scene");
     // Robust mode: conservative traversal and no accuracy-reducing shortcuts, so that rays through
     // shared edges of neighbouring triangles are not lost (costs ~10% on the armadillo). High
     // build quality: the scene is static and built once.
     rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
     try {
-        checkEmbree(impl_->device, "configuring the scene");
+        checkEmbree("configuring the scene");
     } catch (...) {
         rtcReleaseScene(impl_->scene);
         throw;
@@ -332,7 +276,7 @@ void Geometry::addMesh(const TriangleMesh& mesh, int shapeId) {
     data.triangles = mesh.triangles;
 
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    checkEmbree(impl_->device, "creating a triangle mesh");
+    checkEmbree("creating a triangle mesh");
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
         geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
     auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
@@ -340,8 +284,9 @@ void Geometry::addMesh(const TriangleMesh& mesh, int shapeId) {
         data.triangles.size()));
     if (!vb || !ib) {
         rtcReleaseGeometry(geom);
-        checkEmbree(impl_->device, "allocating triangle mesh buffers");
-        throw std::runtime_error("Embree could not allocate triangle mesh buffers");
+        checkEmbree("allocating triangle mesh buffers");
+        throw EmbreeError(RTC_ERROR_OUT_OF_MEMORY, "Embree could not allocate triangle mesh buffers; reduce the "
+                                                   "scene's triangles or free memory");
     }
     for (size_t i = 0; i < nv; ++i) {
         vb[3 * i + 0] = static_cast<float>(data.positions[i].x);
@@ -376,7 +321,7 @@ void Geometry::addSphere(const Vec3& center, double radius, int shapeId) {
     impl_->spheres.push_back(SphereData{center, radius});
     SphereData* s = &impl_->spheres.back();
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
-    checkEmbree(impl_->device, "creating a sphere");
+    checkEmbree("creating a sphere");
     rtcSetGeometryUserPrimitiveCount(geom, 1);
     rtcSetGeometryUserData(geom, s);
     rtcSetGeometryBoundsFunction(geom, sphereBounds, nullptr);
@@ -396,7 +341,7 @@ void Geometry::addSphere(const Vec3& center, double radius, int shapeId) {
 void Geometry::commit() {
     TPB_CHECK(!impl_->committed);
     rtcCommitScene(impl_->scene);
-    checkEmbree(impl_->device, "building the acceleration structure");
+    checkEmbree("building the acceleration structure");
     impl_->committed = true;
 }
 
