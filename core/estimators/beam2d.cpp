@@ -154,8 +154,7 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
         // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r.
         const Color kappa = pass_.profile == TimeProfile::Exact ? m.sigma_t + tauB * c : Color(0.0);
         const double tBeam = b.opl0 + eta * o.sb0;
-        splatSpread(sink.time, sink.acc, sink.tally, L, kappa, o.sMinus, o.sPlus, path.oplCam + tBeam, eta * (1.0 + c),
-                    tBeam, eta * c);
+        sink.spread(L, kappa, o.sMinus, o.sPlus, path.oplCam + tBeam, eta * (1.0 + c), tBeam, eta * c);
     }
     return estimates;
 }

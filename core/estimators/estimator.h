@@ -45,10 +45,20 @@ struct PathState {
 
 // Where an estimate goes: the pixel's accumulator for this pass, on the film's time axis; tally
 // counts what fell outside the film and non-finite estimates (dropped).
+// Estimators write through spread() and instant() only, so what the film does with an estimate's
+// time profile (the bins, a progressive time kernel) is decided here, not in every estimator.
 struct PixelSink {
     const TimeBins& time;
     PixelAccumulator& acc;
     FilmTally& tally;
+    // Energy L along s in [s0, s1] of the camera segment with density exp(-kappa s), arriving at
+    // aReal + bReal s (real axis) and aUnwarped + bUnwarped s (unwarped axis), OPL in m.
+    void spread(const Color& L, const Color& kappa, double s0, double s1, double aReal, double bReal,
+                double aUnwarped, double bUnwarped) {
+        splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnwarped, bUnwarped);
+    }
+    // Energy L arriving at one instant on each axis.
+    void instant(const Color& L, double tReal, double tUnwarped) { splatInstant(time, acc, tally, L, tReal, tUnwarped); }
 };
 
 // Per-thread scratch space of the estimators (kept across pixels to avoid allocations).
@@ -71,6 +81,12 @@ public:
     virtual ~VolumeEstimator() = default;
     virtual std::string name() const = 0;
     virtual int dim() const = 0;  // kernel dimension for the radius schedule
+    // What the photon pass must store for this estimator (beams, points at scattering events, or both).
+    struct Needs {
+        bool beams = true;
+        bool points = false;
+    };
+    virtual Needs needs() const { return {}; }
     // Builds what gather() needs from this pass's photon map (which must outlive the pass).
     virtual void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) = 0;
     virtual bool empty() const = 0;            // nothing to gather this pass

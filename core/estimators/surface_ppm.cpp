@@ -34,7 +34,7 @@ int64_t SurfacePpmEstimator::gather(const SurfaceQuery& q, const PathState& path
         if (!scene.surfacePointsSeeEachOther(anchor, q.ng, photonAnchor(scene, ph), ph.normal)) return;
         const Color L = path.beta * fr * ph.power * invArea;
         ++estimates;
-        splatInstant(sink.time, sink.acc, sink.tally, L, path.oplCam + ph.opl, ph.opl);
+        sink.instant(L, path.oplCam + ph.opl, ph.opl);
     });
     return estimates;
 }

@@ -57,6 +57,15 @@ struct SettingsSource {
     double sceneDiagonal = 0.0;
 };
 
+// The optional progressive time kernel of the photon-beams estimators (issue 14): every estimate's
+// time profile is smoothed along time by a kernel whose width shrinks pass after pass with the
+// spatial radius (README "Derivations": the rates). Box: the only kind so far.
+enum class TimeKernelKind { None, Box };
+struct TimeKernelSettings {
+    TimeKernelKind kind = TimeKernelKind::None;
+    double width = 0.0;  // m of OPL, full width of pass 1's kernel; 0 = chosen from the scene
+};
+
 struct RenderSettings {
     Method method = Method::Beams;
 
@@ -78,6 +87,7 @@ struct RenderSettings {
     // The density estimators, by name (estimators/registry.cpp, docs/estimators.md).
     std::string volumeEstimator = "beam2d";  // along camera segments in media
     std::string surfaceEstimator = "ppm";    // at diffuse camera-path vertices
+    TimeKernelSettings timeKernel;           // off by default
     uint64_t maxPhotonMapBytes = 0;  // per pass; 0 = maxFilmBytes() (memory_budget.h)
 
     // ---- path tracer ----

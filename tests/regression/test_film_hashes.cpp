@@ -9,11 +9,17 @@
 //   - The film depends on the build (optimisation level, sanitizers and compiler change the last
 //     bits, which can turn a path at a grazing hit): a build other than the one recorded (build
 //     type, compiler, sanitizer) skips the test, saying so. tools/test's Release build checks it.
-//   - Same build, same CPU model: the hash must match exactly (and the sums to 1e-5).
-//   - Same build on another CPU (Embree picks its SIMD kernels by CPU): the sums must match to 1e-3
-//     and a hash mismatch is a note. TPB_EXACT_HASHES=1 makes it exact everywhere.
-// A change that alters films on purpose re-records the file with TPB_UPDATE_HASHES=1 and says in
-// its commit message which scenes changed and why.
+//   - Embree picks its SIMD kernels by the CPU's instruction sets, which can turn a path at a
+//     grazing hit, so the file holds one block per CPU ("cpu <model> [<isa>]", the model name plus
+//     the SIMD sets Embree dispatches on; a block without "[...]" was recorded before the sets were
+//     part of the key and stands for its model). Same build, a block recorded on this CPU: the hash
+//     must equal that block's exactly (and the sums to 1e-5).
+//   - Same build, no block of this CPU: the sums must match to 1e-3 and a hash mismatch is a note.
+//     TPB_EXACT_HASHES=1 makes it exact everywhere.
+// A change that alters films on purpose re-records the file with TPB_UPDATE_HASHES=1 (this CPU's
+// block only: the other blocks are stale then) and says in its commit message which scenes changed
+// and why. TPB_UPDATE_HASHES=add adds this CPU's block and keeps the others: for a new machine when
+// nothing changed on purpose.
 #include "support/path_tracer_passes.h"
 #include "integrators/path_tracer.h"
 #include "integrators/preview.h"
@@ -61,6 +67,46 @@ std::string cpuModel() {
     while (std::getline(in, line))
         if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
     return "unknown";
+}
+
+// The CPU's key in the hash file: its model name and the SIMD instruction sets Embree chooses its
+// kernels by (a machine with AVX-512 runs other kernels than one with AVX2 only).
+std::string cpuKey() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line, flags;
+    while (std::getline(in, line))
+        if (line.rfind("flags", 0) == 0) { flags = " " + line.substr(line.find(':') + 1) + " "; break; }
+    std::string isa;
+    for (const char* f : {"sse4_2", "avx", "avx2", "avx512f", "avx512vl", "avx512bw", "avx512dq"})
+        if (flags.find(std::string(" ") + f + " ") != std::string::npos) isa += (isa.empty() ? "" : " ") + std::string(f);
+    return cpuModel() + " [" + isa + "]";
+}
+
+// A block of the hash file: the CPU it was recorded on, the build, the signatures by scene.
+struct HashBlock {
+    std::string cpu, build;
+    std::map<std::string, Signature> scenes;
+    // Recorded on this machine: the same key, or a legacy block (no "[...]") of the same model.
+    bool ofThisCpu() const { return cpu == cpuKey() || (cpu.find('[') == std::string::npos && cpu == cpuModel()); }
+};
+
+std::vector<HashBlock> readHashFile(const std::string& path) {
+    std::ifstream in(path);
+    std::vector<HashBlock> blocks;
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        if (line.rfind("cpu ", 0) == 0) { blocks.push_back({line.substr(4), "", {}}); continue; }
+        if (blocks.empty()) blocks.push_back({"unknown", "", {}});
+        if (line.rfind("build ", 0) == 0) { blocks.back().build = line.substr(6); continue; }
+        std::istringstream ss(line);
+        std::string name;
+        Signature s;
+        ss >> name >> s.hash;
+        for (double& v : s.sums) ss >> v;
+        blocks.back().scenes[name] = s;
+    }
+    return blocks;
 }
 
 struct Fnv {
@@ -175,49 +221,55 @@ TEST(FilmHashes, EveryShippedSceneRendersAsRecorded) {
         got["pt:" + name] = pathTracerSignature(std::string(TPB_SOURCE_DIR) + "/scenes/" + name);
     }
 
-    if (const char* u = std::getenv("TPB_UPDATE_HASHES"); u && std::string(u) == "1") {
+    std::vector<HashBlock> blocks = readHashFile(kDataFile);
+    if (const char* u = std::getenv("TPB_UPDATE_HASHES"); u && (std::string(u) == "1" || std::string(u) == "add")) {
+        std::vector<HashBlock> keep;
+        if (std::string(u) == "add")
+            for (const HashBlock& b : blocks)
+                if (b.cpu != cpuKey()) keep.push_back(b);
+        keep.push_back({cpuKey(), buildFingerprint(), got});
         std::ofstream out(kDataFile);
         out << "# tests/regression/test_film_hashes.cpp: scene hash sum_real sum_unwarped sum_steady before_real before_unwarped sumsq_real\n";
-        out << "cpu " << cpuModel() << "\n";
-        out << "build " << buildFingerprint() << "\n";
-        for (const auto& [name, s] : got) {
-            out << name << " " << s.hash;
-            for (double v : s.sums) out << " " << std::setprecision(17) << v;
-            out << "\n";
+        for (const HashBlock& b : keep) {
+            out << "cpu " << b.cpu << "\n";
+            out << "build " << b.build << "\n";
+            for (const auto& [name, s] : b.scenes) {
+                out << name << " " << s.hash;
+                for (double v : s.sums) out << " " << std::setprecision(17) << v;
+                out << "\n";
+            }
         }
-        GTEST_SKIP() << "recorded " << got.size() << " scenes into " << kDataFile;
+        GTEST_SKIP() << "recorded " << got.size() << " scenes into " << kDataFile << " (cpu " << cpuKey() << ", "
+                     << keep.size() << " block(s))";
     }
 
-    std::ifstream in(kDataFile);
-    ASSERT_TRUE(in) << kDataFile << " is missing: record it with TPB_UPDATE_HASHES=1";
-    std::string line, recordedCpu, recordedBuild;
-    std::map<std::string, Signature> want;
-    while (std::getline(in, line)) {
-        if (line.empty() || line[0] == '#') continue;
-        if (line.rfind("cpu ", 0) == 0) { recordedCpu = line.substr(4); continue; }
-        if (line.rfind("build ", 0) == 0) { recordedBuild = line.substr(6); continue; }
-        std::istringstream ss(line);
-        std::string name;
-        Signature s;
-        ss >> name >> s.hash;
-        for (double& v : s.sums) ss >> v;
-        want[name] = s;
+    ASSERT_FALSE(blocks.empty()) << kDataFile << " is missing or empty: record it with TPB_UPDATE_HASHES=1";
+    std::vector<const HashBlock*> mine, sameBuild;
+    for (const HashBlock& b : blocks) {
+        if (b.build != buildFingerprint()) continue;
+        sameBuild.push_back(&b);
+        if (b.ofThisCpu()) mine.push_back(&b);
     }
-    if (recordedBuild != buildFingerprint())
-        GTEST_SKIP() << "the hashes were recorded with the build \"" << recordedBuild << "\"; this is \""
+    if (sameBuild.empty())
+        GTEST_SKIP() << "the hashes were recorded with the build \"" << blocks.front().build << "\"; this is \""
                      << buildFingerprint() << "\" (the Release build of tools/test checks them)";
     const char* exactEnv = std::getenv("TPB_EXACT_HASHES");
-    const bool exact = (exactEnv && std::string(exactEnv) == "1") || recordedCpu == cpuModel();
+    const bool exact = (exactEnv && std::string(exactEnv) == "1") || !mine.empty();
+    const std::vector<const HashBlock*>& candidates = mine.empty() ? sameBuild : mine;
+    const std::map<std::string, Signature>& want = candidates.front()->scenes;
     for (const auto& [name, s] : got) {
         ASSERT_TRUE(want.count(name)) << name << " has no recorded signature: re-record with TPB_UPDATE_HASHES=1";
-        const Signature& w = want[name];
+        // The block whose hash this film has, if any (several blocks may stand for this CPU).
+        const Signature* w = &want.at(name);
+        for (const HashBlock* b : candidates)
+            if (b->scenes.count(name) && b->scenes.at(name).hash == s.hash) w = &b->scenes.at(name);
         const double tol = exact ? 1e-5 : 1e-3;
         for (int i = 0; i < 6; ++i)
-            EXPECT_NEAR(s.sums[i], w.sums[i], tol * std::abs(w.sums[i]) + 1e-30) << name << " sum " << i;
-        if (exact) EXPECT_EQ(s.hash, w.hash) << name << ": the film changed (same CPU model as recorded)";
-        else if (s.hash != w.hash)
-            std::printf("note: %s hash %s differs from the recorded %s (recorded on another CPU: %s)\n", name.c_str(),
-                        s.hash.c_str(), w.hash.c_str(), recordedCpu.c_str());
+            EXPECT_NEAR(s.sums[i], w->sums[i], tol * std::abs(w->sums[i]) + 1e-30) << name << " sum " << i;
+        if (exact) EXPECT_EQ(s.hash, w->hash) << name << ": the film changed (a block of this CPU, " << cpuKey() << ", holds another hash)";
+        else if (s.hash != w->hash)
+            std::printf("note: %s hash %s differs from the recorded %s (recorded on another CPU: %s; this is %s)\n",
+                        name.c_str(), s.hash.c_str(), w->hash.c_str(), candidates.front()->cpu.c_str(), cpuKey().c_str());
     }
     EXPECT_EQ(got.size(), want.size()) << "scenes were added or removed: re-record with TPB_UPDATE_HASHES=1";
 }
