@@ -5,6 +5,7 @@
 
 #include "cli/interrupt.h"
 #include "base/error.h"
+#include "estimators/estimator_names.h"
 #include "film/film_view.h"
 #include "render/time_range.h"
 
@@ -158,6 +159,22 @@ void RenderOverrides::add(CLI::App* cmd) {
     cmd->add_flag("--pt-free-flight", ptFreeFlight,
                   "Path tracer: connect point/spot lights only from free-flight vertices, without equiangular "
                   "sampling (unbiased too, but with infinite variance next to a light in a medium)");
+    std::string volumeNames, surfaceNames;
+    for (const std::string& n : volumeEstimatorNames()) volumeNames += (volumeNames.empty() ? "" : " | ") + n;
+    for (const std::string& n : surfaceEstimatorNames()) surfaceNames += (surfaceNames.empty() ? "" : " | ") + n;
+    cmd->add_option("--estimator", estimator,
+                    "Volume density estimator of the photon-beams method: " + volumeNames + " (README \"Estimators\")");
+    cmd->add_option("--surface-estimator", surfaceEstimator, "Surface density estimator: " + surfaceNames);
+    cmd->add_option("--time-kernel", timeKernel,
+                    "Progressive time kernel of the estimators: none | box (width chosen from the scene) | box:WIDTH "
+                    "(m of optical path, full width at pass 1; it shrinks with the radius)")
+        ->check(CLI::Validator(
+            [](std::string& s) {
+                if (parseTimeKernel(s)) return std::string();
+                return s + ": allowed none, box or box:WIDTH with WIDTH > 0 in m of optical path "
+                       "(e.g. box:0.05)";
+            },
+            "none|box|box:WIDTH"));
     cmd->add_option("--accel", accel, "Beam query backend: embree | brute")->check(CLI::IsMember({"embree", "brute"}));
 }
 
@@ -180,7 +197,18 @@ SettingsOverrides RenderOverrides::settings() const {
     if (beamLength == "long") o.beamLength = BeamLength::Long;
     o.accel = accel == "brute" ? AccelBackend::BruteForce : AccelBackend::Embree;
     if (ptFreeFlight) o.equiangular = false;
+    o.volumeEstimator = estimator;
+    o.surfaceEstimator = surfaceEstimator;
+    if (timeKernel) o.timeKernel = parseTimeKernel(*timeKernel);
     return o;
+}
+
+void RenderOverrides::rejectBeamsOnlyFlags(const std::string& method) const {
+    const char* flag = estimator ? "--estimator" : surfaceEstimator ? "--surface-estimator" : timeKernel ? "--time-kernel" : nullptr;
+    if (!flag) return;
+    throw UserError(std::string(flag) + " applies to the photon-beams estimators only; --method " + method +
+                    (method == "pt" ? " is the unbiased path tracer, which has no kernel" : " has no kernel") + ": drop " +
+                    flag + " or use --method beams");
 }
 
 PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo) {

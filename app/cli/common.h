@@ -26,11 +26,15 @@ struct RenderOverrides {
     std::optional<int> threads, width, height, bins, maxDepth;
     std::optional<uint64_t> seed;
     std::string profile, beamLength, accel = "embree";
+    std::optional<std::string> estimator, surfaceEstimator, timeKernel;  // names checked by validate()
     bool ptFreeFlight = false;  // path tracer: no equiangular sampling (for comparisons)
 
     void add(CLI::App* cmd);
     // The overrides the flags give (prepareRender applies and validates them).
     SettingsOverrides settings() const;
+    // Throws UserError when a flag of the photon-beams estimators (--estimator, --surface-estimator,
+    // --time-kernel) is given to a command that runs `method` ("pt", "analytic-single-scattering").
+    void rejectBeamsOnlyFlags(const std::string& method) const;
 };
 
 struct LoadOptions {

@@ -11,6 +11,7 @@
 #include "cli/interrupt.h"
 #include "cli/commands.h"
 #include "base/error.h"
+#include "estimators/estimator_names.h"
 #include "eval/error_metrics.h"
 #include "io/image_io.h"
 #include "integrators/path_tracer.h"
@@ -232,6 +233,7 @@ void printReference(const std::string& path, const ReferenceInfo& i) {
 
 void runReference(ReferenceCmd& c) {
     InterruptScope interrupts;  // Ctrl-C and SIGTERM: the finished passes are written (marked interrupted)
+    if (c.analytic || c.method != "beams") c.ov.rejectBeamsOnlyFlags(c.analytic ? "analytic-single-scattering" : c.method);
     const PreparedRender prepared = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
     const Scene* scene = prepared.scene.get();
     const std::string method = c.analytic ? "analytic-single-scattering" : c.method;
@@ -377,14 +379,71 @@ struct ConvergeContext {
     const PreparedRender& prepared;   // the settings and the film's time axis
 };
 
+// The photon-beams settings of a converge method: "beams" (the settings as they are) or
+// "<estimator>[+<time kernel>]" (estimator_names.h; parseTimeKernel), checked like the flags.
+RenderSettings beamsVariant(const RenderSettings& base, const std::string& method) {
+    RenderSettings s = base;
+    s.method = Method::Beams;
+    if (method == "beams") return s;
+    const size_t plus = method.find('+');
+    const std::string est = method.substr(0, plus);
+    const auto& names = volumeEstimatorNames();
+    if (std::find(names.begin(), names.end(), est) == names.end()) {
+        std::string list;
+        for (const std::string& n : names) list += ", " + n;
+        throw UserError("--method " + method + ": unknown method or estimator \"" + est + "\"; allowed: beams, pt, both" +
+                        list + " (an estimator may take a time kernel: " + names.front() + "+box or " + names.front() +
+                        "+box:WIDTH)");
+    }
+    s.volumeEstimator = est;
+    s.timeKernel = {};
+    if (plus != std::string::npos) {
+        const std::optional<TimeKernelSettings> k = parseTimeKernel(method.substr(plus + 1));
+        if (!k)
+            throw UserError("--method " + method + ": unknown time kernel \"" + method.substr(plus + 1) +
+                            "\"; allowed: none, box, box:WIDTH (m of optical path, > 0)");
+        s.timeKernel = *k;
+    }
+    return s;
+}
+
+// The --method list, expanded ("both" = beams,pt) and checked before anything runs.
+std::vector<std::string> convergeMethods(const std::string& list, const PreparedRender& prepared) {
+    const double rangeOpl = prepared.time.binWidth * prepared.time.bins;
+    std::vector<std::string> out;
+    size_t from = 0;
+    while (from <= list.size()) {
+        const size_t comma = list.find(',', from);
+        const std::string m = list.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+        if (m == "both") {
+            out.push_back("beams");
+            out.push_back("pt");
+        } else if (!m.empty()) {
+            if (m != "pt") {
+                const RenderSettings v = beamsVariant(prepared.settings, m);  // throws for an unknown name
+                if (v.timeKernel.kind != TimeKernelKind::None && v.timeKernel.width > rangeOpl)
+                    throw UserError("--method " + m + ": the time kernel's width " + shortNumber(v.timeKernel.width) +
+                                    " m is wider than the film's time range " + shortNumber(rangeOpl) + " m");
+            }
+            if (std::find(out.begin(), out.end(), m) != out.end())
+                throw UserError("--method " + list + ": \"" + m + "\" is listed twice");
+            out.push_back(m);
+        }
+        if (comma == std::string::npos) break;
+        from = comma + 1;
+    }
+    if (out.empty()) throw UserError("--method is empty: give beams, pt, both or estimators such as beam2d,point3d");
+    return out;
+}
+
 // Runs one method, recording checkpoints; rendering time only (measuring is not counted).
 MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
     const ConvergeCmd& c = cx.cmd;
     MethodResult res;
     res.method = method;
     RenderSettings ps = ptSettings(cx.prepared, c.spp);
-    if (method == "beams") {
-        res.driver = std::make_unique<Driver>(cx.scene, cx.prepared.settings, cx.prepared.time);
+    if (method != "pt") {
+        res.driver = std::make_unique<Driver>(cx.scene, beamsVariant(cx.prepared.settings, method), cx.prepared.time);
     } else {
         if (cx.ref.info.method == "pt" && ps.seed == cx.ref.info.seed) {
             ps.seed = cx.ref.info.seed + 1;
@@ -415,7 +474,7 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
         r.cpu = cpu;
         r.passes = done;
         r.spp = method == "pt" ? done * ps.samplesPerPixel : done;
-        if (method == "beams") r.radius = res.driver->lastPass().beamRadius;
+        if (method != "pt") r.radius = res.driver->lastPass().beamRadius;
         r.err = compareWithReference(res.film(), cx.ref, cx.axis, c.perFrame, cx.mask.empty() ? nullptr : &cx.mask);
         r.corrVolume = noiseCorrected(r.err.volume, cx.floorVolume);
         r.corrSteady = noiseCorrected(r.err.steady, cx.floorSteady);
@@ -457,7 +516,11 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
     return res;
 }
 
-std::string methodLabel(const std::string& m) { return m == "beams" ? "photon beams" : "path tracing"; }
+std::string methodLabel(const std::string& m) {
+    if (m == "pt") return "path tracing";
+    if (m == "beams") return "photon beams";
+    return "photon beams " + m;
+}
 
 void writeCsv(const std::string& path, const std::vector<MethodResult>& results) {
     std::ostringstream os;
@@ -505,7 +568,17 @@ std::string gnuplotScript(const ConvergeContext& cx, const std::vector<MethodRes
       << cx.prepared.time.bins << " bins, " << axisName << " time, delta emission"
       << (cx.mask.empty() ? "" : ", light pixels masked") << "\" noenhanced\n";
     std::vector<std::string> curves, curvesL1;
-    auto color = [](const std::string& m) { return m == "beams" ? std::string("#c0392b") : std::string("#2471a3"); };
+    auto color = [&results](const std::string& m) {
+        if (m == "pt") return std::string("#2471a3");
+        // The photon-beams variants in the order they ran.
+        static const char* palette[] = {"#c0392b", "#27ae60", "#8e44ad", "#d68910", "#16a085", "#7f8c8d", "#e84393", "#2c3e50"};
+        int k = 0;
+        for (const MethodResult& r : results) {
+            if (r.method == m) break;
+            if (r.method != "pt") ++k;
+        }
+        return std::string(palette[k % 8]);
+    };
     auto curve = [&](const MethodResult& m, int column, bool steady, double slope) {
         const std::string sel = "(strcol(1) eq '" + m.method + "' ? $3 : NaN)";
         return "'convergence.csv' using " + sel + ":" + std::to_string(column) + " with linespoints " +
@@ -628,7 +701,8 @@ void runConverge(ConvergeCmd& c) {
         std::printf("masking %lld pixels within %.3g px of the point/spot lights' images\n", static_cast<long long>(n),
                     c.maskLights);
     }
-    // Every method's settings were checked (prepareRender) before the folder is touched.
+    // Every method's settings were checked (prepareRender, convergeMethods) before the folder is touched.
+    const std::vector<std::string> methods = convergeMethods(c.method, cx.prepared);
     OutputFiles files;
     files.files = {"convergence.csv", "convergence.json", "convergence.gp"};
     if (c.perFrame) files.files.push_back("convergence_frames.csv");
@@ -637,8 +711,6 @@ void runConverge(ConvergeCmd& c) {
         files.files.insert(files.files.end(), {"convergence.svg", "convergence.png", "convergence_l1.svg",
                                                "convergence_l1.png"});
     const OutputFolder folder(c.out, "converge", files);
-    std::vector<std::string> methods = c.method == "both" ? std::vector<std::string>{"beams", "pt"}
-                                                          : std::vector<std::string>{c.method};
     std::vector<MethodResult> results;
     {
         for (const std::string& m : methods) {
@@ -847,8 +919,10 @@ void registerConverge(CLI::App& app) {
                                                       "--bins and --max-depth default to its values)")
             ->required();
         cmd->add_option("-o,--out", c->out, "Output folder (created if needed)");
-        cmd->add_option("--method", c->method, "beams | pt | both (one after the other, same budget each)")
-            ->check(CLI::IsMember({"beams", "pt", "both"}));
+        cmd->add_option("--method", c->method,
+                        "What to measure, one after the other with the same budget each, comma-separated: beams (the "
+                        "scene's estimator, with --estimator/--time-kernel) | pt | both (= beams,pt) | an estimator "
+                        "with an optional time kernel, e.g. beam1d,beam2d,point2d+box,point3d+box:0.05");
         cmd->add_option("--clock", c->clock, "Time axis: wall (seconds of rendering) | cpu (process CPU seconds, "
                                              "all threads; steadier on a shared machine)")
             ->check(CLI::IsMember({"wall", "cpu"}));

@@ -77,6 +77,8 @@ void run(const std::string& path, const RenderOverrides& ov) {
     std::printf("render     %lld photons/pass, beam radius %.4g m, surface radius %.4g m, alpha %.3g, %lld passes%s\n",
                 static_cast<long long>(ds.photonsPerPass), ds.beamRadius0, ds.surfaceRadius0, ds.alpha,
                 static_cast<long long>(ds.passes), ds.timeBudgetSec > 0 ? (", budget " + std::to_string(ds.timeBudgetSec) + " s").c_str() : "");
+    std::printf("estimators volume %s, surface %s, time kernel %s\n", ds.volumeEstimator.c_str(), ds.surfaceEstimator.c_str(),
+                timeKernelName(ds.timeKernel).c_str());
     std::printf("stages\n");
     for (const std::string& r : s->stages.reasons) std::printf("  - %s\n", r.c_str());
 }

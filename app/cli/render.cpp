@@ -45,7 +45,9 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
                      {"surface_radius0_m", s.surfaceRadius0}, {"alpha", s.alpha}, {"seed", s.seed},
                      {"threads", s.threads}, {"time_profile", s.profile == TimeProfile::Exact ? "exact" : "uniform"},
                      {"beam_length", s.beamLength == BeamLength::Short ? "short" : "long"},
-                     {"accel", s.accel == AccelBackend::Embree ? "embree" : "brute-force"}};
+                     {"accel", s.accel == AccelBackend::Embree ? "embree" : "brute-force"},
+                     {"volume_estimator", s.volumeEstimator}, {"surface_estimator", s.surfaceEstimator},
+                     {"time_kernel", timeKernelName(s.timeKernel)}};
     json per = json::array();
     int64_t beams = 0, estimates = 0, photonEst = 0;
     double passSec = 0.0;
@@ -86,6 +88,7 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
 
 // Flags that contradict each other; checked before anything is loaded or written.
 void checkFlagConflicts(const RenderCmd& c) {
+    if (c.method != "beams") c.ov.rejectBeamsOnlyFlags(c.method);
     if (c.unwarp && c.realTime)
         throw UserError("--unwarp and --real-time contradict each other: give one of them (frames are in real time "
                         "unless --unwarp or the scene's render.unwarp asks for unwarped time)");

@@ -135,6 +135,7 @@ private:
     void drawTimeSection();
     void drawProgressSection();
     void drawSettingsSection();
+    bool drawEstimatorSettings();
     void drawExportSection();
     void drawMessages();
     bool section(const char* label, ImGuiTreeNodeFlags flags = 0);  // a collapsing header, tracked

@@ -3,6 +3,7 @@
 #include "viewer/app.h"
 
 #include "base/error.h"
+#include "estimators/estimator_names.h"
 
 #include <imgui_internal.h>  // ImGui::GetItemID (public from ImGui 1.88)
 #include <imgui_stdlib.h>
@@ -360,6 +361,65 @@ void Viewer::drawProgressSection() {
     track("Restart");
 }
 
+// The photon-beams estimators (estimators/estimator_names.h) and the progressive time kernel: a
+// change restarts the accumulation (an average over passes of different estimators means nothing)
+// and says so. Returns true when it restarted.
+bool Viewer::drawEstimatorSettings() {
+    const RenderSettings& cur = driver_->settings();
+    const std::vector<std::string>& names = volumeEstimatorNames();
+    int e = 0;
+    for (size_t i = 0; i < names.size(); ++i)
+        if (names[i] == cur.volumeEstimator) e = static_cast<int>(i);
+    std::vector<const char*> labels;
+    for (const std::string& n : names) labels.push_back(n.c_str());
+    SettingsOverrides o;
+    std::string what;
+    if (ImGui::Combo("volume estimator", &e, labels.data(), static_cast<int>(labels.size())) && names[e] != cur.volumeEstimator) {
+        o.volumeEstimator = names[e];
+        what = "estimator " + names[e];
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("beam1d / beam2d: beams x camera ray with a 1D / 2D kernel; point2d / point3d: photon points\n"
+                          "with a 2D kernel across the ray / a 3D kernel (README \"Estimators\")");
+    track("volume estimator");
+    const char* kernels[] = {"none", "box"};
+    int k = cur.timeKernel.kind == TimeKernelKind::Box ? 1 : 0;
+    if (ImGui::Combo("time kernel", &k, kernels, 2) && (k == 1) != (cur.timeKernel.kind == TimeKernelKind::Box)) {
+        o.timeKernel = k == 1 ? TimeKernelSettings{TimeKernelKind::Box, edit_.timeKernel.width} : TimeKernelSettings{};
+        what = std::string("time kernel ") + kernels[k];
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("smooths every estimate along time with a box whose width shrinks with the radius\n"
+                          "(README \"Progressive time kernel\")");
+    track("time kernel");
+    if (cur.timeKernel.kind == TimeKernelKind::Box) {
+        ImGui::InputDouble("time kernel width (m)", &edit_.timeKernel.width, 0.0, 0.0, "%.6g");
+        if (ImGui::IsItemDeactivatedAfterEdit() && edit_.timeKernel.width != cur.timeKernel.width) {
+            o.timeKernel = TimeKernelSettings{TimeKernelKind::Box, edit_.timeKernel.width};
+            what = "time kernel width " + shortNumber(edit_.timeKernel.width) + " m";
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("full width of pass 1's kernel in m of OPL; 0 = from the scene");
+        track("time kernel width (m)");
+    }
+    if (what.empty()) return false;
+    RenderSettings s = cur;
+    s.apply(o);
+    try {
+        const double diag = scene_.bounds.diagonal() > 0.0 ? scene_.bounds.diagonal() : 1.0;
+        for (const std::string& w : s.validate({nullptr, &o, diag})) std::fprintf(stderr, "warning: %s\n", w.c_str());
+        const TimeBins& t = driver_->film().time();
+        s.validateAgainstFilm(t.binWidth * t.bins, {nullptr, &o, diag});
+    } catch (const UserError& err) {
+        status_ = std::string("invalid setting: ") + err.what() + ": not applied";
+        edit_.timeKernel = cur.timeKernel;
+        return false;
+    }
+    edit_.volumeEstimator = s.volumeEstimator;
+    edit_.timeKernel = s.timeKernel;
+    restart(s, what + ": accumulation restarted");
+    return true;
+}
+
 void Viewer::drawSettingsSection() {
     if (!section("Render settings")) return;
     hint("a change (Enter or leaving the field) restarts the accumulation");
@@ -376,6 +436,7 @@ void Viewer::drawSettingsSection() {
         return;
     }
     track("method");
+    if (driver_->settings().method == Method::Beams && drawEstimatorSettings()) return;
     bool apply = false;
     const int64_t step = 1000, stepFast = 10000;
     ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);

@@ -18,6 +18,7 @@
 // volumeEstimator / surfaceEstimator): a new estimator is its own file, one line there, its tests.
 #pragma once
 #include "accel/beam_accel.h"
+#include "estimators/estimator_names.h"
 #include "film/transient_film.h"
 #include "photons/photon_tracer.h"
 #include "scene/scene.h"
@@ -117,7 +118,5 @@ public:
 // By name ("beam2d"; "ppm"): nullptr for an unknown name (estimatorNames() lists the known ones).
 std::unique_ptr<VolumeEstimator> makeVolumeEstimator(const std::string& name);
 std::unique_ptr<SurfaceEstimator> makeSurfaceEstimator(const std::string& name);
-std::vector<std::string> volumeEstimatorNames();
-std::vector<std::string> surfaceEstimatorNames();
 
 }  // namespace tpb

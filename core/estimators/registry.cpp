@@ -1,4 +1,5 @@
-// The estimators by name (estimators/estimator.h). Adding one: include its header, add a line.
+// The estimators by name (estimators/estimator.h). Adding one: include its header, add a line here
+// and its name in estimators/estimator_names.h.
 #include "estimators/beam2d.h"
 #include "estimators/estimator.h"
 #include "estimators/surface_ppm.h"
@@ -14,8 +15,5 @@ std::unique_ptr<SurfaceEstimator> makeSurfaceEstimator(const std::string& name) 
     if (name == "ppm") return std::make_unique<SurfacePpmEstimator>();
     return nullptr;
 }
-
-std::vector<std::string> volumeEstimatorNames() { return {"beam2d"}; }
-std::vector<std::string> surfaceEstimatorNames() { return {"ppm"}; }
 
 }  // namespace tpb

@@ -61,11 +61,17 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     p.pilotSettings = RenderSettings::fromDesc(desc.render, diag);
     if (overrides.maxDepth) p.pilotSettings.maxDepth = *overrides.maxDepth;
     p.pilotSettings.threads = p.settings.threads;
+    // ... with the default estimators and no time kernel, so every estimator of a comparison gets
+    // the same film time axis.
+    p.pilotSettings.volumeEstimator = RenderSettings{}.volumeEstimator;
+    p.pilotSettings.surfaceEstimator = RenderSettings{}.surfaceEstimator;
+    p.pilotSettings.timeKernel = {};
 
     const FilmTimeAxis axis = filmTimeAxis(*p.scene, desc.film, p.pilotSettings, options.pilot);
     p.film = desc.film;
     p.time = axis.time;
     p.fit = axis.fit;
+    p.settings.validateAgainstFilm(p.time.binWidth * p.time.bins, {&desc, &overrides, diag});
     p.source.path = desc.path;
     p.source.version = desc.version;
     p.source.locs = std::move(desc.locs);

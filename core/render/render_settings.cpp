@@ -1,10 +1,13 @@
 #include "render/render_settings.h"
 
 #include "base/error.h"
+#include "estimators/estimator_names.h"
 #include "render/memory_budget.h"
 #include "scene/scene_loader.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 
 namespace tpb {
@@ -25,6 +28,25 @@ std::optional<Method> parseMethod(std::string_view s) {
     return std::nullopt;
 }
 
+std::optional<TimeKernelSettings> parseTimeKernel(std::string_view s) {
+    if (s == "none") return TimeKernelSettings{};
+    if (s == "box") return TimeKernelSettings{TimeKernelKind::Box, 0.0};
+    if (s.rfind("box:", 0) == 0) {
+        const std::string w(s.substr(4));
+        char* end = nullptr;
+        const double width = std::strtod(w.c_str(), &end);
+        if (w.empty() || end != w.c_str() + w.size() || !(width > 0.0) || !std::isfinite(width)) return std::nullopt;
+        return TimeKernelSettings{TimeKernelKind::Box, width};
+    }
+    return std::nullopt;
+}
+
+std::string timeKernelName(const TimeKernelSettings& k) {
+    if (k.kind == TimeKernelKind::None) return "none";
+    if (!(k.width > 0.0)) return "box";
+    return "box:" + shortNumber(k.width);
+}
+
 RenderSettings RenderSettings::fromDesc(const RenderDesc& r, double sceneDiagonal) {
     const double diag = sceneDiagonal > 0.0 ? sceneDiagonal : 1.0;
     RenderSettings s;
@@ -41,6 +63,9 @@ RenderSettings RenderSettings::fromDesc(const RenderDesc& r, double sceneDiagona
     s.beamLength = r.beamLength;
     s.emission = r.emission;
     s.unwarp = r.unwarp;
+    s.volumeEstimator = r.volumeEstimator;
+    s.surfaceEstimator = r.surfaceEstimator;
+    s.timeKernel = r.timeKernel;
     return s;
 }
 
@@ -62,6 +87,9 @@ void RenderSettings::apply(const SettingsOverrides& o) {
     if (o.beamLength) beamLength = *o.beamLength;
     if (o.accel) accel = *o.accel;
     if (o.equiangular) equiangular = *o.equiangular;
+    if (o.volumeEstimator) volumeEstimator = *o.volumeEstimator;
+    if (o.surfaceEstimator) surfaceEstimator = *o.surfaceEstimator;
+    if (o.timeKernel) timeKernel = *o.timeKernel;
 }
 
 namespace {
@@ -180,6 +208,33 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
             "must be >= 1 (1 = single scattering)", std::to_string(maxDepth));
     c.check(samplesPerPixel >= 1, c.field("samples_per_pixel", "--spp", ov.samplesPerPixel.has_value()),
             "must be >= 1", std::to_string(samplesPerPixel));
+    // ---- the estimators and the time kernel (photon beams only) ----
+    const auto checkName = [&](const std::string& name, const std::vector<std::string>& known, const Field& f,
+                               const char* what) {
+        if (std::find(known.begin(), known.end(), name) != known.end()) return;
+        std::string list;
+        for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+        c.fail(f, c.name(f) + ": unknown " + what + " \"" + name + "\"; allowed: " + list + " (README \"Estimators\")");
+    };
+    const Field volEst = c.field("volume_estimator", "--estimator", ov.volumeEstimator.has_value());
+    const Field surfEst = c.field("surface_estimator", "--surface-estimator", ov.surfaceEstimator.has_value());
+    const Field tk = c.field("time_kernel", "--time-kernel", ov.timeKernel.has_value());
+    checkName(volumeEstimator, volumeEstimatorNames(), volEst, "volume estimator");
+    checkName(surfaceEstimator, surfaceEstimatorNames(), surfEst, "surface estimator");
+    c.check(timeKernel.width >= 0.0 && std::isfinite(timeKernel.width), tk,
+            "width must be a finite length > 0 in m of optical path (or 0 / absent: chosen from the scene)",
+            shortNumber(timeKernel.width));
+    if (method != Method::Beams) {
+        // A flag that only the photon-beams integrator reads makes no sense with another method
+        // (values from the scene file are the file's settings for photon beams: no complaint).
+        for (const Field* f : {&volEst, &surfEst, &tk})
+            if (f->overridden)
+                c.fail(*f, c.name(*f) + " applies to the photon-beams estimators only (--method beams); the " +
+                               std::string(methodName(method) == std::string("pt") ? "path tracer is unbiased and has no kernel"
+                                                                                   : "geometry preview has no light transport") +
+                               ": drop " + c.name(*f) + " or use --method beams");
+    }
+
     const Field thr = c.field("threads", "--threads", ov.threads.has_value());
     c.check(threads >= 0, thr, "must be >= 0 (0 = all cores)", std::to_string(threads));
     if (threads > maxUsefulThreads()) {
@@ -189,6 +244,18 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
         threads = maxUsefulThreads();
     }
     return c.warnings;
+}
+
+void RenderSettings::validateAgainstFilm(double filmRangeOpl, const SettingsSource& src) const {
+    const SettingsOverrides none;
+    const SettingsOverrides& ov = src.overrides ? *src.overrides : none;
+    Checker c(src);
+    const Field tk = c.field("time_kernel", "--time-kernel", ov.timeKernel.has_value());
+    if (method == Method::Beams && timeKernel.kind != TimeKernelKind::None && timeKernel.width > filmRangeOpl)
+        c.fail(tk, c.name(tk) + ": the time kernel's width " + shortNumber(timeKernel.width) +
+                       " m (of optical path) is wider than the film's whole time range " + shortNumber(filmRangeOpl) +
+                       " m: every frame would show the same blur; give a width below the range (a few bin widths, "
+                       "e.g. " + shortNumber(4.0 * filmRangeOpl / 100.0) + " m), or \"box\" to let the renderer choose");
 }
 
 }  // namespace tpb

@@ -27,6 +27,11 @@ enum class Method {
 const char* methodName(Method m);                       // "beams" | "pt" | "preview"
 std::optional<Method> parseMethod(std::string_view s);  // accepts the names above
 
+// The time kernel as the CLI and the viewer write it: "none" | "box" (width from the scene) |
+// "box:WIDTH" (WIDTH m of OPL, > 0). nullopt for anything else.
+std::optional<TimeKernelSettings> parseTimeKernel(std::string_view s);
+std::string timeKernelName(const TimeKernelSettings& k);  // the inverse: "none", "box", "box:0.05"
+
 // Command-line (or viewer) overrides of the scene file's render block: what is set replaces the
 // file's value. width/height/bins change the film's shape: they are applied to the description
 // before the scene is built (applyFilmShape, prepare.h); the rest to RenderSettings (apply()).
@@ -42,6 +47,8 @@ struct SettingsOverrides {
     std::optional<BeamLength> beamLength;
     std::optional<AccelBackend> accel;
     std::optional<bool> equiangular;
+    std::optional<std::string> volumeEstimator, surfaceEstimator;  // --estimator, --surface-estimator
+    std::optional<TimeKernelSettings> timeKernel;                  // --time-kernel
     // ---- the film's shape ----
     std::optional<int> width, height, bins;
 };
@@ -55,15 +62,6 @@ struct SettingsSource {
     // The built scene's bounding diagonal (m); 0 = not known yet (the loader): absolute radii are
     // then only checked to be > 0, relative ones against their fraction of the diagonal.
     double sceneDiagonal = 0.0;
-};
-
-// The optional progressive time kernel of the photon-beams estimators (issue 14): every estimate's
-// time profile is smoothed along time by a kernel whose width shrinks pass after pass with the
-// spatial radius (README "Derivations": the rates). Box: the only kind so far.
-enum class TimeKernelKind { None, Box };
-struct TimeKernelSettings {
-    TimeKernelKind kind = TimeKernelKind::None;
-    double width = 0.0;  // m of OPL, full width of pass 1's kernel; 0 = chosen from the scene
 };
 
 struct RenderSettings {
@@ -113,6 +111,9 @@ struct RenderSettings {
     // warning). Throws UserError naming where the bad value came from (SettingsSource); returns
     // the warnings, each "file:line: render.key: ..." or "--flag ...".
     std::vector<std::string> validate(const SettingsSource& source);
+    // The checks that need the film's time axis (decided after validate(), render/prepare.cpp): a
+    // time kernel no wider than the film's range (filmRangeOpl, m). Throws UserError like validate().
+    void validateAgainstFilm(double filmRangeOpl, const SettingsSource& source) const;
 };
 
 }  // namespace tpb

@@ -105,6 +105,16 @@ enum class EmissionMode { Delta, Continuous };
 enum class TimeProfile { Exact, Uniform };
 enum class BeamLength { Short, Long };
 
+// The optional progressive time kernel of the photon-beams estimators (issue 14): every estimate's
+// time profile is smoothed along time by a kernel whose width shrinks pass after pass with the
+// spatial radius (README "Derivations": the rates). Box: the only kind so far.
+enum class TimeKernelKind { None, Box };
+struct TimeKernelSettings {
+    TimeKernelKind kind = TimeKernelKind::None;
+    double width = 0.0;  // m of OPL, full width of pass 1's kernel; 0 = chosen from the scene
+    bool operator==(const TimeKernelSettings&) const = default;
+};
+
 struct RenderDesc {
     int64_t photonsPerPass = 20000;
     double radius = 0.01;         // initial kernel radius
@@ -120,6 +130,10 @@ struct RenderDesc {
     bool unwarp = false;
     TimeProfile timeProfile = TimeProfile::Exact;
     BeamLength beamLength = BeamLength::Short;
+    // The density estimators by name (estimators/estimator_names.h) and the time kernel.
+    std::string volumeEstimator = "beam2d";
+    std::string surfaceEstimator = "ppm";
+    TimeKernelSettings timeKernel;
 };
 
 struct SceneDesc {

@@ -75,7 +75,10 @@
 //     "emission": "delta",               // "delta" | "continuous"
 //     "unwarp": false,                   // remove the camera-to-scene travel time
 //     "time_profile": "exact",           // "exact" | "uniform"
-//     "beam_length": "short"             // "short" | "long"
+//     "beam_length": "short",            // "short" | "long"
+//     "volume_estimator": "beam2d",      // estimators/estimator_names.h (README "Estimators")
+//     "surface_estimator": "ppm",        // the surface photon map
+//     "time_kernel": "none"              // "none" | "box" | {"type": "box", "width": m of OPL > 0}
 //   }
 // }
 //
@@ -99,6 +102,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -792,6 +796,34 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     r.beamLength = b.choice<BeamLength>("beam_length", {{"short", BeamLength::Short}, {"long", BeamLength::Long}},
                                         "beam_length")
                        .value_or(r.beamLength);
+    // The estimators: names checked by validate() below (the allowed values in its message).
+    r.volumeEstimator = b.string("volume_estimator").value_or(r.volumeEstimator);
+    r.surfaceEstimator = b.string("surface_estimator").value_or(r.surfaceEstimator);
+    // "time_kernel": "none" | "box" | {"type": "box", "width": m of OPL}.
+    if (const JsonValue* tk = b.get("time_kernel")) {
+        const auto kind = [&](const std::string& name, const std::function<void(const std::string&)>& bad) {
+            if (name == "none") return TimeKernelKind::None;
+            if (name == "box") return TimeKernelKind::Box;
+            bad("unknown time kernel \"" + name + "\"; allowed: none, box (or {\"type\": \"box\", \"width\": m})");
+            return TimeKernelKind::None;
+        };
+        if (tk->isString()) {
+            r.timeKernel = {kind(tk->text, [&](const std::string& m) { b.fail("time_kernel", m); }), 0.0};
+        } else if (tk->isObject()) {
+            Bag k(ctx, *tk, b.pathOf("time_kernel"), "time kernel");
+            const std::string type = k.string("type").value_or("box");
+            r.timeKernel.kind = kind(type, [&](const std::string& m) { k.fail("type", m); });
+            if (const std::optional<double> w = k.number("width")) {
+                k.check(*w > 0.0 && std::isfinite(*w), "width", "must be > 0 (m of optical path; leave it out to "
+                                                                "let the renderer choose it from the scene)");
+                k.checkCoordinates("width", {*w});
+                r.timeKernel.width = *w;
+            }
+            k.finish();
+        } else {
+            b.wrongType("time_kernel", "\"none\", \"box\" or an object {\"type\": \"box\", \"width\": m}");
+        }
+    }
     b.finish();
 
     // The ranges (the scene's diagonal is not known yet: absolute radii are checked against it

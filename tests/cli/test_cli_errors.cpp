@@ -1026,3 +1026,38 @@ TEST_F(CliErrors, EnergyOutsideTheFilmIsReported) {
     EXPECT_EQ(q.err.find("warning"), std::string::npos) << q.err;
     EXPECT_NE(q.out.find("% of the energy outside the film\n"), std::string::npos) << q.out;
 }
+
+// Issue 14: the estimator and time-kernel flags and keys: a bad value names the flag or the
+// file:line:key and the allowed values; nothing is written.
+TEST_F(CliErrors, EstimatorAndTimeKernelErrorsNameTheAllowedValues) {
+    const fs::path scene = write("scene.json", insideScene());
+    const std::string out = (dir_ / "out").string();
+    const struct { std::vector<std::string> args; const char* text; } cases[] = {
+        {{"render", scene.string(), "-o", out, "--estimator", "beam3d"},
+         "error: --estimator: unknown volume estimator \"beam3d\"; allowed: beam2d"},
+        {{"render", scene.string(), "-o", out, "--surface-estimator", "grid"},
+         "error: --surface-estimator: unknown surface estimator \"grid\"; allowed: ppm"},
+        {{"render", scene.string(), "-o", out, "--time-kernel", "gauss"},
+         "error: --time-kernel: gauss: allowed none, box or box:WIDTH"},
+        {{"render", scene.string(), "-o", out, "--time-kernel", "box:0"}, "error: --time-kernel: box:0: allowed"},
+        {{"render", scene.string(), "-o", out, "--time-kernel", "box:1000"},
+         "error: --time-kernel: the time kernel's width 1000 m (of optical path) is wider than the film's whole time range"},
+        {{"render", scene.string(), "-o", out, "--method", "pt", "--time-kernel", "box"},
+         "error: --time-kernel applies to the photon-beams estimators only; --method pt"},
+        {{"reference", scene.string(), "-o", out + "/r.tpbref", "--passes", "1", "--estimator", "beam2d"},
+         "error: --estimator applies to the photon-beams estimators only"},
+        {{"info", scene.string(), "--estimator", "nope"}, "error: --estimator: unknown volume estimator \"nope\""},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.args[0] + " " + c.args.back());
+        const Proc p = runTpb(c.args, dir_, {}, 30.0);
+        EXPECT_FALSE(p.timedOut);
+        EXPECT_EQ(p.code, 2) << p.err;
+        EXPECT_EQ(p.err.rfind(c.text, 0), 0u) << p.err;
+        EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written";
+    }
+    // In the scene file: named by file:line:key (the render block is on line 8).
+    const Proc p = render(write("bad.json", insideScene("{\"bins\": 8}", "{\"volume_estimator\": \"beam9\"}")));
+    expectUserError(p, (dir_ / "bad.json").string() + ":8", "render.volume_estimator",
+                    "unknown volume estimator \"beam9\"; allowed: ");
+}

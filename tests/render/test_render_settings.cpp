@@ -6,6 +6,7 @@
 #include "render/memory_budget.h"
 #include "scene/scene_loader.h"
 #include "base/error.h"
+#include "estimators/estimator_names.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -18,6 +19,7 @@
 using namespace tpb;
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
+using ::testing::AllOf;
 
 namespace {
 
@@ -256,4 +258,92 @@ TEST(PrepareRender, RefusesBadOverridesAndRadiiBeforeThePilot) {
     o.alpha = 3.0;
     EXPECT_EQ(errorOf([&] { prepareRender(loadSceneFromString(json, "r.json"), o, opt); }),
               "--alpha must be in (0, 1] (got 3)");
+}
+
+// ---- the estimators and the time kernel (issue 14) ----------------------------------------------
+
+TEST(RenderSettings, TimeKernelNamesRoundTrip) {
+    EXPECT_EQ(parseTimeKernel("none"), TimeKernelSettings{});
+    EXPECT_EQ(parseTimeKernel("box"), (TimeKernelSettings{TimeKernelKind::Box, 0.0}));
+    EXPECT_EQ(parseTimeKernel("box:0.05"), (TimeKernelSettings{TimeKernelKind::Box, 0.05}));
+    for (const char* bad : {"", "box:", "box:0", "box:-1", "box:x", "box:1e999", "gauss", "Box", "box:0.1m"})
+        EXPECT_FALSE(parseTimeKernel(bad).has_value()) << bad;
+    for (const char* s : {"none", "box", "box:0.05"}) EXPECT_EQ(timeKernelName(*parseTimeKernel(s)), s);
+}
+
+TEST(RenderSettingsValidate, UnknownEstimatorIsNamedWithTheAllowedValues) {
+    SceneDesc d = fileWith({{"render.volume_estimator", 9}});
+    d.render.volumeEstimator = "beam3d";
+    EXPECT_THAT(validateFile(d), StartsWith("scene.json:9: render.volume_estimator: "));
+    EXPECT_THAT(validateFile(d), HasSubstr("unknown volume estimator \"beam3d\"; allowed: beam2d"));
+    SettingsOverrides o;
+    o.volumeEstimator = "nope";
+    EXPECT_THAT(validateFlags(o), StartsWith("--estimator: unknown volume estimator \"nope\"; allowed: "));
+    o = {};
+    o.surfaceEstimator = "ppm2";
+    EXPECT_THAT(validateFlags(o), StartsWith("--surface-estimator: unknown surface estimator \"ppm2\"; allowed: ppm"));
+    o = {};
+    o.volumeEstimator = volumeEstimatorNames().back();
+    EXPECT_EQ(validateFlags(o), "");
+}
+
+TEST(RenderSettingsValidate, EstimatorFlagsNeedThePhotonBeamsMethod) {
+    SettingsOverrides o;
+    o.method = Method::PathTracer;
+    o.timeKernel = TimeKernelSettings{TimeKernelKind::Box, 0.1};
+    EXPECT_THAT(validateFlags(o), HasSubstr("--time-kernel applies to the photon-beams estimators only"));
+    o.timeKernel.reset();
+    o.volumeEstimator = "beam2d";
+    EXPECT_THAT(validateFlags(o), HasSubstr("--estimator applies to the photon-beams estimators only"));
+    // The file's estimator is the file's photon-beams setting: no complaint when another method runs.
+    SceneDesc d = fileWith({{"render.time_kernel", 4}});
+    d.render.timeKernel = {TimeKernelKind::Box, 0.1};
+    RenderSettings s = RenderSettings::fromDesc(d.render, 3.0);
+    SettingsOverrides pt;
+    pt.method = Method::PathTracer;
+    s.apply(pt);
+    EXPECT_EQ(errorOf([&] { s.validate({&d, &pt, 3.0}); }), "");
+}
+
+TEST(PrepareRender, TimeKernelWiderThanTheFilmIsRefused) {
+    PrepareOptions opt;
+    opt.pilot.run = false;
+    // The film covers 16 x 0.05 = 0.8 m of OPL.
+    const std::string film = R"({"start_m": 1.0, "bin_width_m": 0.05, "bins": 16})";
+    const std::string wide = sceneJson(film, R"({"time_kernel": {"type": "box", "width": 2.0}})");
+    const std::string e = errorOf([&] { prepareRender(loadSceneFromString(wide, "k.json"), {}, opt); });
+    EXPECT_THAT(e, StartsWith("k.json:7: render.time_kernel: "));
+    EXPECT_THAT(e, HasSubstr("width 2 m (of optical path) is wider than the film's whole time range 0.8 m"));
+    SettingsOverrides o;
+    o.timeKernel = TimeKernelSettings{TimeKernelKind::Box, 0.9};
+    EXPECT_THAT(errorOf([&] { prepareRender(loadSceneFromString(sceneJson(film, "{}"), "k.json"), o, opt); }),
+                StartsWith("--time-kernel: the time kernel's width 0.9 m"));
+    o.timeKernel = TimeKernelSettings{TimeKernelKind::Box, 0.1};
+    const PreparedRender p = prepareRender(loadSceneFromString(sceneJson(film, "{}"), "k.json"), o, opt);
+    EXPECT_EQ(p.settings.timeKernel, (TimeKernelSettings{TimeKernelKind::Box, 0.1}));
+    // The pilot fits the time axis with the default estimators and no kernel, whatever is chosen.
+    EXPECT_EQ(p.pilotSettings.timeKernel, TimeKernelSettings{});
+    EXPECT_EQ(p.pilotSettings.volumeEstimator, RenderSettings{}.volumeEstimator);
+}
+
+TEST(SceneLoaderRender, EstimatorAndTimeKernelKeys) {
+    PrepareOptions opt;
+    opt.pilot.run = false;
+    const std::string film = R"({"start_m": 1.0, "bin_width_m": 0.05, "bins": 16})";
+    const auto load = [&](const std::string& render) { return loadSceneFromString(sceneJson(film, render), "t.json"); };
+    EXPECT_EQ(load(R"({"time_kernel": "box"})").render.timeKernel, (TimeKernelSettings{TimeKernelKind::Box, 0.0}));
+    EXPECT_EQ(load(R"({"time_kernel": "none"})").render.timeKernel, TimeKernelSettings{});
+    EXPECT_EQ(load(R"({"time_kernel": {"width": 0.2}})").render.timeKernel, (TimeKernelSettings{TimeKernelKind::Box, 0.2}));
+    EXPECT_EQ(load(R"({"volume_estimator": "beam2d", "surface_estimator": "ppm"})").render.volumeEstimator, "beam2d");
+    EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": "gauss"})"); }),
+                AllOf(StartsWith("t.json:7: render.time_kernel: "), HasSubstr("allowed: none, box")));
+    EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": {"type": "tent"}})"); }),
+                StartsWith("t.json:7: render.time_kernel.type: unknown time kernel \"tent\""));
+    EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": {"type": "box", "width": -1}})"); }),
+                StartsWith("t.json:7: render.time_kernel.width: width must be > 0"));
+    EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": {"type": "box", "widht": 1}})"); }), HasSubstr("widht"));
+    EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": 3})"); }), HasSubstr("expected \"none\", \"box\" or an object"));
+    EXPECT_THAT(errorOf([&] { load(R"({"volume_estimator": "beams"})"); }),
+                AllOf(StartsWith("t.json:7: render.volume_estimator: "), HasSubstr("allowed: ")));
+    EXPECT_THAT(errorOf([&] { load(R"({"volume_estimator": 2})"); }), HasSubstr("expected a string"));
 }
