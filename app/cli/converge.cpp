@@ -380,36 +380,37 @@ struct ConvergeContext {
 };
 
 // The photon-beams settings of a converge method: "beams" (the settings as they are) or
-// "<estimator>[+<time kernel>]" (estimator_names.h; parseTimeKernel), checked like the flags.
-RenderSettings beamsVariant(const RenderSettings& base, const std::string& method) {
-    RenderSettings s = base;
+// "<estimator>[+<time kernel>]" (estimator_names.h; parseTimeKernel), checked by the settings' own
+// validate() / validateAgainstFilm() against the film's time range, their message prefixed with the
+// method.
+RenderSettings beamsVariant(const PreparedRender& prepared, const std::string& method) {
+    RenderSettings s = prepared.settings;
     s.method = Method::Beams;
     if (method == "beams") return s;
     const size_t plus = method.find('+');
-    const std::string est = method.substr(0, plus);
-    const auto& names = volumeEstimatorNames();
-    if (std::find(names.begin(), names.end(), est) == names.end()) {
-        std::string list;
-        for (const std::string& n : names) list += ", " + n;
-        throw UserError("--method " + method + ": unknown method or estimator \"" + est + "\"; allowed: beams, pt, both" +
-                        list + " (an estimator may take a time kernel: " + names.front() + "+box or " + names.front() +
-                        "+box:WIDTH)");
-    }
-    s.volumeEstimator = est;
-    s.timeKernel = {};
+    SettingsOverrides o;
+    o.volumeEstimator = method.substr(0, plus);
+    o.timeKernel = TimeKernelSettings{};
     if (plus != std::string::npos) {
-        const std::optional<TimeKernelSettings> k = parseTimeKernel(method.substr(plus + 1));
-        if (!k)
+        o.timeKernel = parseTimeKernel(method.substr(plus + 1));
+        if (!o.timeKernel)
             throw UserError("--method " + method + ": unknown time kernel \"" + method.substr(plus + 1) +
                             "\"; allowed: none, box, box:WIDTH (m of optical path, > 0)");
-        s.timeKernel = *k;
+    }
+    s.apply(o);
+    try {
+        const double diag = prepared.scene->bounds.diagonal() > 0.0 ? prepared.scene->bounds.diagonal() : 1.0;
+        s.validate({nullptr, &o, diag});  // (its warnings were given for the shared settings already)
+        s.validateAgainstFilm(prepared.time.binWidth * prepared.time.bins, {nullptr, &o, diag});
+    } catch (const UserError& e) {
+        throw UserError("--method " + method + ": " + e.what() + " (a --method entry is beams, pt, both or " +
+                        volumeEstimatorNames().front() + "[+box[:WIDTH]])");
     }
     return s;
 }
 
 // The --method list, expanded ("both" = beams,pt) and checked before anything runs.
 std::vector<std::string> convergeMethods(const std::string& list, const PreparedRender& prepared) {
-    const double rangeOpl = prepared.time.binWidth * prepared.time.bins;
     std::vector<std::string> out;
     size_t from = 0;
     while (from <= list.size()) {
@@ -419,12 +420,7 @@ std::vector<std::string> convergeMethods(const std::string& list, const Prepared
             out.push_back("beams");
             out.push_back("pt");
         } else if (!m.empty()) {
-            if (m != "pt") {
-                const RenderSettings v = beamsVariant(prepared.settings, m);  // throws for an unknown name
-                if (v.timeKernel.kind != TimeKernelKind::None && v.timeKernel.width > rangeOpl)
-                    throw UserError("--method " + m + ": the time kernel's width " + shortNumber(v.timeKernel.width) +
-                                    " m is wider than the film's time range " + shortNumber(rangeOpl) + " m");
-            }
+            if (m != "pt") beamsVariant(prepared, m);  // throws for an unknown estimator or kernel
             if (std::find(out.begin(), out.end(), m) != out.end())
                 throw UserError("--method " + list + ": \"" + m + "\" is listed twice");
             out.push_back(m);
@@ -443,7 +439,7 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
     res.method = method;
     RenderSettings ps = ptSettings(cx.prepared, c.spp);
     if (method != "pt") {
-        res.driver = std::make_unique<Driver>(cx.scene, beamsVariant(cx.prepared.settings, method), cx.prepared.time);
+        res.driver = std::make_unique<Driver>(cx.scene, beamsVariant(cx.prepared, method), cx.prepared.time);
     } else {
         if (cx.ref.info.method == "pt" && ps.seed == cx.ref.info.seed) {
             ps.seed = cx.ref.info.seed + 1;

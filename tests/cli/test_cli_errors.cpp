@@ -21,6 +21,7 @@
 #include <memory>
 #include <fstream>
 #include <sstream>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -165,6 +166,22 @@ protected:
         EXPECT_EQ(p.err.find("Sanitizer"), std::string::npos) << p.err;
         EXPECT_EQ(p.err.find("runtime error"), std::string::npos) << p.err;
         EXPECT_FALSE(fs::exists(dir_ / "out" / "steady.exr")) << where;
+    }
+
+    // A command refused at start-up: exit code 2, stderr starting with `text`, no output folder.
+    struct RefusedCommand {
+        std::vector<std::string> args;
+        const char* text;
+    };
+    void expectRefused(const std::vector<RefusedCommand>& cases) {
+        for (const RefusedCommand& c : cases) {
+            SCOPED_TRACE(c.args[0] + " " + c.args.back());
+            const Proc p = runTpb(c.args, dir_, {}, 30.0);
+            EXPECT_FALSE(p.timedOut);
+            EXPECT_EQ(p.code, 2) << p.err;
+            EXPECT_EQ(p.err.rfind(c.text, 0), 0u) << p.err;
+            EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written";
+        }
     }
 
     std::unique_ptr<tpb::test::TempDir> tmp_;
@@ -610,7 +627,7 @@ int countFrames(const fs::path& dir) {
 TEST_F(CliErrors, PassesAndTimeFlagsAreCheckedForRangeAndFiniteness) {
     const fs::path scene = write("scene.json", insideScene());
     const std::string out = (dir_ / "out").string();
-    const struct { std::vector<std::string> args; const char* text; } cases[] = {
+    expectRefused({
         {{"render", scene.string(), "-o", out, "--passes", "-3"},
          "error: --passes: must be an integer >= 0 (0 = no pass limit: until --time or Ctrl-C); got -3"},
         {{"render", scene.string(), "-o", out, "--time", "nan"},
@@ -624,15 +641,7 @@ TEST_F(CliErrors, PassesAndTimeFlagsAreCheckedForRangeAndFiniteness) {
          "error: --time: must be a finite"},
         {{"converge", scene.string(), "--reference", out + "/r.tpbref", "-o", out, "--time", "1", "--at", "nan"},
          "error: --at: must be a finite number > 0 (seconds); got nan"},
-    };
-    for (const auto& c : cases) {
-        SCOPED_TRACE(c.args[0] + " " + c.args.back());
-        const Proc p = runTpb(c.args, dir_, {}, 20.0);
-        EXPECT_FALSE(p.timedOut);
-        EXPECT_EQ(p.code, 2) << p.err;
-        EXPECT_EQ(p.err.rfind(c.text, 0), 0u) << p.err;
-        EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written";
-    }
+    });
     if (runTpb({"view", "--help"}, dir_).code == 0) {  // built with the viewer: its flags too (no window opens)
         const Proc v = runTpb({"view", scene.string(), "--passes", "-3"}, dir_, {}, 20.0);
         EXPECT_EQ(v.code, 2) << v.err;
@@ -1032,7 +1041,7 @@ TEST_F(CliErrors, EnergyOutsideTheFilmIsReported) {
 TEST_F(CliErrors, EstimatorAndTimeKernelErrorsNameTheAllowedValues) {
     const fs::path scene = write("scene.json", insideScene());
     const std::string out = (dir_ / "out").string();
-    const struct { std::vector<std::string> args; const char* text; } cases[] = {
+    expectRefused({
         {{"render", scene.string(), "-o", out, "--estimator", "beam3d"},
          "error: --estimator: unknown volume estimator \"beam3d\"; allowed: beam2d"},
         {{"render", scene.string(), "-o", out, "--surface-estimator", "grid"},
@@ -1047,17 +1056,37 @@ TEST_F(CliErrors, EstimatorAndTimeKernelErrorsNameTheAllowedValues) {
         {{"reference", scene.string(), "-o", out + "/r.tpbref", "--passes", "1", "--estimator", "beam2d"},
          "error: --estimator applies to the photon-beams estimators only"},
         {{"info", scene.string(), "--estimator", "nope"}, "error: --estimator: unknown volume estimator \"nope\""},
-    };
-    for (const auto& c : cases) {
-        SCOPED_TRACE(c.args[0] + " " + c.args.back());
-        const Proc p = runTpb(c.args, dir_, {}, 30.0);
-        EXPECT_FALSE(p.timedOut);
-        EXPECT_EQ(p.code, 2) << p.err;
-        EXPECT_EQ(p.err.rfind(c.text, 0), 0u) << p.err;
-        EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written";
-    }
+    });
     // In the scene file: named by file:line:key (the render block is on line 8).
     const Proc p = render(write("bad.json", insideScene("{\"bins\": 8}", "{\"volume_estimator\": \"beam9\"}")));
     expectUserError(p, (dir_ / "bad.json").string() + ":8", "render.volume_estimator",
                     "unknown volume estimator \"beam9\"; allowed: ");
+}
+
+// tpb converge --method takes a list of estimator variants: each runs and gets its rows; a bad
+// entry is refused before the output folder exists, naming the entry.
+TEST_F(CliErrors, ConvergeMeasuresEstimatorVariantsAndRefusesBadOnes) {
+    const fs::path scene = write("scene.json", insideScene());
+    const std::string ref = (dir_ / "r.tpbref").string(), out = (dir_ / "out").string();
+    const Proc r = runTpb({"reference", scene.string(), "-o", ref, "--passes", "2", "-q", "--width", "8", "--height", "8"}, dir_,
+                          {}, 60.0);
+    ASSERT_EQ(r.code, 0) << r.err;
+    expectRefused({
+        {{"converge", scene.string(), "--reference", ref, "-o", out, "--method", "beam2d,beam9", "--passes", "1"},
+         "error: --method beam9: --estimator: unknown volume estimator \"beam9\"; allowed: "},
+        {{"converge", scene.string(), "--reference", ref, "-o", out, "--method", "beam2d+tent", "--passes", "1"},
+         "error: --method beam2d+tent: unknown time kernel \"tent\""},
+        {{"converge", scene.string(), "--reference", ref, "-o", out, "--method", "pt,pt", "--passes", "1"},
+         "error: --method pt,pt: \"pt\" is listed twice"},
+    });
+    const Proc ok = runTpb({"converge", scene.string(), "--reference", ref, "-o", out, "--method", "beams,beam2d+box:0.05",
+                            "--passes", "2", "--no-plot", "-q"},
+                           dir_, {}, 120.0);
+    ASSERT_EQ(ok.code, 0) << ok.err;
+    std::ifstream csv(dir_ / "out" / "convergence.csv");
+    std::string line;
+    std::set<std::string> methods;
+    std::getline(csv, line);  // header
+    while (std::getline(csv, line)) methods.insert(line.substr(0, line.find(',')));
+    EXPECT_EQ(methods, (std::set<std::string>{"beams", "beam2d+box:0.05"}));
 }
