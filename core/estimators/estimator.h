@@ -48,18 +48,25 @@ struct PathState {
 // counts what fell outside the film and non-finite estimates (dropped).
 // Estimators write through spread() and instant() only, so what the film does with an estimate's
 // time profile (the bins, a progressive time kernel) is decided here, not in every estimator.
+// The sink also carries this pass's time kernel of the estimator writing into it (estimators/
+// time_kernel.h; set by the photon-beams integrator per pass and per estimator, the camera pass
+// gives each estimator its own): every estimate's time profile is convolved with it on both axes.
+// None (the default) is the kernel-free code, bit for bit.
 struct PixelSink {
     const TimeBins& time;
     PixelAccumulator& acc;
     FilmTally& tally;
+    TimeKernel kernel{};
     // Energy L along s in [s0, s1] of the camera segment with density exp(-kappa s), arriving at
     // aReal + bReal s (real axis) and aUnwarped + bUnwarped s (unwarped axis), OPL in m.
     void spread(const Color& L, const Color& kappa, double s0, double s1, double aReal, double bReal,
                 double aUnwarped, double bUnwarped) {
-        splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnwarped, bUnwarped);
+        splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnwarped, bUnwarped, kernel);
     }
     // Energy L arriving at one instant on each axis.
-    void instant(const Color& L, double tReal, double tUnwarped) { splatInstant(time, acc, tally, L, tReal, tUnwarped); }
+    void instant(const Color& L, double tReal, double tUnwarped) {
+        splatInstant(time, acc, tally, L, tReal, tUnwarped, kernel);
+    }
 };
 
 // Per-thread scratch space of the estimators (kept across pixels to avoid allocations).
@@ -75,6 +82,7 @@ struct EstimatorPass {
     BeamLength beamLength = BeamLength::Short;
     AccelBackend accel = AccelBackend::Embree;
     int threads = 1;
+    TimeKernel timeKernel;  // this pass's time kernel of the estimator (None: off); the sink applies it
 };
 
 class VolumeEstimator {

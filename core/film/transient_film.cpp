@@ -33,8 +33,12 @@ FilmTally& FilmTally::operator+=(const FilmTally& o) {
     return *this;
 }
 
-void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
-                 double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
+namespace {
+
+// One estimate onto both time axes and the steady state; `splat` is splatTime or the smoothed one.
+template <class Splat>
+void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, double aReal, double bReal, double aUnw,
+                   double bUnw, Splat&& splat) {
     if (!isFinite(L) || !std::isfinite(aReal) || !std::isfinite(aUnw) || !std::isfinite(bReal) || !std::isfinite(bUnw)) {
         ++tally.rejected;
         return;
@@ -43,11 +47,11 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
     // What lands in the bins is summed as it lands (exactly zero when nothing does, which the
     // all-black-film check relies on), what falls outside comes back split by side.
     Color binned[2] = {Color(0.0), Color(0.0)};
-    const OutsideFilm outReal = splatTime(time, L, kappa, s0, s1, aReal, bReal, [&](int k, const Color& c) {
+    const OutsideFilm outReal = splat(aReal, bReal, [&](int k, const Color& c) {
         acc.add(TimeAxis::Real, k, c);
         binned[0] += c;
     });
-    const OutsideFilm outUnw = splatTime(time, L, kappa, s0, s1, aUnw, bUnw, [&](int k, const Color& c) {
+    const OutsideFilm outUnw = splat(aUnw, bUnw, [&](int k, const Color& c) {
         acc.add(TimeAxis::Unwarped, k, c);
         binned[1] += c;
     });
@@ -61,6 +65,26 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
         tally.outside[a] += before + luminance(outs[a]->after);
         tally.inside[a] += luminance(binned[a]);
     }
+}
+
+}  // namespace
+
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
+                 double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) {
+        return splatTime(time, L, kappa, s0, s1, a, b, sink);
+    });
+}
+
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
+                 double s0, double s1, double aReal, double bReal, double aUnw, double bUnw, const TimeKernel& kernel) {
+    if (!kernel.active()) {  // the kernel-free code itself: bit-identical films
+        splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnw, bUnw);
+        return;
+    }
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) {
+        return splatTimeSmoothed(time, L, kappa, s0, s1, a, b, kernel, sink);
+    });
 }
 
 void PixelAccumulator::reset(int bins) {

@@ -21,6 +21,7 @@
 #pragma once
 #include "base/math.h"
 #include "scene/scene_desc.h"
+#include "estimators/time_kernel.h"
 #include "estimators/time_splat.h"
 #include "film/film_snapshot.h"
 
@@ -97,6 +98,16 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
 inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, double tReal,
                          double tUnwarped) {
     splatSpread(time, acc, tally, L, Color(0.0), 0.0, 0.0, tReal, 0.0, tUnwarped, 0.0);
+}
+// The same with the estimate's time profile first convolved with a time kernel (estimators/
+// time_kernel.h, on both axes; the steady state is unchanged). An inactive kernel runs the code
+// above, bit for bit.
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
+                 double s0, double s1, double aReal, double bReal, double aUnwarped, double bUnwarped,
+                 const TimeKernel& kernel);
+inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, double tReal,
+                         double tUnwarped, const TimeKernel& kernel) {
+    splatSpread(time, acc, tally, L, Color(0.0), 0.0, 0.0, tReal, 0.0, tUnwarped, 0.0, kernel);
 }
 
 class TransientFilm {

@@ -27,7 +27,8 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
     Rng rng(s.seed, Stream::Camera, s.pass, pixelIndex);
     Ray ray = scene.camera.generate(x + rng.uniform(), y + rng.uniform());
     PathState path;
-    PixelSink sink{time, scratch.acc, stats};
+    PixelSink volumeSink{time, scratch.acc, stats, est.volumeKernel};
+    PixelSink surfaceSink{time, scratch.acc, stats, est.surfaceKernel};
     RegionStack regions = scene.cameraRegions;
     ++stats.cameraRays;
     NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
@@ -41,7 +42,7 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
         // Medium segment: the volume estimate along it (photon beams: eq. 10, the sum over the
         // beams crossing the ray).
         if (est.volume && region.hasMedium && region.medium.scattering)
-            stats.beamEstimates += est.volume->gather({ray, sMax, regionId}, path, sink, scratch.estimator);
+            stats.beamEstimates += est.volume->gather({ray, sMax, regionId}, path, volumeSink, scratch.estimator);
         if (!hit) break;
         const SegmentTransport seg = crossSegment(region, ray, hit->t);
         path.beta *= seg.transmittance;
@@ -61,7 +62,7 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
         const Material& mat = *si.material;
         if (si.kind == SurfaceKind::Diffuse) {
             // The surface estimate (transient progressive photon mapping) ends the path.
-            if (est.surface) stats.photonEstimates += est.surface->gather({ray, *hit, ng, mat.albedo}, path, sink);
+            if (est.surface) stats.photonEstimates += est.surface->gather({ray, *hit, ng, mat.albedo}, path, surfaceSink);
             break;
         }
         if (si.kind == SurfaceKind::Mirror) {

@@ -43,6 +43,8 @@ struct PassStats {
     uint64_t pass = 0;  // 1-based
     // Photon beams: kernel radii of this pass, photons traced and what they stored.
     double beamRadius = 0.0, surfaceRadius = 0.0;
+    // and half-widths of their time kernels (m of OPL; 0 = off: estimators/time_kernel.h).
+    double volumeTimeHalfWidth = 0.0, surfaceTimeHalfWidth = 0.0;
     int64_t photons = 0, beams = 0, beamPieces = 0, surfacePhotons = 0;
     // Flux the photons started with, and the part still carried at the end of long beams cut in an
     // unbounded medium (missing from the steady image only: see photon_tracer.cpp, openBeamLength).

@@ -2,6 +2,7 @@
 
 #include "base/error.h"
 #include "base/progressive.h"
+#include "integrators/time_kernel_schedule.h"
 #include "render/memory_budget.h"
 
 #include <chrono>
@@ -24,17 +25,27 @@ PhotonBeamsIntegrator::PhotonBeamsIntegrator(const Scene& scene, const RenderSet
     if (!surface_) throw UserError("unknown surface estimator \"" + settings.surfaceEstimator + "\"");
 }
 
+// With the time kernel on, the schedule runs over space and time: D = dim() + 1 (progressive.h).
 double PhotonBeamsIntegrator::beamRadius(uint64_t pass) const {
-    return progressiveRadius(settings_.beamRadius0, settings_.alpha, pass, volume_->dim());
+    return progressiveRadius(settings_.beamRadius0, settings_.alpha, pass, scheduleDimension(volume_->dim(), timeKernelOn()));
 }
 
 double PhotonBeamsIntegrator::surfaceRadius(uint64_t pass) const {
-    return progressiveRadius(settings_.surfaceRadius0, settings_.alpha, pass, surface_->dim());
+    return progressiveRadius(settings_.surfaceRadius0, settings_.alpha, pass,
+                             scheduleDimension(surface_->dim(), timeKernelOn()));
+}
+
+TimeKernelSchedule PhotonBeamsIntegrator::timeKernels(const TimeBins& time) const {
+    return timeKernelSchedule(scene_, settings_, time, volume_->dim(), surface_->dim());
 }
 
 bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     ps.beamRadius = beamRadius(ctx.pass);
     ps.surfaceRadius = surfaceRadius(ctx.pass);
+    const TimeKernelSchedule kernels = timeKernels(*ctx.time);
+    const TimeKernel volumeKernel = kernels.volume.kernel(ctx.pass), surfaceKernel = kernels.surface.kernel(ctx.pass);
+    ps.volumeTimeHalfWidth = volumeKernel.halfWidth;
+    ps.surfaceTimeHalfWidth = surfaceKernel.halfWidth;
     const double t0 = wallSec();
 
     // 1. Photon pass (only the stages the scene needs).
@@ -66,14 +77,18 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     ep.accel = settings_.accel;
     ep.threads = ctx.threads;
     estimators_ = {};
+    estimators_.volumeKernel = volumeKernel;
+    estimators_.surfaceKernel = surfaceKernel;
     if (scene_.stages.beams && !map_.beams.empty()) {
         ep.radius = ps.beamRadius;
+        ep.timeKernel = volumeKernel;
         volume_->prepare(scene_, map_, ep);
         if (!volume_->empty()) estimators_.volume = volume_.get();
         ps.beamPieces = static_cast<int64_t>(volume_->accelPrimitives());
     }
     if (scene_.stages.surfacePhotons && !map_.photons.empty()) {
         ep.radius = ps.surfaceRadius;
+        ep.timeKernel = surfaceKernel;
         surface_->prepare(scene_, map_, ep);
         if (!surface_->empty()) estimators_.surface = surface_.get();
     }

@@ -12,12 +12,16 @@
 // estimator (estimators/estimator.h, chosen by name in the settings) gives the dimension of its
 // kernel to the schedule (the 2D beam kernel and the surface kernel are both 2D: their area shrinks
 // by (i + alpha) / (i + 1) per pass).
+// With the optional progressive time kernel (RenderSettings::timeKernel, estimators/time_kernel.h)
+// each estimator's estimates are also smoothed along time by a box whose half-width shrinks with its
+// radius, and both follow the schedule of dimension dim() + 1 (integrators/time_kernel_schedule.h).
 // Only the stages the scene needs run (Scene::stages: no beams without a scattering medium that
 // photons reach, no surface photons without a diffuse surface).
 #pragma once
 #include "estimators/estimator.h"
 #include "integrators/camera_pass.h"
 #include "integrators/integrator.h"
+#include "integrators/time_kernel_schedule.h"
 #include "photons/photon_tracer.h"
 
 #include <memory>
@@ -37,6 +41,9 @@ public:
     // Kernel radii of pass `pass` (m), from the estimators' kernel dimensions.
     double beamRadius(uint64_t pass) const;
     double surfaceRadius(uint64_t pass) const;
+    // The estimators' time-kernel schedules on the film's time axis (off unless settings.timeKernel).
+    TimeKernelSchedule timeKernels(const TimeBins& time) const;
+    bool timeKernelOn() const { return settings_.timeKernel.kind != TimeKernelKind::None; }
     // The photon map of the pass in progress (for tools and tests).
     const PhotonMap& photonMap() const { return map_; }
 
