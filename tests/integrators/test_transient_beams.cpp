@@ -539,3 +539,69 @@ TEST(TransientBeams, TimeKernelNarrowerThanTheBinsStillMatchesSingleScatteringOn
         EXPECT_GT(eWide, 1.5 * eNarrow);
     }
 }
+
+// A measurement, not a check (README "Measurements", time kernel): per-bin relative RMSE of transient
+// photon mapping on bins far finer than the kernel (the floor of the test above, 1000 bins of 2 mm)
+// against an exact reference (direct light on the floor, 128 x 128 rays per pixel), with and
+// without the time kernel. Run: build/test_transient_beams --gtest_also_run_disabled_tests
+// --gtest_filter='*DISABLED_MeasureTimeKernel*'
+TEST(TransientBeams, DISABLED_MeasureTimeKernelOnFineBins) {
+    const char* scene = R"({
+      "version": 1,
+      "camera": {"position": [0, 1, 2], "look_at": [0, 0, 0], "fov": 50, "resolution": [12, 12]},
+      "film": {"start_m": 2.0, "bin_width_m": 0.002, "bins": 1000},
+      "materials": {"white": {"type": "diffuse", "albedo": 0.8}},
+      "shapes": [{"type": "quad", "corner": [-3, 0, -3], "edge_u": [0, 0, 6], "edge_v": [6, 0, 0], "material": "white"}],
+      "lights": [{"type": "point", "position": [0.3, 0.8, 0.2], "power": 10}],
+      "render": {"photons_per_pass": 20000, "surface_radius": 0.025, "radius": 0.01, "max_depth": 1, "seed": 5}
+    })";
+    auto sc = sceneFrom(scene);
+    const int W = 12, H = 12, B = sc.time.bins, g = 128;
+    const Light& l = sc->lights[0];
+    // Direct light on the floor: L = albedo / pi * Phi cos / (4 pi d^2), arriving at t_cam + d.
+    std::vector<double> ref(static_cast<size_t>(W) * H * B, 0.0);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            for (int j = 0; j < g; ++j)
+                for (int i = 0; i < g; ++i) {
+                    const Ray ray = sc->camera.generate(x + (i + 0.5) / g, y + (j + 0.5) / g);
+                    const auto hit = sc->geometry.intersect(ray);
+                    if (!hit) continue;
+                    const Vec3 v = l.position - hit->p;
+                    const double d = glm::length(v);
+                    const double L = 0.8 / kPi * l.power.x / (4 * kPi * d * d) * (std::abs(v.y) / d);
+                    const int k = sc.time.binOf(hit->t + d);
+                    if (k >= 0 && k < B) ref[(static_cast<size_t>(y) * W + x) * B + k] += L / (g * g);
+                }
+    struct Config {
+        double alpha;
+        TimeKernelSettings kernel;
+    };
+    const Config configs[] = {{2.0 / 3.0, {}},
+                              {4.0 / 7.0, {}},
+                              {4.0 / 7.0, {TimeKernelKind::Box, 0.0}},
+                              {4.0 / 7.0, {TimeKernelKind::Box, 0.025}},
+                              {2.0 / 3.0, {TimeKernelKind::Box, 0.0}}};
+    for (const Config& c : configs) {
+        RenderSettings s = sc.settings;
+        s.threads = 2;
+        s.alpha = c.alpha;
+        s.timeKernel = c.kernel;
+        Driver drv(*sc, s, sc.time);
+        std::printf("time kernel %s width %.4f, alpha %.3f: relative RMSE per bin", c.kernel.kind == TimeKernelKind::Box ? "box" : "none",
+                    c.kernel.width, c.alpha);
+        for (int p = 1; p <= 256; ++p) {
+            ASSERT_TRUE(drv.runPass(p));
+            if (p != 4 && p != 16 && p != 64 && p != 256) continue;
+            std::vector<double> vol;
+            drv.film().volume(TimeAxis::Real, EmissionMode::Delta, vol);
+            double e2 = 0.0, r2 = 0.0;
+            for (size_t q = 0; q < ref.size(); ++q) {
+                e2 += (vol[q * 3] - ref[q]) * (vol[q * 3] - ref[q]);
+                r2 += ref[q] * ref[q];
+            }
+            std::printf("  %d: %.3f", p, std::sqrt(e2 / r2));
+        }
+        std::printf("\n");
+    }
+}
