@@ -8,6 +8,7 @@
 // When the interval collapses (|b| (s1 - s0) tiny, e.g. a beam pointing straight at the camera)
 // all energy goes to one bin. Energy before the film's start and after its end is returned
 // (OutsideFilm), never dropped silently: the film keeps both, per pixel and axis.
+// The optional progressive time kernel (time_kernel.h) convolves these profiles with a box first.
 #pragma once
 #include "base/math.h"
 
