@@ -72,11 +72,6 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     p.time = axis.time;
     p.fit = axis.fit;
     p.settings.validateAgainstFilm(p.time.binWidth * p.time.bins, {&desc, &overrides, diag});
-    // The selection is in place, the kernel itself is not merged yet (issue 14): say so rather than
-    // let a user believe the film is smoothed.
-    if (p.settings.method == Method::Beams && p.settings.timeKernel.kind != TimeKernelKind::None)
-        warn((overrides.timeKernel ? std::string("--time-kernel: ") : desc.where("render.time_kernel") + "render.time_kernel: ") + "time kernel " + timeKernelName(p.settings.timeKernel) +
-             ": accepted, but this build does not apply a time kernel yet (issue 14): the film is rendered without it");
     p.source.path = desc.path;
     p.source.version = desc.version;
     p.source.locs = std::move(desc.locs);
