@@ -46,14 +46,24 @@ void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece
     }
 }
 
+// Points as zero-length pieces: the axis is the point itself (direction 0, sbLo = sbHi = 0).
+void makePointPieces(const std::vector<VolumePhoton>& points, std::vector<Piece>& pieces) {
+    pieces.clear();
+    pieces.reserve(points.size());
+    for (uint32_t k = 0; k < points.size(); ++k) pieces.push_back({points[k].position, Vec3(0.0), 0.0, 0.0, k, 0, points[k].region});
+}
+
 BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
 
 class BruteForceBeams final : public BeamAccel {
 public:
     void build(const std::vector<Beam>& beams, double radius, int) override {
-        beams_ = &beams;
         radius_ = radius;
         makePieces(beams, radius, pieces_);
+    }
+    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
+        radius_ = radius;
+        makePointPieces(points, pieces_);
     }
     void candidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out) const override {
         for (const Piece& p : pieces_)
@@ -63,7 +73,6 @@ public:
     size_t pieceCount() const override { return pieces_.size(); }
 
 private:
-    const std::vector<Beam>* beams_ = nullptr;
     double radius_ = 0.0;
     std::vector<Piece> pieces_;
 };
@@ -73,33 +82,14 @@ public:
     ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
 
     void build(const std::vector<Beam>& beams, double radius, int) override {
-        beams_ = &beams;
         radius_ = radius;
         makePieces(beams, radius, pieces_);
-        if (scene_) rtcReleaseScene(scene_);
-        scene_ = nullptr;
-        try {
-            RTCDevice device = embreeDevice();
-            scene_ = rtcNewScene(device);
-            checkEmbree("creating the photon-beam scene");
-            rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
-            RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
-            checkEmbree("creating the photon-beam geometry");
-            rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(pieces_.size()));
-            rtcSetGeometryUserData(g, this);
-            rtcSetGeometryBoundsFunction(g, &EmbreeBeams::boundsFn, this);
-            rtcSetGeometryIntersectFunction(g, &EmbreeBeams::intersectFn);
-            rtcSetGeometryOccludedFunction(g, &EmbreeBeams::occludedFn);
-            rtcCommitGeometry(g);
-            rtcAttachGeometry(scene_, g);
-            rtcReleaseGeometry(g);
-            rtcCommitScene(scene_);
-            checkEmbree("building the photon-beam BVH");
-        } catch (...) {
-            if (scene_) rtcReleaseScene(scene_);
-            scene_ = nullptr;  // candidates() then finds nothing rather than query a broken scene
-            throw;
-        }
+        buildBvh();
+    }
+    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
+        radius_ = radius;
+        makePointPieces(points, pieces_);
+        buildBvh();
     }
 
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits) const override {
@@ -164,7 +154,34 @@ private:
     }
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}
 
-    const std::vector<Beam>* beams_ = nullptr;
+    // Embree's BVH over pieces_ (replaces the previous one).
+    void buildBvh() {
+        if (scene_) rtcReleaseScene(scene_);
+        scene_ = nullptr;
+        try {
+            RTCDevice device = embreeDevice();
+            scene_ = rtcNewScene(device);
+            checkEmbree("creating the photon-beam scene");
+            rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
+            RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+            checkEmbree("creating the photon-beam geometry");
+            rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(pieces_.size()));
+            rtcSetGeometryUserData(g, this);
+            rtcSetGeometryBoundsFunction(g, &EmbreeBeams::boundsFn, this);
+            rtcSetGeometryIntersectFunction(g, &EmbreeBeams::intersectFn);
+            rtcSetGeometryOccludedFunction(g, &EmbreeBeams::occludedFn);
+            rtcCommitGeometry(g);
+            rtcAttachGeometry(scene_, g);
+            rtcReleaseGeometry(g);
+            rtcCommitScene(scene_);
+            checkEmbree("building the photon-beam BVH");
+        } catch (...) {
+            if (scene_) rtcReleaseScene(scene_);
+            scene_ = nullptr;  // candidates() then finds nothing rather than query a broken scene
+            throw;
+        }
+    }
+
     double radius_ = 0.0;
     std::vector<Piece> pieces_;
     RTCScene scene_ = nullptr;

@@ -10,6 +10,12 @@
 //   EmbreeBeams:     Embree user geometry over the pieces (Embree's BVH), in beam_accel.cpp only.
 // Candidates are returned sorted by (beam, piece), one per piece, so sums over them do not depend
 // on traversal order.
+//
+// Photon points (VolumePhoton, photon_tracer.h) are indexed the same way, as zero-length pieces: the
+// build overload for points makes point k the piece (beam = k, piece = 0, sbLo = sbHi = 0) with the
+// point as its "axis", padded by the support radius (the point kernels' radius), and candidates()
+// returns the points whose padded box the segment may cross, sorted by index. An accelerator holds
+// either beams or points, whichever it was last built over.
 #pragma once
 #include "accel/accel_backend.h"
 #include "photons/photon_tracer.h"
@@ -42,11 +48,15 @@ public:
     // `beams` must outlive the accelerator (it is referenced, not copied). supportRadius (m): the
     // estimator's kernel is zero farther than this from a beam's axis.
     virtual void build(const std::vector<Beam>& beams, double supportRadius, int threads) = 0;
+    // Same over photon points (`points` must outlive it): the kernel is zero farther than
+    // supportRadius from a point; candidate k is point k (BeamPiece::beam = k).
+    virtual void build(const std::vector<VolumePhoton>& points, double supportRadius, int threads) = 0;
     // Appends the candidate pieces of beams of `region` for the segment o + s d, s in [0, sMax]
-    // (d unit), sorted by (beam, piece): a superset of the pieces whose kernel the segment meets.
+    // (d unit), sorted by (beam, piece): a superset of the pieces whose kernel the segment meets
+    // (for points: of the points within supportRadius of the segment).
     virtual void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out) const = 0;
     virtual std::string name() const = 0;
-    virtual size_t pieceCount() const = 0;
+    virtual size_t pieceCount() const = 0;  // beam pieces, or points
 
     static std::unique_ptr<BeamAccel> create(AccelBackend kind);
 };

@@ -1,5 +1,7 @@
 #include "estimators/beam2d.h"
 
+#include "estimators/kernel_visibility.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -67,36 +69,6 @@ double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap&
 }
 
 // ---- the estimator ------------------------------------------------------------------------------
-
-namespace {
-
-// Shapes whose bounds come within r of the camera segment [0, sMax]: only they can stand between
-// a point of the segment and a beam point within r of it (the beam visibility test in gather).
-void nearShapes(const Scene& scene, const Ray& ray, double sMax, double r, std::vector<int>& out) {
-    out.clear();
-    Bounds3 seg;
-    seg.expand(ray.o);
-    seg.expand(ray.at(sMax));  // an unbounded segment gives infinite bounds: every shape is near
-    const Vec3 pad(r + 8.0 * scene.rayEps);
-    for (size_t i = 0; i < scene.shapes.size(); ++i) {
-        const Bounds3& b = scene.shapes[i].bounds;
-        const bool apart = glm::any(glm::lessThan(b.hi + pad, seg.lo)) || glm::any(glm::greaterThan(b.lo - pad, seg.hi));
-        if (!apart || !std::isfinite(sMax)) out.push_back(static_cast<int>(i));
-    }
-}
-
-// Whether one of the `near` shapes' bounds meets the segment from a to b (else nothing blocks it).
-bool mayBlock(const Scene& scene, const std::vector<int>& near, const Vec3& a, const Vec3& b) {
-    const Vec3 pad(8.0 * scene.rayEps);
-    const Vec3 lo = glm::min(a, b) - pad, hi = glm::max(a, b) + pad;
-    for (int i : near) {
-        const Bounds3& sb = scene.shapes[i].bounds;
-        if (!(glm::any(glm::lessThan(sb.hi, lo)) || glm::any(glm::greaterThan(sb.lo, hi)))) return true;
-    }
-    return false;
-}
-
-}  // namespace
 
 void Beam2DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
     scene_ = &scene;

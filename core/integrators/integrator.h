@@ -41,11 +41,13 @@ struct PassContext {
 // What a pass did: the Driver's history, the CLI's summaries and the viewer's stats panel.
 struct PassStats {
     uint64_t pass = 0;  // 1-based
-    // Photon beams: kernel radii of this pass, photons traced and what they stored.
+    // Photon beams: kernel radii of this pass, photons traced and what they stored (points: photons
+    // at scattering events, for the point estimators); beamPieces: what the volume estimator indexed
+    // (beam pieces, or points).
     double beamRadius = 0.0, surfaceRadius = 0.0;
     // and half-widths of their time kernels (m of OPL; 0 = off: estimators/time_kernel.h).
     double volumeTimeHalfWidth = 0.0, surfaceTimeHalfWidth = 0.0;
-    int64_t photons = 0, beams = 0, beamPieces = 0, surfacePhotons = 0;
+    int64_t photons = 0, beams = 0, beamPieces = 0, surfacePhotons = 0, points = 0;
     // Flux the photons started with, and the part still carried at the end of long beams cut in an
     // unbounded medium (missing from the steady image only: see photon_tracer.cpp, openBeamLength).
     Color emittedFlux{0.0}, cutFlux{0.0};

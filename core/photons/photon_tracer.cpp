@@ -33,12 +33,15 @@ double openBeamLength(const Scene& scene, const Medium& m, double eta, double op
 [[noreturn]] void mapTooLarge(const PhotonPassParams& s, const std::string& who) {
     throw UserError("", 0, "render.photons_per_pass",
                     "pass " + std::to_string(s.pass) + ": " + who + " stored more than " + humanBytes(s.maxMapBytes) +
-                        " of photon beams and surface photons, the memory limit (TPB_MAX_FILM_BYTES); lower "
+                        " of photon beams, surface photons and points, the memory limit (TPB_MAX_FILM_BYTES); lower "
                         "photons_per_pass or render.max_depth (a medium or walls with albedo near 1 keep photons "
                         "alive for up to max_depth bounces)");
 }
 
-uint64_t mapBytes(size_t beams, size_t photons) { return beams * sizeof(Beam) + photons * sizeof(SurfacePhoton); }
+uint64_t mapBytes(size_t beams, size_t photons, size_t points) {
+    return beams * sizeof(Beam) + photons * sizeof(SurfacePhoton) + points * sizeof(VolumePhoton);
+}
+uint64_t mapBytes(const PhotonMap& m) { return mapBytes(m.beams.size(), m.photons.size(), m.points.size()); }
 
 }  // namespace
 
@@ -61,11 +64,12 @@ void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
     RegionStack regions = *startRegions;
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
     NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
-    const size_t beams0 = out.beams.size(), photons0 = out.photons.size();
+    const size_t beams0 = out.beams.size(), photons0 = out.photons.size(), points0 = out.points.size();
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
         if (s.maxMapBytes > 0 && (depth & 4095) == 4095) {
-            const uint64_t mine = mapBytes(out.beams.size() - beams0, out.photons.size() - photons0);
+            const uint64_t mine =
+                mapBytes(out.beams.size() - beams0, out.photons.size() - photons0, out.points.size() - points0);
             if (mine > s.maxMapBytes) mapTooLarge(s, "photon " + std::to_string(index) + " alone");
         }
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
@@ -88,6 +92,15 @@ void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                 }
                 if (len > 0.0 && std::isfinite(len))
                     out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
+            }
+            if (s.storePoints && ff.scattered) {
+                // The point at the end of this segment (header): Phi T(d) / (sigma_bar Tbar(d)) per
+                // channel, as one exponent so that neither transmittance underflows on its own.
+                const double sigmaBar = m.samplingSigma(), d = ff.distance;
+                const Color w(std::exp((sigmaBar - m.sigma_t.x) * d), std::exp((sigmaBar - m.sigma_t.y) * d),
+                              std::exp((sigmaBar - m.sigma_t.z) * d));
+                out.points.push_back({ray.at(d), ray.d, power * w / sigmaBar, opl + ff.opl, regions.top(),
+                                      static_cast<uint32_t>(depth)});
             }
             if (!std::isfinite(ff.distance)) break;
             // Weight: T(d) sigma_s / (sigma_bar T_bar(d)) at a scattering event, T / T_bar at a surface.
@@ -148,24 +161,26 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std:
         PhotonMap& part = parts[static_cast<size_t>(b)];
         const int64_t end = std::min(s.photons, (b + 1) * kBatch);
         for (int64_t i = b * kBatch; i < end; ++i) {
-            const uint64_t before = mapBytes(part.beams.size(), part.photons.size());
+            const uint64_t before = mapBytes(part);
             tracePhoton(scene, s, i, part);
             if (s.maxMapBytes > 0) {
-                const uint64_t total = stored.fetch_add(mapBytes(part.beams.size(), part.photons.size()) - before) +
-                                       mapBytes(part.beams.size(), part.photons.size()) - before;
+                const uint64_t added = mapBytes(part) - before;
+                const uint64_t total = stored.fetch_add(added) + added;
                 if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
             }
         }
         part.emitted = end - b * kBatch;
     }, abort);
     PhotonMap all;
-    size_t nb = 0, np = 0;
-    for (const PhotonMap& p : parts) { nb += p.beams.size(); np += p.photons.size(); }
+    size_t nb = 0, np = 0, nv = 0;
+    for (const PhotonMap& p : parts) { nb += p.beams.size(); np += p.photons.size(); nv += p.points.size(); }
     all.beams.reserve(nb);
     all.photons.reserve(np);
+    all.points.reserve(nv);
     for (PhotonMap& p : parts) {
         all.beams.insert(all.beams.end(), p.beams.begin(), p.beams.end());
         all.photons.insert(all.photons.end(), p.photons.begin(), p.photons.end());
+        all.points.insert(all.points.end(), p.points.begin(), p.points.end());
         all.emitted += p.emitted;
         all.rejected += p.rejected;
         all.emittedFlux += p.emittedFlux;

@@ -8,6 +8,24 @@
 // beam2d.h), which is 1 for grey media. "Long" beams extend to the surface and keep the full
 // transmittance exp(-sigma_t s_b) (the form of the paper's eq. 8); the photon still scatters at the
 // sampled distance.
+//
+// Volume photons ("points", PhotonPassParams::storePoints, for point estimators such as point2d /
+// point3d): one at every scattering event the free flight samples inside a scattering medium, at
+// the end of the segment whose beam has the same depth. Its weight makes the points estimate what
+// the beams estimate. A segment entered with flux Phi (per channel, W) stands for the photon flux
+// along it, Phi T(s) delta(x - x(s)) ds integrated over s in [0, d_surf) (T(s) = exp(-sigma_t s)):
+// the beam's integrand. The event is sampled with pdf p(s) = sigma_bar exp(-sigma_bar s) =
+// sigma_bar Tbar(s) for s < d_surf (transport/free_flight.h), so the one-sample estimator of that
+// integral is
+//   E[ Phi T(s) / p(s) delta(x - x(s)) 1(s < d_surf) ] = Int_0^{d_surf} Phi T(s) delta(x - x(s)) ds,
+// i.e. the point carries
+//   power = Phi T(s) / (sigma_bar Tbar(s)) = Phi exp(-(sigma_t - sigma_bar) s) / sigma_bar   (W m),
+// the short beam's power at its end divided by sigma_bar (Phi / sigma_bar in a grey medium). It is
+// the scattering photon's weight before the albedo: the point estimators multiply by sigma_s (as
+// the beam estimators do), so a point's contribution has the units of a beam's times a length, which
+// the point kernels' extra 1/m (1/(pi r^2) across the ray instead of along a beam's length, or
+// 1/(4/3 pi r^3) integrated along the ray) take away. Storing points draws no random number: the
+// photon paths, hence the beams and surface photons, are the same with or without them.
 #pragma once
 #include "base/math.h"
 #include "scene/scene.h"
@@ -28,6 +46,16 @@ struct Beam {
     uint32_t depth;  // number of scattering/reflection events before this segment
 };
 
+// A photon at a scattering event inside a scattering medium (see the header: weight and depth).
+struct VolumePhoton {
+    Vec3 position;   // m, the scattering point x(s)
+    Vec3 dirIn;      // unit, propagation direction of the segment that ends here (before scattering)
+    Color power;     // W m: Phi T(s) / (sigma_bar Tbar(s)), already divided by the photon count
+    double opl;      // OPL at the scattering point (m), emission time included
+    int region;      // region whose medium it scatters in
+    uint32_t depth;  // that of the segment (beam) it ends: scattering/reflection events before it
+};
+
 struct SurfacePhoton {
     Vec3 position;
     Vec3 dirIn;   // propagation direction when landing
@@ -39,6 +67,7 @@ struct SurfacePhoton {
 struct PhotonMap {
     std::vector<Beam> beams;
     std::vector<SurfacePhoton> photons;
+    std::vector<VolumePhoton> points;  // only when PhotonPassParams::storePoints
     int64_t emitted = 0;
     int64_t rejected = 0;      // non-finite photon weights discarded
     Color emittedFlux{0.0};    // W: the flux the pass's photons started with (estimates the lights' power)
@@ -55,12 +84,13 @@ struct PhotonPassParams {
     int maxDepth = 16;
     bool storeBeams = true;
     bool storeSurfacePhotons = true;
+    bool storePoints = false;  // volume photons at scattering events (the point estimators)
     BeamLength beamLength = BeamLength::Short;
     // OPL of the film's end (m): long beams in an unbounded medium reach at least that far, so the
     // frames lose nothing to their cut (photon_tracer.cpp, openBeamLength). 0 = no film yet.
     double filmEndOpl = 0.0;
     int threads = 1;
-    // Memory guard: a pass whose beams and surface photons would take more than this throws
+    // Memory guard: a pass whose beams, surface photons and points would take more than this throws
     // UserError (key render.photons_per_pass) instead of exhausting memory, e.g. an albedo-1
     // medium with a huge max_depth. 0 = no limit.
     uint64_t maxMapBytes = 0;

@@ -8,10 +8,14 @@
 //       queried region, with the same piece ranges;
 //   (c) after the overlap test both backends give exactly the same pieces;
 //   (d) beamPieceCount stays in 1..16 and a beam's pieces tile [0, length] exactly.
+// Photon points (zero-length pieces, the point estimators): Embree's candidates contain every point
+// within the radius of the segment and both backends agree after that test, also after a rebuild
+// from beams to points and back.
 // Also: a rebuild replaces the beams; the shared Embree device (scene/embree_device.h) turns an Embree error into an EmbreeError.
 #include "accel/beam_accel.h"
 #include "base/rng.h"
 #include "estimators/beam2d.h"
+#include "estimators/point3d.h"
 #include "scene/embree_device.h"
 
 #include <embree3/rtcore.h>  // only to provoke an Embree error in the device test
@@ -302,6 +306,67 @@ TEST(BeamAccel, PieceCountBoundsAndPiecesTileTheBeam) {
         }
     }
     EXPECT_TRUE(sawSixteen && sawOne);
+}
+
+// Points: the kernels of point2d / point3d are zero farther than r from the point; a point is a
+// true overlap when the ball around it meets the segment (rayPointChord).
+TEST(BeamAccel, PointCandidatesContainEveryPointNearTheSegmentAndMatchBruteForce) {
+    Rng rng(3000, Stream::Test, 0, 0);
+    const double radius = 0.05;
+    // Points clustered near the beams' axes of randomBeams (so that segments aimed at a beam meet many).
+    const std::vector<Beam> beams = randomBeams(rng, 300, radius);
+    std::vector<VolumePhoton> points;
+    for (const Beam& b : beams)
+        for (int k = 0; k < 4; ++k) {
+            VolumePhoton v{};
+            v.position = b.origin + rng.uniform() * b.length * b.dir + 2.0 * radius * (rng.uniform() - 0.5) * randomDir(rng);
+            v.dirIn = b.dir;
+            v.power = Color(1.0);
+            v.region = b.region;
+            points.push_back(v);
+        }
+    auto brute = BeamAccel::create(AccelBackend::BruteForce);
+    auto embree = BeamAccel::create(AccelBackend::Embree);
+    for (int round = 0; round < 2; ++round) {  // round 1: rebuilt over beams in between
+        if (round == 1) {
+            brute->build(beams, radius, 1);
+            embree->build(beams, radius, 1);
+        }
+        brute->build(points, radius, 1);
+        embree->build(points, radius, 1);
+        ASSERT_EQ(brute->pieceCount(), points.size());
+        ASSERT_EQ(embree->pieceCount(), points.size());
+        size_t overlaps = 0, candidatesEmbree = 0, candidatesBrute = 0;
+        std::vector<BeamPiece> cb, ce;
+        for (int q = 0; q < 3000; ++q) {
+            const Segment s = randomSegment(rng, beams, radius);
+            cb.clear();
+            ce.clear();
+            brute->candidates(s.o, s.d, s.sMax, s.region, cb);
+            embree->candidates(s.o, s.d, s.sMax, s.region, ce);
+            const auto near = [&](const std::vector<BeamPiece>& c) {
+                std::vector<uint32_t> out;
+                for (size_t i = 0; i < c.size(); ++i) {
+                    EXPECT_EQ(c[i].piece, 0u);
+                    EXPECT_EQ(c[i].sbLo, 0.0);
+                    EXPECT_EQ(c[i].sbHi, 0.0);
+                    EXPECT_EQ(points[c[i].beam].region, s.region);
+                    if (i > 0) {
+                        EXPECT_LT(c[i - 1].beam, c[i].beam);
+                    }
+                    if (rayPointChord(s.o, s.d, s.sMax, points[c[i].beam].position, radius)) out.push_back(c[i].beam);
+                }
+                return out;
+            };
+            const std::vector<uint32_t> nb = near(cb), ne = near(ce);
+            ASSERT_EQ(nb, ne) << "query " << q;
+            overlaps += nb.size();
+            candidatesEmbree += ce.size();
+            candidatesBrute += cb.size();
+        }
+        EXPECT_GT(overlaps, 1500u);
+        EXPECT_LT(candidatesEmbree, candidatesBrute / 10);
+    }
 }
 
 TEST(EmbreeDevice, OneDeviceAndErrorsThrowWithTheirCode) {
