@@ -2,12 +2,16 @@
 // and its name in estimators/estimator_names.h.
 #include "estimators/beam2d.h"
 #include "estimators/estimator.h"
+#include "estimators/point2d.h"
+#include "estimators/point3d.h"
 #include "estimators/surface_ppm.h"
 
 namespace tpb {
 
 std::unique_ptr<VolumeEstimator> makeVolumeEstimator(const std::string& name) {
     if (name == "beam2d") return std::make_unique<Beam2DEstimator>();
+    if (name == "point2d") return std::make_unique<Point2DEstimator>();
+    if (name == "point3d") return std::make_unique<Point3DEstimator>();
     return nullptr;
 }
 

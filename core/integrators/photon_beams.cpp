@@ -54,7 +54,10 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     pt.pass = ctx.pass;
     pt.photons = settings_.photonsPerPass;
     pt.maxDepth = settings_.maxDepth;
-    pt.storeBeams = scene_.stages.beams;
+    // Only what the volume estimator reads (beams, points at scattering events, or both).
+    const VolumeEstimator::Needs needs = volume_->needs();
+    pt.storeBeams = scene_.stages.beams && needs.beams;
+    pt.storePoints = scene_.stages.beams && needs.points;
     pt.storeSurfacePhotons = scene_.stages.surfacePhotons;
     pt.beamLength = settings_.beamLength;
     pt.filmEndOpl = ctx.time->endOpl();
@@ -64,6 +67,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     if (ctx.abort && ctx.abort->load()) return false;
     ps.photons = map_.emitted;
     ps.beams = static_cast<int64_t>(map_.beams.size());
+    ps.points = static_cast<int64_t>(map_.points.size());
     ps.surfacePhotons = static_cast<int64_t>(map_.photons.size());
     ps.emittedFlux = map_.emittedFlux;
     ps.cutFlux = map_.cutFlux;
@@ -79,7 +83,8 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     estimators_ = {};
     estimators_.volumeKernel = volumeKernel;
     estimators_.surfaceKernel = surfaceKernel;
-    if (scene_.stages.beams && !map_.beams.empty()) {
+    const bool volumeInput = (needs.beams && !map_.beams.empty()) || (needs.points && !map_.points.empty());
+    if (scene_.stages.beams && volumeInput) {
         ep.radius = ps.beamRadius;
         ep.timeKernel = volumeKernel;
         volume_->prepare(scene_, map_, ep);

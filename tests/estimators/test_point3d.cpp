@@ -1,0 +1,337 @@
+// Tests of the point x beam 3D estimator ("point3d", estimators/point3d.h):
+//  - exact: the chord of the ball on the segment against dense sampling (clipped at both ends,
+//    grazing, unbounded segments); the chord's transmittance integral against quadrature, with its
+//    sigma_t -> 0 limit (the chord's length) and large sigma_t (e^{-sigma_t s-} / sigma_t); one
+//    point's estimate against the formula written out (chromatic medium, eta != 1), its time profile
+//    per bin against quadrature (real axis: density e^{-sigma_t s} per channel over t = a + eta s;
+//    unwarped: one instant), the uniform profile, both accelerator backends; the kernel integrates
+//    to one (a grid of points filling space gives sigma_s rho Phi Int_0^S T(s) ds); a wall between the
+//    point and the ray blocks it;
+//  - statistical: single scattering from a point-light pulse in an infinite chromatic medium against
+//    the quadrature oracle, per pixel, bin and channel, both axes, delta and continuous emission
+//    (tests/support/single_scattering_check.h), with the check that a 4% brighter film and a 3%
+//    slower time axis are rejected;
+//  - consistency: Embree and brute-force candidates, 1 and 2 threads give identical films.
+#include "estimators/beam2d.h"
+#include "estimators/point3d.h"
+#include "support/gather_probe.h"
+#include "support/single_scattering_check.h"
+#include "support/test_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+using namespace tpb;
+
+namespace {
+
+// Composite Gauss-Legendre (5 points) on n panels.
+double quad(const std::function<double(double)>& f, double a, double b, int n = 400) {
+    static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
+    static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665, 0.2369268850561891};
+    const double h = (b - a) / n;
+    double s = 0.0;
+    for (int i = 0; i < n; ++i) {
+        const double m = a + (i + 0.5) * h;
+        for (int j = 0; j < 5; ++j) s += w[j] * f(m + 0.5 * h * x[j]);
+    }
+    return s * 0.5 * h;
+}
+
+// An infinite chromatic medium with eta = 1.3; `shapes` is a JSON array.
+std::string mediumScene(const std::string& shapes = "[]") {
+    return R"({
+      "version": 1,
+      "camera": {"position": [0, 0, -1], "look_at": [0, 0, 0], "fov": 20, "resolution": [4, 4]},
+      "film": {"start_m": 0, "bin_width_m": 0.02, "bins": 300},
+      "media": {"m": {"sigma_s": [0.3, 0.5, 0.9], "sigma_a": [0.1, 0.05, 2.2], "g": 0.4, "ior": 1.3}},
+      "materials": {"white": {"type": "diffuse", "albedo": 0.5}},
+      "global_medium": "m",
+      "shapes": )" + shapes + R"(,
+      "lights": [{"type": "point", "position": [0, 3, 0], "power": 1}],
+      "render": {"photons_per_pass": 100, "radius": 0.05, "seed": 1}
+    })";
+}
+
+VolumePhoton point(const Vec3& x, const Vec3& dirIn, const Color& power, double opl) {
+    return VolumePhoton{x, glm::normalize(dirIn), power, opl, 0, 0};
+}
+
+// As tests/estimators/test_point2d.cpp: single scattering of a point-light pulse (1 ns) in an infinite
+// chromatic medium with eta = 1.2, the view starting 11.6 degrees from the light.
+const char* kSingleScatter = R"({
+  "version": 1,
+  "camera": {"position": [0, 0, 3], "look_at": [1.5, 0, 0], "fov": 30, "resolution": [12, 12]},
+  "film": {"start_m": 0, "bin_width_m": 0.25, "bins": 48},
+  "media": {"m": {"sigma_s": [0.3, 0.4, 0.6], "sigma_a": [0.1, 0.1, 0.2], "g": 0.3, "ior": 1.2}},
+  "global_medium": "m",
+  "lights": [{"type": "point", "position": [0, 0, 0], "power": 10, "emit_time_ns": 1}],
+  "render": {"photons_per_pass": 50000, "radius": 0.05, "alpha": 1, "passes": 1, "max_depth": 1, "seed": 3}
+})";
+
+// Inside a closed box of fog with a glass and a mirror sphere (multiple scattering, walls, specular chains).
+const char* kBox = R"({
+  "version": 1,
+  "camera": {"position": [0, 1, 0.95], "look_at": [0, 0.8, -1], "fov": 60, "resolution": [20, 16]},
+  "film": {"bins": 32},
+  "media": {"fog": {"sigma_s": 0.5, "sigma_a": 0.05, "g": 0.2}},
+  "global_medium": "fog",
+  "materials": {"white": {"type": "diffuse", "albedo": 0.7}, "glass": {"type": "dielectric", "ior": 1.5},
+                "chrome": {"type": "mirror", "reflectance": 0.9}},
+  "shapes": [
+    {"type": "box", "min": [-1, 0, -1], "max": [1, 2, 1], "material": "white", "flip_normals": true},
+    {"type": "sphere", "center": [-0.4, 0.5, 0], "radius": 0.35, "material": "glass"},
+    {"type": "sphere", "center": [0.45, 0.4, -0.2], "radius": 0.3, "material": "chrome"}
+  ],
+  "lights": [{"type": "point", "position": [0, 1.8, 0], "power": 20}],
+  "render": {"photons_per_pass": 3000, "radius_relative": 0.02, "surface_radius_relative": 0.03, "seed": 9}
+})";
+
+std::vector<double> renderVolume(const test::TestScene& sc, const RenderSettings& s, int passes) {
+    Driver drv(*sc, s, sc.time);
+    for (int p = 1; p <= passes; ++p) EXPECT_TRUE(drv.runPass(p));
+    std::vector<double> v, u;
+    drv.film().volume(TimeAxis::Real, EmissionMode::Delta, v);
+    drv.film().volume(TimeAxis::Unwarped, EmissionMode::Delta, u);
+    v.insert(v.end(), u.begin(), u.end());
+    EXPECT_EQ(drv.film().stats.rejectedSamples.load(), 0);
+    return v;
+}
+
+}  // namespace
+
+TEST(Point3D, RegisteredWithItsDimensionAndNeeds) {
+    const auto est = makeVolumeEstimator("point3d");
+    ASSERT_TRUE(est);
+    EXPECT_EQ(est->name(), "point3d");
+    EXPECT_EQ(est->dim(), 3);
+    EXPECT_FALSE(est->needs().beams);
+    EXPECT_TRUE(est->needs().points);
+    const std::vector<std::string> names = volumeEstimatorNames();
+    EXPECT_NE(std::find(names.begin(), names.end(), "point3d"), names.end());
+}
+
+// The chord [s-, s+] against dense sampling of |x_r + s w_r - x_p| < r on [0, sMax].
+TEST(Point3D, ChordMatchesDenseSamplingClippedAndGrazing) {
+    Rng rng(21, Stream::Test, 0, 0);
+    int nonEmpty = 0, clipped = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        const double z = 1.0 - 2.0 * rng.uniform(), phi = 2.0 * kPi * rng.uniform();
+        const Vec3 wr(std::sqrt(1.0 - z * z) * std::cos(phi), std::sqrt(1.0 - z * z) * std::sin(phi), z);
+        const Vec3 xr(rng.uniform(), rng.uniform(), rng.uniform());
+        const double r = 0.05 + 0.1 * rng.uniform(), sMax = 0.2 + rng.uniform();
+        const Vec3 xp = xr + (1.4 * rng.uniform() - 0.2) * wr + Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * (2.5 * r);
+        const auto chord = rayPointChord(xr, wr, sMax, xp, r);
+        const int n = 20000;
+        double lo = kInf, hi = -kInf;
+        for (int i = 0; i <= n; ++i) {
+            const double s = sMax * i / n;
+            if (glm::length(xr + s * wr - xp) < r) { lo = std::min(lo, s); hi = std::max(hi, s); }
+        }
+        const double step = sMax / n;
+        if (!chord) {
+            EXPECT_TRUE(!(hi >= lo) || hi - lo <= 2 * step) << trial;
+            continue;
+        }
+        ++nonEmpty;
+        clipped += chord->sMinus == 0.0 || chord->sPlus == sMax;
+        EXPECT_NEAR(chord->sMinus, lo, 1.01 * step) << trial;
+        EXPECT_NEAR(chord->sPlus, hi, 1.01 * step) << trial;
+        EXPECT_NEAR(chord->sP, glm::dot(xp - xr, wr), 1e-15);
+    }
+    EXPECT_GT(nonEmpty, 80);
+    EXPECT_GT(clipped, 10);
+    // Grazing: a chord that shrinks to zero as the point moves out to distance r.
+    const Vec3 xr(0.0), wr(0.0, 0.0, 1.0);
+    double prev = kInf;
+    for (double eps : {1e-2, 1e-4, 1e-6, 1e-8}) {
+        const auto c = rayPointChord(xr, wr, 2.0, Vec3(0.1 * (1.0 - eps), 0.0, 1.0), 0.1);
+        ASSERT_TRUE(c);
+        const double len = c->sPlus - c->sMinus;
+        EXPECT_NEAR(len, 2.0 * 0.1 * std::sqrt(1.0 - (1.0 - eps) * (1.0 - eps)), 1e-9);
+        EXPECT_LT(len, prev);
+        prev = len;
+    }
+    EXPECT_FALSE(rayPointChord(xr, wr, 2.0, Vec3(0.1, 0.0, 1.0), 0.1));                  // touching: empty
+    EXPECT_FALSE(rayPointChord(xr, wr, 2.0, Vec3(0.0, 0.0, -0.1), 0.1));                 // touching the start
+    const auto open = rayPointChord(xr, wr, kInf, Vec3(0.0, 0.0, 1e5), 0.1);             // unbounded segment
+    ASSERT_TRUE(open);
+    EXPECT_NEAR(open->sPlus - open->sMinus, 0.2, 1e-9);
+}
+
+// Int_{s-}^{s+} e^{-sigma_t s} ds: closed form = quadrature; sigma_t -> 0 gives the chord length,
+// large sigma_t gives e^{-sigma_t s-} / sigma_t.
+TEST(Point3D, ChordTransmittanceMatchesQuadratureAndLimits) {
+    for (double st : {1e-12, 1e-6, 1e-3, 0.5, 3.0, 40.0, 1e3}) {
+        for (auto [a, b] : {std::pair{0.0, 0.1}, std::pair{0.7, 0.8}, std::pair{2.0, 2.0 + 1e-7}, std::pair{0.0, 3.0}}) {
+            const double closed = chordTransmittance(st, a, b);
+            const double ref = quad([&](double s) { return std::exp(-st * s); }, a, b, 20000);
+            EXPECT_NEAR(closed, ref, 1e-10 * ref) << st << " [" << a << ", " << b << "]";
+        }
+    }
+    EXPECT_NEAR(chordTransmittance(1e-14, 0.3, 0.5), 0.2, 1e-14);           // sigma_t -> 0: the chord length
+    EXPECT_DOUBLE_EQ(chordTransmittance(0.0, 0.3, 0.5), 0.2 * 1.0);
+    const double big = 1e4;
+    EXPECT_NEAR(chordTransmittance(big, 0.001, 0.1), std::exp(-big * 0.001) / big, 1e-12 * std::exp(-big * 0.001) / big);
+    EXPECT_EQ(chordTransmittance(1e6, 10.0, 11.0), 0.0);                    // underflows to 0, no NaN
+    EXPECT_TRUE(std::isfinite(chordTransmittance(1e300, 0.0, 1.0)));
+}
+
+// One point: L = beta sigma_s rho Phi (3 / (4 pi r^3)) Int_{s-}^{s+} T(s) ds; on the real axis spread
+// over t = t_cam + t_p + eta s with density e^{-sigma_t s} per channel, on the unwarped axis at t_p.
+TEST(Point3D, OnePointMatchesTheFormulaAndItsTimeProfilePerBin) {
+    const test::TestScene sc = test::testSceneFrom(mediumScene());
+    const Medium& m = sc->regions[0].medium;
+    const double eta = sc->regions[0].ior, r = 0.3, opl = 2.013;
+    ASSERT_EQ(eta, 1.3);
+    ASSERT_GT(m.sigma_t.z, 2.0);  // a thick channel: its profile is far from even
+    const Vec3 xp(0.1, -0.05, 1.5), dirIn(0.3, -1.0, 0.2);
+    PhotonMap map;
+    map.points.push_back(point(xp, dirIn, Color(1.0, 2.0, 3.0), opl));
+    const CameraSegment seg{Ray{Vec3(0.0), Vec3(0.0, 0.0, 1.0)}, 4.0, 0};
+    test::GatherSetup g;
+    g.radius = r;
+    g.path.beta = Color(0.9, 0.8, 0.7);
+    g.path.oplCam = 0.5;
+    const auto chord = rayPointChord(seg.ray.o, seg.ray.d, seg.sMax, xp, r);
+    ASSERT_TRUE(chord);
+    const double rho = m.phase.eval(-glm::dot(glm::normalize(dirIn), seg.ray.d));
+    const double K3 = 3.0 / (4.0 * kPi * r * r * r);
+    Color expected;
+    for (int c = 0; c < 3; ++c)
+        expected[c] = g.path.beta[c] * m.sigma_s[c] * rho * (c + 1.0) * K3 *
+                      quad([&](double s) { return std::exp(-m.sigma_t[c] * s); }, chord->sMinus, chord->sPlus);
+    const TimeBins& tb = sc.time;
+    const int kUnwarped = tb.binOf(opl);
+    for (AccelBackend backend : {AccelBackend::Embree, AccelBackend::BruteForce}) {
+        g.accel = backend;
+        g.profile = TimeProfile::Exact;
+        Point3DEstimator est;
+        const test::GatherResult res = test::gatherOnce(est, *sc, map, seg, tb, g);
+        ASSERT_EQ(res.estimates, 1);
+        int binsChecked = 0;
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(res.steady[c], expected[c], 1e-12 * expected[c]) << c;
+            EXPECT_NEAR(res.bins[1][kUnwarped][c], expected[c], 1e-12 * expected[c]) << c;  // one instant
+            // Real axis: bin k holds the energy of s with t_cam + t_p + eta s in the bin.
+            const double a = g.path.oplCam + opl, total = quad([&](double s) { return std::exp(-m.sigma_t[c] * s); },
+                                                                 chord->sMinus, chord->sPlus);
+            for (int k = 0; k < tb.bins; ++k) {
+                const double sLo = std::max(chord->sMinus, (tb.startOpl + k * tb.binWidth - a) / eta);
+                const double sHi = std::min(chord->sPlus, (tb.startOpl + (k + 1) * tb.binWidth - a) / eta);
+                const double share = sHi > sLo ? quad([&](double s) { return std::exp(-m.sigma_t[c] * s); }, sLo, sHi, 20) / total : 0.0;
+                EXPECT_NEAR(res.bins[0][k][c], expected[c] * share, 1e-10 * expected[c]) << "channel " << c << " bin " << k;
+                binsChecked += share > 0.0;
+            }
+        }
+        EXPECT_GE(binsChecked, 3 * 30);  // the chord 2 h ~ 0.57 m spreads over ~37 bins of 0.02 m / eta
+        // The uniform profile (the paper's even spread): the same energy, shares proportional to time.
+        g.profile = TimeProfile::Uniform;
+        Point3DEstimator uni;
+        const test::GatherResult u = test::gatherOnce(uni, *sc, map, seg, tb, g);
+        const double tLo = g.path.oplCam + opl + eta * chord->sMinus, tHi = g.path.oplCam + opl + eta * chord->sPlus;
+        const int kMid = tb.binOf(0.5 * (tLo + tHi));
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(u.steady[c], expected[c], 1e-12 * expected[c]);
+            EXPECT_NEAR(u.bins[0][kMid][c], expected[c] * tb.binWidth / (tHi - tLo), 1e-10 * expected[c]);
+        }
+    }
+}
+
+// Filling space with points of power Phi dV turns the estimate into the kernel's integral:
+//   Int d^3x_p K_3 Int_0^S T(s) 1(|x(s) - x_p| < r) ds = Int_0^S T(s) ds.
+// Cylindrical grid around the ray: u = r sin(theta) with Gauss-Legendre in theta (the integrand
+// 2 pi u 2 h(u), h = sqrt(r^2 - u^2), is smooth in theta), a fine midpoint rule in s_p reaching r past
+// both ends of the segment. Pins the ball's normalisation 3 / (4 pi r^3) and the chord's clipping.
+TEST(Point3D, KernelIntegratesToOneAlongTheRay) {
+    const test::TestScene sc = test::testSceneFrom(mediumScene());
+    const Medium& m = sc->regions[0].medium;
+    const double r = 0.08, S = 2.0, ds = r / 40.0;
+    static const double gx[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
+    static const double gw[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665, 0.2369268850561891};
+    const int nPhi = 5;
+    PhotonMap map;
+    for (double s = -1.5 * r + 0.5 * ds; s < S + 1.5 * r; s += ds)
+        for (int j = 0; j < 5; ++j) {
+            const double theta = 0.25 * kPi * (1.0 + gx[j]), wTheta = 0.25 * kPi * gw[j];  // theta in [0, pi/2]
+            const double u = r * std::sin(theta);
+            const double dA = 2.0 * kPi * u * r * std::cos(theta) * wTheta;  // 2 pi u du
+            for (int k = 0; k < nPhi; ++k) {
+                const double phi = 2.0 * kPi * (k + 0.37 * j) / nPhi;
+                map.points.push_back(point(Vec3(u * std::cos(phi), u * std::sin(phi), s), Vec3(0, 1, 0), Color(dA * ds / nPhi), 1.0));
+            }
+        }
+    const CameraSegment seg{Ray{Vec3(0.0), Vec3(0.0, 0.0, 1.0)}, S, 0};
+    test::GatherSetup g;
+    g.radius = r;
+    Point3DEstimator est;
+    const test::GatherResult res = test::gatherOnce(est, *sc, map, seg, sc.time, g);
+    const double rho = m.phase.eval(0.0);
+    for (int c = 0; c < 3; ++c) {
+        const double st = m.sigma_t[c];
+        const double exact = m.sigma_s[c] * rho * (1.0 - std::exp(-st * S)) / st;
+        EXPECT_NEAR(res.steady[c], exact, 2e-4 * exact) << "channel " << c;
+    }
+}
+
+TEST(Point3D, AWallBetweenThePointAndTheRayBlocksIt) {
+    const std::string wall = R"([{"type": "quad", "corner": [-1, -1, 1], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}])";
+    const test::TestScene walled = test::testSceneFrom(mediumScene(wall)), open = test::testSceneFrom(mediumScene());
+    const CameraSegment seg{Ray{Vec3(-0.5, 0.0, 0.98), Vec3(1.0, 0.0, 0.0)}, 1.0, 0};
+    test::GatherSetup g;
+    g.radius = 0.05;
+    PhotonMap behind, before;
+    behind.points.push_back(point(Vec3(0.0, 0.0, 1.02), Vec3(0, -1, 0), Color(1.0), 1.0));
+    before.points.push_back(point(Vec3(0.0, 0.0, 0.94), Vec3(0, -1, 0), Color(1.0), 1.0));
+    for (AccelBackend backend : {AccelBackend::Embree, AccelBackend::BruteForce}) {
+        g.accel = backend;
+        Point3DEstimator a, b, c;
+        EXPECT_EQ(test::gatherOnce(a, *walled, behind, seg, walled.time, g).estimates, 0);
+        EXPECT_EQ(test::gatherOnce(b, *open, behind, seg, open.time, g).estimates, 1);
+        EXPECT_EQ(test::gatherOnce(c, *walled, before, seg, walled.time, g).estimates, 1);
+    }
+}
+
+// See tests/estimators/test_point2d.cpp (same scene, radius and thresholds): per-cell mean z^2 and
+// per-channel totals against singleScatteringReference, both axes, delta and continuous.
+TEST(Point3D, SingleScatteringMatchesQuadraturePerPixelAndBinOnBothAxes) {
+    test::expectSingleScatteringMatches(kSingleScatter, "point3d", 300);
+}
+
+TEST(Point3D, BruteForceAndEmbreeGiveIdenticalFilms) {
+    const test::TestScene sc = test::testSceneFrom(kBox);
+    RenderSettings s = sc.settings;
+    s.volumeEstimator = "point3d";
+    s.threads = 2;
+    s.accel = AccelBackend::Embree;
+    const std::vector<double> a = renderVolume(sc, s, 2);
+    s.accel = AccelBackend::BruteForce;
+    const std::vector<double> b = renderVolume(sc, s, 2);
+    ASSERT_EQ(a.size(), b.size());
+    double total = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        ASSERT_EQ(a[i], b[i]) << i;
+        total += a[i];
+    }
+    EXPECT_GT(total, 0.0);
+}
+
+TEST(Point3D, OneAndTwoThreadsGiveIdenticalFilms) {
+    const test::TestScene sc = test::testSceneFrom(kBox);
+    RenderSettings s = sc.settings;
+    s.volumeEstimator = "point3d";
+    s.threads = 1;
+    const std::vector<double> a = renderVolume(sc, s, 2);
+    s.threads = 2;
+    const std::vector<double> b = renderVolume(sc, s, 2);
+    ASSERT_EQ(a.size(), b.size());
+    double total = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        ASSERT_EQ(a[i], b[i]) << i;
+        total += a[i];
+    }
+    EXPECT_GT(total, 0.0);
+}
