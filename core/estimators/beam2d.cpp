@@ -84,50 +84,49 @@ void Beam2DEstimator::prepare(const Scene& scene, const PhotonMap& map, const Es
     accel_->build(map.beams, pass.radius, pass.threads);
 }
 
+// Eqs. 8, 12-15 for one candidate piece of a beam: the overlap, the wall test, the closed-form
+// transmittance integral and its spread in time.
+bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& piece, NearShapes& near,
+                       PixelSink& sink) {
+    const Medium& m = g.medium;
+    const double r = g.radius;
+    RayBeamOverlap o;
+    if (!rayBeamOverlap(g.ray.o, g.ray.d, g.sMax, b.origin, b.dir, piece.sbLo, piece.sbHi, r, o)) return false;
+    const double c = o.cosRB;
+    // The kernel blurs the beam by r in every direction, also through a wall: a beam inside a
+    // closed box would light the fog just outside it. Keep the estimate only when the beam
+    // point nearest the middle of the overlap sees that point of the camera segment.
+    const double sMid = 0.5 * (o.sMinus + o.sPlus);
+    const double sbMid = std::clamp(o.sb0 + c * sMid, 0.0, b.length);
+    const Vec3 xr = g.ray.at(sMid), xb = b.origin + sbMid * b.dir;
+    if (!kernelPointVisible(g.scene, near.get(), xr, xb)) return false;
+    // Eq. 8: L_b = sigma_s rho(theta) Phi_b / (pi r^2) * int T(s_r) T_b(s_b(s_r)) ds_r
+    const Color& tauB = g.tauB;
+    const double invArea = 1.0 / (kPi * r * r);  // 1 / Omega_R(r^2)
+    const Color integral(transmittanceIntegral(m.sigma_t.x, tauB.x, o), transmittanceIntegral(m.sigma_t.y, tauB.y, o),
+                         transmittanceIntegral(m.sigma_t.z, tauB.z, o));
+    const double rho = m.phase.eval(-c);  // scattering from w_b into -w_r (towards the camera)
+    const Color L = g.path.beta * m.sigma_s * rho * b.power * invArea * integral;
+    // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r.
+    const Color kappa = g.profile == TimeProfile::Exact ? m.sigma_t + tauB * c : Color(0.0);
+    const double tBeam = b.opl0 + g.eta * o.sb0;
+    sink.spread(L, kappa, o.sMinus, o.sPlus, g.path.oplCam + tBeam, g.eta * (1.0 + c), tBeam, g.eta * c);
+    return true;
+}
+
 // Beam radiance estimate along the camera segment x_r + s w_r, s in [0, sMax] (eqs. 8, 10, 12-15).
 int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                                 EstimatorScratch& scratch) const {
     if (!ready_) return 0;
-    const Scene& scene = *scene_;
-    const Ray& ray = seg.ray;
-    const Region& region = scene.regions[seg.region];
-    const Medium& m = region.medium;
-    const double eta = region.ior;
-    const double r = pass_.radius;
+    const Region& region = scene_->regions[seg.region];
+    const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
+                          beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
     scratch.pieces.clear();
-    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces);
-    bool haveNear = false;
-    // tau_b: attenuation along the beam inside the kernel (photon_tracer.h).
-    const Color tauB = pass_.beamLength == BeamLength::Long ? m.sigma_t : m.sigma_t - Color(m.samplingSigma());
-    const double invArea = 1.0 / (kPi * r * r);  // 1 / Omega_R(r^2)
+    accel_->candidates(seg.ray.o, seg.ray.d, seg.sMax, seg.region, scratch.pieces);
+    NearShapes near(*scene_, seg.ray, seg.sMax, pass_.radius, scratch.shapes);
     int64_t estimates = 0;
-    for (const BeamPiece& piece : scratch.pieces) {
-        const Beam& b = map_->beams[piece.beam];
-        RayBeamOverlap o;
-        if (!rayBeamOverlap(ray.o, ray.d, seg.sMax, b.origin, b.dir, piece.sbLo, piece.sbHi, r, o)) continue;
-        const double c = o.cosRB;
-        // The kernel blurs the beam by r in every direction, also through a wall: a beam inside a
-        // closed box would light the fog just outside it. Keep the estimate only when the beam
-        // point nearest the middle of the overlap sees that point of the camera segment.
-        if (!haveNear) {
-            nearShapes(scene, ray, seg.sMax, r, scratch.shapes);
-            haveNear = true;
-        }
-        const double sMid = 0.5 * (o.sMinus + o.sPlus);
-        const double sbMid = std::clamp(o.sb0 + c * sMid, 0.0, b.length);
-        const Vec3 xr = ray.at(sMid), xb = b.origin + sbMid * b.dir;
-        if (mayBlock(scene, scratch.shapes, xr, xb) && !scene.segmentClear(xr, xb)) continue;
-        // Eq. 8: L_b = sigma_s rho(theta) Phi_b / (pi r^2) * int T(s_r) T_b(s_b(s_r)) ds_r
-        const Color integral(transmittanceIntegral(m.sigma_t.x, tauB.x, o), transmittanceIntegral(m.sigma_t.y, tauB.y, o),
-                             transmittanceIntegral(m.sigma_t.z, tauB.z, o));
-        const double rho = m.phase.eval(-c);  // scattering from w_b into -w_r (towards the camera)
-        const Color L = path.beta * m.sigma_s * rho * b.power * invArea * integral;
-        ++estimates;
-        // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r.
-        const Color kappa = pass_.profile == TimeProfile::Exact ? m.sigma_t + tauB * c : Color(0.0);
-        const double tBeam = b.opl0 + eta * o.sb0;
-        sink.spread(L, kappa, o.sMinus, o.sPlus, path.oplCam + tBeam, eta * (1.0 + c), tBeam, eta * c);
-    }
+    for (const BeamPiece& piece : scratch.pieces)
+        if (gatherBeam2DPiece(g, map_->beams[piece.beam], piece, near, sink)) ++estimates;
     return estimates;
 }
 

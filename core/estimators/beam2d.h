@@ -32,6 +32,7 @@
 #pragma once
 #include "base/math.h"
 #include "estimators/estimator.h"
+#include "estimators/kernel_visibility.h"
 
 namespace tpb {
 
@@ -56,6 +57,31 @@ bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb,
 
 // Int_{s-}^{s+} exp(-sigma_t s - tau_b (sb0 + c s)) ds for one channel (closed form above).
 double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap& o);
+
+// tau_b (1/m): the attenuation along a beam inside the kernel (photon_tracer.h): sigma_t for long
+// beams, sigma_t - sigma_sampling for short ones (1 for grey media).
+inline Color beamAttenuation(const Medium& m, BeamLength length) {
+    return length == BeamLength::Long ? m.sigma_t : m.sigma_t - Color(m.samplingSigma());
+}
+
+// What the per-beam estimates along one camera segment share (also used by beam1d.h).
+struct SegmentGather {
+    const Scene& scene;
+    const Ray& ray;        // x_r, w_r
+    double sMax;           // m, the segment's length (may be infinite)
+    const Medium& medium;  // of the segment's region
+    double eta;            // its index of refraction
+    double radius;         // m, this pass's kernel radius r
+    Color tauB;            // beamAttenuation()
+    TimeProfile profile;
+    const PathState& path;
+};
+
+// Eqs. 8, 12-15 for one candidate piece [sbLo, sbHi] of beam b: adds its estimate (times the
+// path's throughput) to sink when the segment meets the piece's kernel cylinder and the wall test
+// (kernel_visibility.h) passes; returns whether it did.
+bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& piece, NearShapes& near,
+                       PixelSink& sink);
 
 // The estimator (eqs. 8, 10, 12-15). Kernel dimension 2 (a disc across the beam): the kernel's
 // area pi r^2 shrinks by (i + alpha) / (i + 1) per pass. Homogeneous media only (it reads the

@@ -1,4 +1,4 @@
-// The wall test of the volume kernels (beam2d, point2d, point3d): a kernel blurs a beam or a photon
+// The wall test of the volume kernels (beam1d, beam2d, point2d, point3d): a kernel blurs a beam or a photon
 // point by r in every direction, also through a wall, so a beam or point inside a closed box would
 // light the fog just outside it. An estimate is kept only when the beam or point sees the point of
 // the camera segment it is blurred onto; these two helpers make that test cheap (most segments have
@@ -42,5 +42,26 @@ inline bool mayBlock(const Scene& scene, const std::vector<int>& near, const Vec
 inline bool kernelPointVisible(const Scene& scene, const std::vector<int>& near, const Vec3& to, const Vec3& from) {
     return !mayBlock(scene, near, to, from) || scene.segmentClear(to, from);
 }
+
+// nearShapes() of one camera segment, computed on first use (most segments meet no beam near a wall).
+class NearShapes {
+public:
+    NearShapes(const Scene& scene, const Ray& ray, double sMax, double r, std::vector<int>& storage)
+        : scene_(scene), ray_(ray), sMax_(sMax), r_(r), shapes_(storage) {}
+    const std::vector<int>& get() {
+        if (!have_) {
+            nearShapes(scene_, ray_, sMax_, r_, shapes_);
+            have_ = true;
+        }
+        return shapes_;
+    }
+
+private:
+    const Scene& scene_;
+    const Ray& ray_;
+    double sMax_, r_;
+    std::vector<int>& shapes_;
+    bool have_ = false;
+};
 
 }  // namespace tpb
