@@ -123,7 +123,7 @@ public:
     virtual int64_t gather(const SurfaceQuery& q, const PathState& path, PixelSink& sink) const = 0;
 };
 
-// By name ("beam2d"; "ppm"): nullptr for an unknown name (estimatorNames() lists the known ones).
+// By name (estimators/estimator_names.h lists them, the default first): nullptr for an unknown name.
 std::unique_ptr<VolumeEstimator> makeVolumeEstimator(const std::string& name);
 std::unique_ptr<SurfaceEstimator> makeSurfaceEstimator(const std::string& name);
 

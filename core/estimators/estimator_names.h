@@ -9,7 +9,7 @@ namespace tpb {
 
 // Volume estimators (along camera segments in media), the default first.
 inline const std::vector<std::string>& volumeEstimatorNames() {
-    static const std::vector<std::string> names = {"beam2d", "point2d", "point3d"};
+    static const std::vector<std::string> names = {"beam2d", "beam1d", "point2d", "point3d"};
     return names;
 }
 // Surface estimators (at the diffuse end of a camera path), the default first.

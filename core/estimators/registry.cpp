@@ -1,5 +1,6 @@
 // The estimators by name (estimators/estimator.h). Adding one: include its header, add a line here
 // and its name in estimators/estimator_names.h.
+#include "estimators/beam1d.h"
 #include "estimators/beam2d.h"
 #include "estimators/estimator.h"
 #include "estimators/point2d.h"
@@ -10,6 +11,7 @@ namespace tpb {
 
 std::unique_ptr<VolumeEstimator> makeVolumeEstimator(const std::string& name) {
     if (name == "beam2d") return std::make_unique<Beam2DEstimator>();
+    if (name == "beam1d") return std::make_unique<Beam1DEstimator>();
     if (name == "point2d") return std::make_unique<Point2DEstimator>();
     if (name == "point3d") return std::make_unique<Point3DEstimator>();
     return nullptr;
