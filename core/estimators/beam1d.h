@@ -46,22 +46,26 @@
 // beam2d, the blur across the kernel itself takes no time (an O(r) error that vanishes with r).
 //
 // (1D-6) Near-parallel ray and beam. As sin(theta) -> 0, (1D-4) is unbounded and exactly parallel
-// lines have no closest point. For beams leaving a point at distance h from the camera line
-// isotropically (a light, a scattering vertex), the pairs within r at angle theta << 1 have
-// probability ~ theta dtheta and an estimate ~ 1/(2 r theta) while the closest points stay inside
-// segments of length l (theta > h / l), so E[L_b^2] ~ Int_{h/l} dtheta / (8 pi r^2 theta) ~
-// log(l / h) / r^2: a log divergence, infinite for a ray through the point (h = 0). (For beam
-// origins spread over a volume the measure is dV dOmega = dd sin(theta) ds_r* ds_b* dOmega and the
-// second moment stays finite; the third diverges logarithmically. Either way the tail is heavy.)
+// lines have no closest point. Take beams leaving a point at distance h < r from the camera line
+// isotropically (a light, a scattering vertex): a direction at angle theta << 1 from +-w_r passes
+// within r for every azimuth, its closest point on the beam stays at s_b* ~ h / theta inside the
+// beam, and with F = sigma_s rho Phi_b T its estimate is F / (2 r theta). Over dOmega / (4 pi) =
+// theta dtheta dphi / (4 pi) the mean Int theta dtheta F / (4 r theta) is finite, but
+//   E[L_b^2] ~ 2 Int_{h/l} theta dtheta / 2 * F^2 / (4 r^2 theta^2) = F^2 log(l / h) / (4 r^2):
+// a log divergence, infinite for a ray through the point (h = 0). (For h > r the azimuths within
+// the kernel shrink to ~4 r / h: F^2 log(l / h) / (4 pi r h). For beam origins spread over a volume
+// the measure is dd sin(theta) ds_r* ds_b* dOmega and the second moment stays finite; the third
+// diverges logarithmically. Either way the tail is heavy.)
 // Rule: per (segment, beam), with l = min(S, L_b),
 //   sin(theta) <  eps = clamp(pi r / (2 l), 1e-4, 1):  beam2d's estimate (eq. 8, 12-15; the disc),
 //   sin(theta) >= eps:                                 (1D-4) with (1D-5).
 // Both are estimates with normalised kernels supported within r of the beam (1D-2), chosen by the
 // directions alone (not by position), so the mixture is a kernel estimate whose bias vanishes as
-// r -> 0, like each (eps -> 0 as well: the disc's share of pairs vanishes). eps equalises the two
-// bounds: (1D-4) <= sigma_s rho Phi_b T / (2 r eps) = sigma_s rho Phi_b T l / (pi r^2), and eq. 8
-// is at most that times max(1, 1/|c|) (its overlap is at most S and L_b / |c| long), so no pair's
-// estimate exceeds ~ l / (pi r^2) and the log divergence is cut at eps: E[L_b^2] ~ log(1/eps) / r^2.
+// r -> 0 like each one's (and eps -> 1e-4: the disc's share of pairs becomes negligible). eps
+// equalises the two bounds: (1D-4) <= sigma_s rho Phi_b T / (2 r eps) = sigma_s rho Phi_b T l /
+// (pi r^2), and eq. 8 is at most that times max(1, 1/|c|) (its overlap is at most S and L_b / |c|
+// long), so no pair's estimate exceeds ~ l / (pi r^2), and the log divergence is cut at eps:
+// E[L_b^2] ~ F^2 log(1 / eps) / r^2 for a point on the camera line.
 // The floor 1e-4 keeps (1D-3) well conditioned: rounding a direction by delta ~ 1e-16 moves the
 // closest points by ~ |Delta| delta / sin^2(theta), below 1e-8 |Delta| above the floor. (A fixed
 // floor costs nothing in consistency: the disc is a valid kernel for any share of the pairs.)
