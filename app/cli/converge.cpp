@@ -15,6 +15,7 @@
 #include "eval/error_metrics.h"
 #include "io/image_io.h"
 #include "integrators/path_tracer.h"
+#include "photons/photon_tracer.h"
 #include "eval/reference.h"
 
 #include <nlohmann/json.hpp>
@@ -350,6 +351,9 @@ struct MethodResult {
     std::vector<Row> rows;
     PowerLawFit fitVolume, fitSteady, fitVolumeCorr, fitVolumeL1, fitSteadyL1;
     std::vector<double> finalPerFrame;
+    // The largest photon map of a pass (beams, volume photons, surface photons; bytes of the stored
+    // records, without the acceleration structures): the memory an estimator costs beyond the film.
+    uint64_t peakMapBytes = 0;
     std::unique_ptr<Driver> driver;  // runs the method's integrator
     const TransientFilm& film() const { return driver->film(); }
     std::vector<double> times() const {
@@ -500,6 +504,10 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
         if (take || last) record();
     }
     if (done > 0 && (res.rows.empty() || res.rows.back().passes != done)) record();
+    for (const PassStats& p : res.driver->history())
+        res.peakMapBytes = std::max<uint64_t>(res.peakMapBytes, static_cast<uint64_t>(p.beams) * sizeof(Beam) +
+                                                                    static_cast<uint64_t>(p.points) * sizeof(VolumePhoton) +
+                                                                    static_cast<uint64_t>(p.surfacePhotons) * sizeof(SurfacePhoton));
     if (!res.rows.empty()) {
         const std::vector<double> t = res.times();
         res.fitVolume = fitPowerLawSecondHalf(t, res.errors(MethodResult::Volume));
@@ -750,6 +758,7 @@ void runConverge(ConvergeCmd& c) {
         json e;
         e["passes"] = m.rows.back().passes;
         e["elapsed_s"] = m.rows.back().elapsed;
+        e["photon_map_bytes"] = m.peakMapBytes;
         e["final"] = {{"volume", jnum(m.rows.back().err.volume)}, {"steady", jnum(m.rows.back().err.steady)},
                       {"steady_total_diff", jnum(m.rows.back().err.steadyTotalDiff)},
                       {"volume_corrected", jnum(m.rows.back().corrVolume)},
@@ -819,13 +828,13 @@ void runConverge(ConvergeCmd& c) {
     if (cx.floorVolume >= 0.0)
         std::printf("  the reference's own error (%s): volume %.4g, steady %.4g: smaller errors cannot be resolved; "
                     "'corrected' = sqrt(err^2 - own^2)\n", ref.info.selfErrorEstimate.c_str(), cx.floorVolume, cx.floorSteady);
-    std::printf("  %-13s %8s %9s %11s %11s %11s %12s\n", "method", "passes", "time_s", "volume", "corrected", "steady",
-                "steady_total");
+    std::printf("  %-13s %8s %9s %11s %11s %11s %12s %10s\n", "method", "passes", "time_s", "volume", "corrected", "steady",
+                "steady_total", "map_MiB");
     for (const MethodResult& m : results) {
         const Row& r = m.rows.back();
-        std::printf("  %-13s %8lld %9.2f %11.4g %11.4g %11.4g %+11.3f%%\n", methodLabel(m.method).c_str(),
+        std::printf("  %-13s %8lld %9.2f %11.4g %11.4g %11.4g %+11.3f%% %10.2f\n", methodLabel(m.method).c_str(),
                     static_cast<long long>(r.passes), r.elapsed, r.err.volume, r.corrVolume, r.err.steady,
-                    100.0 * r.err.steadyTotalDiff);
+                    100.0 * r.err.steadyTotalDiff, m.peakMapBytes / 1048576.0);
     }
     std::printf("fitted convergence slope (least squares of log error vs log time, second half of the checkpoints):\n");
     for (const MethodResult& m : results)
