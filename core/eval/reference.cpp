@@ -408,7 +408,7 @@ ReferenceVolume renderReference(const Scene& scene, const TimeBins& time, const 
     info.method = job.method;
     info.requestedPasses = job.passes;
     info.requestedTimeSec = job.timeBudgetSec;
-    const int W = scene.camera.width, H = scene.camera.height, B = time.bins;
+    const int B = time.bins;
     const size_t P = info.pixels();
     const double t0 = nowSec();
     auto budgetLeft = [&](int64_t done) {

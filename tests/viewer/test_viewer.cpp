@@ -565,7 +565,7 @@ TEST_F(ViewerTest, SwitchingEmissionModeRefitsTheExposure) {
 // first pass can take many seconds). The first pass here gathers for a few seconds (more photons);
 // the viewer reports each fit with the passes completed at that moment.
 TEST_F(ViewerTest, AutoExposureFitsTheTilesFinishedDuringTheFirstPass) {
-    const Proc r = viewRun("midpass", "--seed 7 --threads 2 --photons 4000 --passes 1 --after-passes 1");
+    const Proc r = viewRun("midpass", "--seed 7 --threads 2 --photons 40000 --passes 1 --after-passes 1");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
     std::istringstream in(r.out);
     std::string line;
