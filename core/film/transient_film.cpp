@@ -25,6 +25,7 @@ void FilmTally::flushInto(FilmStats& f) const {
 
 FilmTally& FilmTally::operator+=(const FilmTally& o) {
     rejected += o.rejected;
+    binsSplatted += o.binsSplatted;
     for (int a = 0; a < 2; ++a) {
         outside[a] += o.outside[a];
         before[a] += o.before[a];
@@ -47,14 +48,18 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
     // What lands in the bins is summed as it lands (exactly zero when nothing does, which the
     // all-black-film check relies on), what falls outside comes back split by side.
     Color binned[2] = {Color(0.0), Color(0.0)};
+    int64_t written = 0;
     const OutsideFilm outReal = splat(aReal, bReal, [&](int k, const Color& c) {
         acc.add(TimeAxis::Real, k, c);
         binned[0] += c;
+        ++written;
     });
     const OutsideFilm outUnw = splat(aUnw, bUnw, [&](int k, const Color& c) {
         acc.add(TimeAxis::Unwarped, k, c);
         binned[1] += c;
+        ++written;
     });
+    tally.binsSplatted += written;
     acc.addSteady(L);
     acc.addOutside(TimeAxis::Real, outReal);
     acc.addOutside(TimeAxis::Unwarped, outUnw);

@@ -85,6 +85,7 @@ struct FilmTally {
     double outside[2] = {0.0, 0.0};  // luminance outside the film's time range, per axis
     double before[2] = {0.0, 0.0};   // of it, the part before the film's start
     double inside[2] = {0.0, 0.0};   // luminance inside it
+    int64_t binsSplatted = 0;        // bins written, both axes (tpb bench: cost per splatted bin)
     void flushInto(FilmStats& fs) const;
     FilmTally& operator+=(const FilmTally& o);
 };

@@ -753,6 +753,38 @@ TEST_F(CliErrors, BenchPassesZeroIsRefused) {
     EXPECT_EQ(p.out.find("ratio"), std::string::npos) << p.out;
 }
 
+// `bench --json FILE` (issue 15, measure first): the command, and per bin count the medians, the
+// stage shares, the camera-pass thread-ns per ray / estimate / splatted bin and the memory. Fails
+// if: a field is missing, a count is zero although the pass did work, or the shares exceed 1.
+TEST_F(CliErrors, BenchJsonRecordsTheCommandAndThePerUnitCosts) {
+    const fs::path scene = write("scene.json", insideScene());
+    const std::string json = (dir_ / "bench.json").string();
+    const Proc p = runTpb({"bench", scene.string(), "--bins-list", "1,16", "--bench-passes", "2", "--width", "16",
+                           "--height", "16", "--json", json}, dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    std::ifstream in(json);
+    ASSERT_TRUE(in) << json;
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_NE(j.at("command").get<std::string>().find("--json"), std::string::npos);
+    ASSERT_EQ(j.at("configs").size(), 2u);
+    for (const auto& c : j.at("configs")) {
+        EXPECT_EQ(c.at("passes").get<int>(), 2);
+        EXPECT_GT(c.at("per_pass").at("camera_rays").get<double>(), 0.0);
+        EXPECT_GT(c.at("per_pass").at("bins_splatted").get<double>(), 0.0);
+        EXPECT_GT(c.at("camera_thread_ns").at("per_camera_ray").get<double>(), 0.0);
+        EXPECT_GT(c.at("camera_thread_ns").at("per_splatted_bin").get<double>(), 0.0);
+        double share = 0.0;
+        for (const char* k : {"photon", "build", "camera"}) share += c.at("share_of_pass").at(k).get<double>();
+        EXPECT_GT(share, 0.0);
+        EXPECT_LE(share, 1.0 + 1e-9);
+        EXPECT_GT(c.at("film_bytes_per_pixel_bin").get<double>(), 0.0);
+        EXPECT_GT(c.at("peak_rss_bytes").get<double>(), 0.0);
+    }
+    // More bins: at least as many bins written per pass (an estimate covers more of them).
+    EXPECT_GE(j["configs"][1]["per_pass"]["bins_splatted"].get<double>(),
+              j["configs"][0]["per_pass"]["bins_splatted"].get<double>());
+}
+
 // Item 12: a 1024x1024x512 film gave no hint of the 17 minutes its frames take to write. Before the
 // render: the number of frames, their size and the write time estimated from preview.exr.
 TEST_F(CliErrors, ExportSizeAndTimeAreEstimatedBeforeRendering) {
