@@ -23,18 +23,9 @@ std::optional<ClosestApproach> closestApproach(const Vec3& xr, const Vec3& wr, c
 }
 
 void Beam1DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
-    scene_ = &scene;
-    map_ = &map;
-    pass_ = pass;
-    ready_ = !map.beams.empty();
-    if (!ready_) return;
-    if (!accel_ || backend_ != pass.accel) {
-        accel_ = BeamAccel::create(pass.accel);
-        backend_ = pass.accel;
-    }
     // Support radius r: a closest point within r of the segment lies on a piece whose box, padded
     // by r, the segment crosses (the near-parallel fallback's disc has the same radius).
-    accel_->build(map.beams, pass.radius, pass.threads);
+    prepareOver(scene, map, pass, map.beams);
 }
 
 // The radiance the pass's beams scatter along x_r + s w_r, s in [0, sMax] ((1D-4) - (1D-6)).

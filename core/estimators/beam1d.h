@@ -75,7 +75,7 @@
 #pragma once
 #include "base/math.h"
 #include "estimators/beam2d.h"
-#include "estimators/estimator.h"
+#include "estimators/accel_estimator.h"
 
 #include <memory>
 #include <optional>
@@ -103,25 +103,15 @@ inline double parallelSinThreshold(double radius, double sMax, double beamLength
     return std::clamp(kPi * radius / (2.0 * l), 1e-4, 1.0);
 }
 
-class Beam1DEstimator final : public VolumeEstimator {
+class Beam1DEstimator final : public AccelVolumeEstimator {
 public:
     static constexpr int kDim = 1;
     std::string name() const override { return "beam1d"; }
     int dim() const override { return kDim; }
     Needs needs() const override { return {true, false}; }  // beams only
     void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) override;
-    bool empty() const override { return !ready_; }
-    size_t accelPrimitives() const override { return ready_ ? accel_->pieceCount() : 0; }
     int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                    EstimatorScratch& scratch) const override;
-
-private:
-    const Scene* scene_ = nullptr;
-    const PhotonMap* map_ = nullptr;
-    EstimatorPass pass_;
-    std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
-    AccelBackend backend_ = AccelBackend::Embree;
-    bool ready_ = false;
 };
 
 }  // namespace tpb

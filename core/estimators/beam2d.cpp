@@ -71,17 +71,8 @@ double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap&
 // ---- the estimator ------------------------------------------------------------------------------
 
 void Beam2DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
-    scene_ = &scene;
-    map_ = &map;
-    pass_ = pass;
-    ready_ = !map.beams.empty();
-    if (!ready_) return;
-    if (!accel_ || backend_ != pass.accel) {
-        accel_ = BeamAccel::create(pass.accel);
-        backend_ = pass.accel;
-    }
     // The kernel is a cylinder of radius r around the beam: nothing beyond r from its axis.
-    accel_->build(map.beams, pass.radius, pass.threads);
+    prepareOver(scene, map, pass, map.beams);
 }
 
 // Eqs. 8, 12-15 for one candidate piece of a beam: the overlap, the wall test, the closed-form

@@ -31,7 +31,7 @@
 // and the energy density along s_r is proportional to exp(-kappa s_r): exponential in time too.
 #pragma once
 #include "base/math.h"
-#include "estimators/estimator.h"
+#include "estimators/accel_estimator.h"
 #include "estimators/kernel_visibility.h"
 
 namespace tpb {
@@ -87,24 +87,14 @@ bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& p
 // area pi r^2 shrinks by (i + alpha) / (i + 1) per pass. Homogeneous media only (it reads the
 // region's sigma_t and sigma_s): a heterogeneous medium needs its own estimator (transmittance
 // integrals by ray marching or tracking).
-class Beam2DEstimator final : public VolumeEstimator {
+class Beam2DEstimator final : public AccelVolumeEstimator {
 public:
     static constexpr int kDim = 2;
     std::string name() const override { return "beam2d"; }
     int dim() const override { return kDim; }
     void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) override;
-    bool empty() const override { return !ready_; }
-    size_t accelPrimitives() const override { return ready_ ? accel_->pieceCount() : 0; }
     int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                    EstimatorScratch& scratch) const override;
-
-private:
-    const Scene* scene_ = nullptr;
-    const PhotonMap* map_ = nullptr;
-    EstimatorPass pass_;
-    std::unique_ptr<BeamAccel> accel_;  // kept across passes so its buffers are reused
-    AccelBackend backend_ = AccelBackend::Embree;
-    bool ready_ = false;
 };
 
 }  // namespace tpb

@@ -17,17 +17,8 @@ std::optional<RayPointDisc> rayPointDisc(const Vec3& xr, const Vec3& wr, double 
 }
 
 void Point2DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
-    scene_ = &scene;
-    map_ = &map;
-    pass_ = pass;
-    ready_ = !map.points.empty();
-    if (!ready_) return;
-    if (!accel_ || backend_ != pass.accel) {
-        accel_ = BeamAccel::create(pass.accel);
-        backend_ = pass.accel;
-    }
     // The disc kernel is zero farther than r from the ray's line, hence from the segment.
-    accel_->build(map.points, pass.radius, pass.threads);
+    prepareOver(scene, map, pass, map.points);
 }
 
 // L = sum_p sigma_s rho(w_p . -w_r) Phi_p T_r(s_p) / (pi r^2), one instant per point (header).

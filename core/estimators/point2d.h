@@ -41,7 +41,7 @@
 // blurred onto (estimators/kernel_visibility.h).
 #pragma once
 #include "base/math.h"
-#include "estimators/estimator.h"
+#include "estimators/accel_estimator.h"
 
 #include <memory>
 #include <optional>
@@ -57,25 +57,15 @@ struct RayPointDisc {
 };
 std::optional<RayPointDisc> rayPointDisc(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xp, double radius);
 
-class Point2DEstimator final : public VolumeEstimator {
+class Point2DEstimator final : public AccelVolumeEstimator {
 public:
     static constexpr int kDim = 2;
     std::string name() const override { return "point2d"; }
     int dim() const override { return kDim; }
     Needs needs() const override { return {false, true}; }
     void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) override;
-    bool empty() const override { return !ready_; }
-    size_t accelPrimitives() const override { return ready_ ? accel_->pieceCount() : 0; }
     int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                    EstimatorScratch& scratch) const override;
-
-private:
-    const Scene* scene_ = nullptr;
-    const PhotonMap* map_ = nullptr;
-    EstimatorPass pass_;
-    std::unique_ptr<BeamAccel> accel_;  // over the points (zero-length pieces), kept across passes
-    AccelBackend backend_ = AccelBackend::Embree;
-    bool ready_ = false;
 };
 
 }  // namespace tpb

@@ -26,17 +26,8 @@ double chordTransmittance(double sigma_t, double sMinus, double sPlus) {
 }
 
 void Point3DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
-    scene_ = &scene;
-    map_ = &map;
-    pass_ = pass;
-    ready_ = !map.points.empty();
-    if (!ready_) return;
-    if (!accel_ || backend_ != pass.accel) {
-        accel_ = BeamAccel::create(pass.accel);
-        backend_ = pass.accel;
-    }
     // The ball kernel is zero farther than r from the point.
-    accel_->build(map.points, pass.radius, pass.threads);
+    prepareOver(scene, map, pass, map.points);
 }
 
 // L = sum_p sigma_s rho Phi_p (3 / (4 pi r^3)) Int_{s-}^{s+} T_r(s) ds, spread over the chord (header).

@@ -35,7 +35,7 @@
 // segment (estimators/kernel_visibility.h).
 #pragma once
 #include "base/math.h"
-#include "estimators/estimator.h"
+#include "estimators/accel_estimator.h"
 
 #include <memory>
 #include <optional>
@@ -53,25 +53,15 @@ std::optional<RayPointChord> rayPointChord(const Vec3& xr, const Vec3& wr, doubl
 // Int_{s-}^{s+} exp(-sigma_t s) ds for one channel (closed form above).
 double chordTransmittance(double sigma_t, double sMinus, double sPlus);
 
-class Point3DEstimator final : public VolumeEstimator {
+class Point3DEstimator final : public AccelVolumeEstimator {
 public:
     static constexpr int kDim = 3;
     std::string name() const override { return "point3d"; }
     int dim() const override { return kDim; }
     Needs needs() const override { return {false, true}; }
     void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) override;
-    bool empty() const override { return !ready_; }
-    size_t accelPrimitives() const override { return ready_ ? accel_->pieceCount() : 0; }
     int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                    EstimatorScratch& scratch) const override;
-
-private:
-    const Scene* scene_ = nullptr;
-    const PhotonMap* map_ = nullptr;
-    EstimatorPass pass_;
-    std::unique_ptr<BeamAccel> accel_;  // over the points (zero-length pieces), kept across passes
-    AccelBackend backend_ = AccelBackend::Embree;
-    bool ready_ = false;
 };
 
 }  // namespace tpb

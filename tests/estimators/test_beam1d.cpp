@@ -23,6 +23,8 @@
 #include "support/scene_builder.h"
 #include "support/test_scene.h"
 
+#include "support/quadrature.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -38,16 +40,7 @@ namespace {
 
 // Composite Gauss-Legendre (5 points) on n panels.
 double quad(const std::function<double(double)>& f, double a, double b, int n = 400) {
-    static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
-    static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665, 0.2369268850561891};
-    if (!(b > a)) return 0.0;
-    const double h = (b - a) / n;
-    double s = 0.0;
-    for (int i = 0; i < n; ++i) {
-        const double m = a + (i + 0.5) * h;
-        for (int j = 0; j < 5; ++j) s += w[j] * f(m + 0.5 * h * x[j]);
-    }
-    return s * 0.5 * h;
+    return b > a ? test::gaussLegendre5(f, a, b, n) : 0.0;
 }
 
 Vec3 randomDir(Rng& rng) {

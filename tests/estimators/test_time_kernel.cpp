@@ -7,6 +7,8 @@
 #include "film/transient_film.h"
 #include "base/rng.h"
 
+#include "support/quadrature.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,18 +23,7 @@ namespace {
 // ---- the oracle: quadrature of the convolution, nothing from time_kernel.h --------------------
 
 // Composite 5-point Gauss-Legendre on n panels.
-double quad(const std::function<double(double)>& f, double a, double b, int n) {
-    static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
-    static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
-                                0.2369268850561891};
-    const double h = (b - a) / n;
-    double s = 0.0;
-    for (int i = 0; i < n; ++i) {
-        const double m = a + (i + 0.5) * h;
-        for (int j = 0; j < 5; ++j) s += w[j] * f(m + 0.5 * h * x[j]);
-    }
-    return s * 0.5 * h;
-}
+double quad(const std::function<double(double)>& f, double a, double b, int n) { return test::gaussLegendre5(f, a, b, n); }
 
 // The share of the time interval [lo, hi] (lo may be -inf, hi +inf) of the profile "density
 // exp(-kappa s) on [s0, s1], arriving at a + b s" (an instant when s1 == s0) convolved with the box of
