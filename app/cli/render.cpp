@@ -55,7 +55,7 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
     int64_t regionOverflows = 0;
     for (const PassStats& p : hist) {
         per.push_back({{"pass", p.pass}, {"beam_radius_m", p.beamRadius}, {"surface_radius_m", p.surfaceRadius},
-                       {"beams", p.beams}, {"beam_pieces", p.beamPieces}, {"surface_photons", p.surfacePhotons},
+                       {"beams", p.beams}, {"points", p.points}, {"beam_pieces", p.beamPieces}, {"surface_photons", p.surfacePhotons},
                        {"beam_estimates", p.camera.beamEstimates}, {"photon_estimates", p.camera.photonEstimates},
                        {"photon_s", p.photonSec}, {"build_s", p.buildSec}, {"camera_s", p.cameraSec},
                        {"pass_s", p.passSec}, {"elapsed_s", p.elapsedSec}});

@@ -328,11 +328,19 @@ void Viewer::drawProgressSection() {
         ImGui::TextDisabled(" ");
     } else if (done > 0) {
         ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
-        ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
-                    static_cast<long long>(last.photons));
+        // What the volume estimator gathers from: beams, photon points (point2d/point3d) or both.
+        if (last.points > 0 && last.beams == 0)
+            ImGui::Text("points per pass %lld  (%lld photons)", static_cast<long long>(last.points),
+                        static_cast<long long>(last.photons));
+        else if (last.points > 0)
+            ImGui::Text("beams %lld, points %lld per pass  (%lld photons)", static_cast<long long>(last.beams),
+                        static_cast<long long>(last.points), static_cast<long long>(last.photons));
+        else
+            ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
+                        static_cast<long long>(last.photons));
     } else {
         ImGui::TextDisabled(failed ? "kernel radius -" : "kernel radius -  (first pass in progress...)");
-        ImGui::TextDisabled("beams per pass -");
+        ImGui::TextDisabled("stored per pass -");
     }
     if (done > 0) {
         ImGui::Text("time per pass %.3f s", last.passSec);
