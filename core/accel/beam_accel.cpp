@@ -14,9 +14,10 @@
 namespace tpb {
 
 void sortBeamPieces(std::vector<BeamPiece>& hits, size_t from) {
-    std::sort(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(), [](const BeamPiece& a, const BeamPiece& b) {
-        return a.beam != b.beam ? a.beam < b.beam : a.piece < b.piece;
-    });
+    // One 64-bit key per piece: (beam, piece) in lexicographic order.
+    const auto key = [](const BeamPiece& p) { return (static_cast<uint64_t>(p.beam) << 32) | p.piece; };
+    std::sort(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
+              [&](const BeamPiece& a, const BeamPiece& b) { return key(a) < key(b); });
     // Embree may visit a primitive twice (spatial splits); keep one hit per (beam, piece).
     hits.erase(std::unique(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
                            [](const BeamPiece& a, const BeamPiece& b) { return a.beam == b.beam && a.piece == b.piece; }),
@@ -65,9 +66,11 @@ public:
         radius_ = radius;
         makePointPieces(points, pieces_);
     }
-    void candidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out) const override {
+    using BeamAccel::candidates;
+    void candidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out,
+                    const CandidateTest& test) const override {
         for (const Piece& p : pieces_)
-            if (p.region == region) out.push_back(candidate(p));  // already in (beam, piece) order
+            if (p.region == region && test(candidate(p))) out.push_back(candidate(p));  // already in (beam, piece) order
     }
     std::string name() const override { return "brute-force"; }
     size_t pieceCount() const override { return pieces_.size(); }
@@ -92,7 +95,9 @@ public:
         buildBvh();
     }
 
-    void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits) const override {
+    using BeamAccel::candidates;
+    void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
+                    const CandidateTest& test) const override {
         const size_t from = hits.size();
         if (pieces_.empty() || !scene_) return;
         Context ctx;
@@ -100,6 +105,7 @@ public:
         ctx.self = this;
         ctx.region = region;
         ctx.hits = &hits;
+        ctx.test = &test;
         RTCRayHit rh;
         rh.ray.org_x = static_cast<float>(o.x);
         rh.ray.org_y = static_cast<float>(o.y);
@@ -127,6 +133,7 @@ private:
         const EmbreeBeams* self;
         int region;
         std::vector<BeamPiece>* hits;
+        const CandidateTest* test;
     };
 
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
@@ -148,8 +155,10 @@ private:
         if (!args->valid[0]) return;
         auto* ctx = reinterpret_cast<Context*>(args->context);
         const Piece& p = ctx->self->pieces_[args->primID];
-        // Embree reached this piece's padded box: a candidate (the estimator tests its kernel).
-        if (p.region == ctx->region) ctx->hits->push_back(candidate(p));
+        // Embree reached this piece's padded box: a candidate, kept if the estimator's test accepts it.
+        if (p.region != ctx->region) return;
+        const BeamPiece c = candidate(p);
+        if ((*ctx->test)(c)) ctx->hits->push_back(c);
         // No hit is reported to Embree: traversal goes on and visits every candidate piece.
     }
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}

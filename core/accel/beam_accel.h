@@ -9,7 +9,11 @@
 //   BruteForceBeams: every piece of the region (the test oracle).
 //   EmbreeBeams:     Embree user geometry over the pieces (Embree's BVH), in beam_accel.cpp only.
 // Candidates are returned sorted by (beam, piece), one per piece, so sums over them do not depend
-// on traversal order.
+// on traversal order. An estimator may hand candidates() its exact kernel test (CandidateTest):
+// the accelerator then runs it on each piece as traversal reaches it and keeps only the pieces it
+// accepts, so rejected pieces are never stored or sorted (the sort of every candidate was a quarter
+// of the camera pass). The accepted pieces come back in the same order: the estimates, and the
+// films, are the same with or without the test.
 //
 // Photon points (VolumePhoton, photon_tracer.h) are indexed the same way, as zero-length pieces: the
 // build overload for points makes point k the piece (beam = k, piece = 0, sbLo = sbHi = 0) with the
@@ -42,6 +46,15 @@ inline uint32_t beamPieceCount(double length, double radius) {
     return static_cast<uint32_t>(std::clamp(n, 1.0, 16.0));
 }
 
+// An estimator's exact test of one candidate piece (false: its kernel cannot reach the segment).
+// A plain function and a context pointer, called from inside the traversal: no allocation, no
+// virtual call per candidate. A null `accept` accepts every candidate.
+struct CandidateTest {
+    bool (*accept)(const void* context, const BeamPiece& piece) = nullptr;
+    const void* context = nullptr;
+    bool operator()(const BeamPiece& p) const { return !accept || accept(context, p); }
+};
+
 class BeamAccel {
 public:
     virtual ~BeamAccel() = default;
@@ -53,8 +66,13 @@ public:
     virtual void build(const std::vector<VolumePhoton>& points, double supportRadius, int threads) = 0;
     // Appends the candidate pieces of beams of `region` for the segment o + s d, s in [0, sMax]
     // (d unit), sorted by (beam, piece): a superset of the pieces whose kernel the segment meets
-    // (for points: of the points within supportRadius of the segment).
-    virtual void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out) const = 0;
+    // (for points: of the points within supportRadius of the segment). With a test, only the
+    // candidates it accepts, in the same order.
+    virtual void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out,
+                            const CandidateTest& test) const = 0;
+    void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out) const {
+        candidates(o, d, sMax, region, out, CandidateTest{});
+    }
     virtual std::string name() const = 0;
     virtual size_t pieceCount() const = 0;  // beam pieces, or points
 

@@ -105,6 +105,22 @@ bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& p
     return true;
 }
 
+namespace {
+// The cylinder test as the accelerator's candidate test: the same call gatherBeam2DPiece makes, so
+// the pieces it keeps are exactly those that give an estimate or fail the wall test.
+struct CylinderTest {
+    const Ray& ray;
+    double sMax, radius;
+    const std::vector<Beam>& beams;
+    static bool accept(const void* context, const BeamPiece& piece) {
+        const auto& t = *static_cast<const CylinderTest*>(context);
+        const Beam& b = t.beams[piece.beam];
+        RayBeamOverlap o;
+        return rayBeamOverlap(t.ray.o, t.ray.d, t.sMax, b.origin, b.dir, piece.sbLo, piece.sbHi, t.radius, o);
+    }
+};
+}  // namespace
+
 // Beam radiance estimate along the camera segment x_r + s w_r, s in [0, sMax] (eqs. 8, 10, 12-15).
 int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                                 EstimatorScratch& scratch) const {
@@ -113,7 +129,8 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
                           beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
     scratch.pieces.clear();
-    accel_->candidates(seg.ray.o, seg.ray.d, seg.sMax, seg.region, scratch.pieces);
+    const CylinderTest test{seg.ray, seg.sMax, pass_.radius, map_->beams};
+    accel_->candidates(seg.ray.o, seg.ray.d, seg.sMax, seg.region, scratch.pieces, {&CylinderTest::accept, &test});
     NearShapes near(*scene_, seg.ray, seg.sMax, pass_.radius, scratch.shapes);
     int64_t estimates = 0;
     for (const BeamPiece& piece : scratch.pieces)

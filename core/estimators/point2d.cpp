@@ -21,6 +21,19 @@ void Point2DEstimator::prepare(const Scene& scene, const PhotonMap& map, const E
     prepareOver(scene, map, pass, map.points);
 }
 
+namespace {
+// The kernel test as the accelerator's candidate test: the same call gather() makes per candidate.
+struct PointKernelTest {
+    const Ray& ray;
+    double sMax, radius;
+    const std::vector<VolumePhoton>& points;
+    static bool accept(const void* context, const BeamPiece& candidate) {
+        const auto& t = *static_cast<const PointKernelTest*>(context);
+        return rayPointDisc(t.ray.o, t.ray.d, t.sMax, t.points[candidate.beam].position, t.radius).has_value();
+    }
+};
+}  // namespace
+
 // L = sum_p sigma_s rho(w_p . -w_r) Phi_p T_r(s_p) / (pi r^2), one instant per point (header).
 int64_t Point2DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                                  EstimatorScratch& scratch) const {
@@ -31,7 +44,8 @@ int64_t Point2DEstimator::gather(const CameraSegment& seg, const PathState& path
     const Medium& m = region.medium;
     const double eta = region.ior, r = pass_.radius;
     scratch.pieces.clear();
-    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces);
+    const PointKernelTest test{ray, seg.sMax, r, map_->points};
+    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&PointKernelTest::accept, &test});
     bool haveNear = false;
     const double invArea = 1.0 / (kPi * r * r);  // K_2 = 1 / (pi r^2)
     int64_t estimates = 0;

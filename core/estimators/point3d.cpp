@@ -30,6 +30,19 @@ void Point3DEstimator::prepare(const Scene& scene, const PhotonMap& map, const E
     prepareOver(scene, map, pass, map.points);
 }
 
+namespace {
+// The kernel test as the accelerator's candidate test: the same call gather() makes per candidate.
+struct PointKernelTest {
+    const Ray& ray;
+    double sMax, radius;
+    const std::vector<VolumePhoton>& points;
+    static bool accept(const void* context, const BeamPiece& candidate) {
+        const auto& t = *static_cast<const PointKernelTest*>(context);
+        return rayPointChord(t.ray.o, t.ray.d, t.sMax, t.points[candidate.beam].position, t.radius).has_value();
+    }
+};
+}  // namespace
+
 // L = sum_p sigma_s rho Phi_p (3 / (4 pi r^3)) Int_{s-}^{s+} T_r(s) ds, spread over the chord (header).
 int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                                  EstimatorScratch& scratch) const {
@@ -40,7 +53,8 @@ int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path
     const Medium& m = region.medium;
     const double eta = region.ior, r = pass_.radius;
     scratch.pieces.clear();
-    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces);
+    const PointKernelTest test{ray, seg.sMax, r, map_->points};
+    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&PointKernelTest::accept, &test});
     bool haveNear = false;
     const double invVolume = 3.0 / (4.0 * kPi * r * r * r);  // K_3
     const Color kappa = pass_.profile == TimeProfile::Exact ? m.sigma_t : Color(0.0);
