@@ -18,7 +18,10 @@ void TileSums::zero(size_t pixels, int binCount) {
 
 const std::vector<double>& TileBlock::cumulative(TimeAxis axis) const {
     const int a = static_cast<int>(axis);
-    std::call_once(once_[a], [&] {
+    std::lock_guard<std::mutex> g(cumulativeMutex_);
+    if (cumulativeValid_[a]) return cumulative_[a];
+    cumulativeValid_[a] = true;
+    [&] {
         const std::vector<FilmSum>& src = sums.bins[a];
         const size_t n = sums.before[a].size();  // pixels x rgb
         std::vector<double>& cum = cumulative_[a];
@@ -30,8 +33,16 @@ const std::vector<double>& TileBlock::cumulative(TimeAxis axis) const {
         for (size_t i = 0; i < n; ++i) cum[i] = sums.before[a][i] + src[i];
         for (size_t k = 1; k < binCount; ++k)
             for (size_t i = 0; i < n; ++i) cum[k * n + i] = cum[(k - 1) * n + i] + src[k * n + i];
-    });
+    }();
     return cumulative_[a];
+}
+
+void TileBlock::invalidateCumulative() {
+    std::lock_guard<std::mutex> g(cumulativeMutex_);
+    for (int a = 0; a < 2; ++a) {
+        cumulativeValid_[a] = false;
+        std::vector<double>().swap(cumulative_[a]);
+    }
 }
 
 FilmLayout::FilmLayout(int w, int h, const TimeBins& t)

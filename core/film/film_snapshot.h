@@ -2,21 +2,26 @@
 // a reference comparison) holds while passes go on. The film itself is transient_film.h; the
 // images read from a snapshot (frames, steady, profile, streak, volume) are film_view.h.
 //
-// Copy-on-write tile blocks: the image is split in 16x16 tiles and each tile's sums live in one
-// immutable TileBlock held by std::shared_ptr<const TileBlock>. A TileWriter (transient_film.h)
-// copies the tile's current block, adds its pass to the copy and publishes the copy when it
-// finishes (a pointer swap under the tile's short publish lock). A snapshot is the vector of the
-// tiles' current block pointers: taking one costs one pointer copy per tile, never waits for a
-// tile being rendered, and is per-tile consistent (every tile holds the sum of the passes it has
-// completed, its own pass count, never part of a pass). Tiles may differ by one pass while a pass
-// is being rendered (minPasses() / maxPasses()).
+// Tile blocks, written in place or copied on write: the image is split in 16x16 tiles and each
+// tile's sums live in one TileBlock held by std::shared_ptr. Readers see it as const. A TileWriter
+// (transient_film.h) gathers its pass's pixels into per-thread staging first and adds them to the
+// tile when it finishes: in place, under the tile's publish lock, when no snapshot holds the block
+// (the usual case: the viewer and the CLI drop snapshots after reading them, so a headless render
+// never copies a tile); otherwise it copies the block, adds to the copy and publishes the copy
+// (a pointer swap under the same lock), leaving the snapshot's block untouched. A snapshot is the
+// vector of the tiles' current block pointers: taking one costs one pointer copy per tile and
+// waits at most for one tile's in-place add (the staged bins of 256 pixels, well under a
+// millisecond at 256 bins), and is per-tile consistent (every tile holds the sum of the passes it
+// has completed, its own pass count, never part of a pass). Tiles may differ by one pass while a
+// pass is being rendered (minPasses() / maxPasses()).
 //
-// Memory: the live film (one block per tile) + one block per tile being written (one per render
-// thread) + the blocks that snapshots still hold after the film replaced them: a snapshot held
-// across a whole pass keeps up to one more film's worth alive, so readers should drop snapshots
-// they no longer show. The continuous-emission prefix sums (cumulative()) are computed lazily, once
-// per block and axis, and add bins x RGB doubles per pixel per axis read in continuous mode, for as
-// long as that block lives (a block that the next pass replaces takes its prefix sums with it).
+// Memory: the live film (one block per tile) + the staging of each render thread (one tile of
+// pixel accumulators) + a copy per tile written while a snapshot holds its block, and the blocks
+// that snapshots still hold after the film replaced them: a snapshot held across a whole pass keeps
+// up to one more film's worth alive, so readers should drop snapshots they no longer show. The
+// continuous-emission prefix sums (cumulative()) are computed lazily per block and axis, and add
+// bins x RGB doubles per pixel per axis read in continuous mode, for as long as that block lives
+// unchanged (an in-place add drops them; a block that the next pass replaces takes them with it).
 #pragma once
 #include "estimators/time_splat.h"
 
@@ -55,9 +60,13 @@ public:
     // sum of bins 0..k, in double, layout as sums.bins[axis]. Computed on first use (thread-safe,
     // once per block and axis): O(bins x pixels) once, then one read per pixel per frame.
     const std::vector<double>& cumulative(TimeAxis axis) const;
+    // Drops the prefix sums after the sums changed in place (only by the tile's writer, while no
+    // snapshot holds the block: no reader can be using them).
+    void invalidateCumulative();
 
 private:
-    mutable std::once_flag once_[2];
+    mutable std::mutex cumulativeMutex_;
+    mutable bool cumulativeValid_[2] = {false, false};
     mutable std::vector<double> cumulative_[2];
 };
 

@@ -119,7 +119,7 @@ TransientFilm::TransientFilm(int width, int height, const TimeBins& time)
     for (int t = 0; t < tileCount(); ++t) {
         TileSums zero;
         zero.zero(layout_->pixels(t), time.bins);
-        tiles_[t].block = std::make_shared<const TileBlock>(std::move(zero));
+        tiles_[t].block = std::make_shared<TileBlock>(std::move(zero));
     }
 }
 
@@ -128,8 +128,8 @@ std::shared_ptr<const TileBlock> TransientFilm::current(int tile) const {
     return tiles_[tile].block;
 }
 
-void TransientFilm::publish(int tile, std::shared_ptr<const TileBlock> block) {
-    std::shared_ptr<const TileBlock> old;  // freed outside the lock (if no snapshot holds it)
+void TransientFilm::publish(int tile, std::shared_ptr<TileBlock> block) {
+    std::shared_ptr<TileBlock> old;  // freed outside the lock (if no snapshot holds it)
     {
         std::lock_guard<std::mutex> g(tiles_[tile].publish);
         old = std::exchange(tiles_[tile].block, std::move(block));
@@ -160,7 +160,7 @@ void TransientFilm::clear() {
         std::lock_guard<std::mutex> g(tiles_[t].writer);
         TileSums zero;
         zero.zero(layout_->pixels(t), bins());
-        publish(t, std::make_shared<const TileBlock>(std::move(zero)));
+        publish(t, std::make_shared<TileBlock>(std::move(zero)));
     }
     stats.rejectedSamples = 0;
     stats.overflowedPixels = 0;
@@ -191,7 +191,7 @@ void TransientFilm::merge(const TransientFilm& other) {
             addAll(sum.before[a], add.before[a]);
             addAll(sum.after[a], add.after[a]);
         }
-        publish(t, std::make_shared<const TileBlock>(std::move(sum)));
+        publish(t, std::make_shared<TileBlock>(std::move(sum)));
     }
     stats.rejectedSamples += other.stats.rejectedSamples.load();
     stats.overflowedPixels += other.stats.overflowedPixels.load();
@@ -202,20 +202,64 @@ void TransientFilm::merge(const TransientFilm& other) {
     }
 }
 
-TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile)
-    : film_(film), tile_(tile), lock_(film.tiles_[tile].writer),
-      next_(std::make_shared<TileBlock>(film.current(tile)->sums)) {}
+TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile, TileStaging* staging)
+    : film_(film), tile_(tile), lock_(film.tiles_[tile].writer), staging_(staging) {
+    if (!staging_) {
+        next_ = std::make_shared<TileBlock>(film.current(tile)->sums);
+        return;
+    }
+    const int bins = film.bins();
+    if (staging_->bins != bins || staging_->pixels.size() != static_cast<size_t>(kTile * kTile)) {
+        staging_->pixels.assign(static_cast<size_t>(kTile * kTile), PixelAccumulator(bins));
+        staging_->bins = bins;
+    }
+    staged_.reserve(static_cast<size_t>(kTile * kTile));
+}
 
 TransientFilm::TileWriter::~TileWriter() {
+    if (staging_) {
+        commitStaged();
+        return;
+    }
     ++next_->sums.passes;
     film_.publish(tile_, std::move(next_));
 }
 
-void TransientFilm::TileWriter::addPixel(int x, int y, const PixelAccumulator& acc) {
-    TileSums& t = next_->sums;
+void TransientFilm::TileWriter::commitStaged() {
+    Tile& tile = film_.tiles_[tile_];
+    const auto addStaged = [&](TileSums& sums) {
+        for (uint32_t p : staged_) addTo(sums, p, staging_->pixels[p]);
+        ++sums.passes;
+    };
+    {
+        std::lock_guard<std::mutex> g(tile.publish);
+        if (tile.block.use_count() == 1) {  // no snapshot holds it, and none can take it without this lock
+            addStaged(tile.block->sums);
+            tile.block->invalidateCumulative();
+        } else {
+            next_ = std::make_shared<TileBlock>(tile.block->sums);
+        }
+    }
+    if (next_) {  // a snapshot holds the block: add to a copy (outside the lock), then publish it
+        addStaged(next_->sums);
+        film_.publish(tile_, std::move(next_));
+    }
+    for (uint32_t p : staged_) staging_->pixels[p].clearTouched();
+}
+
+void TransientFilm::TileWriter::addPixel(int x, int y, PixelAccumulator& acc) {
     const TileRect r = film_.tileRect(tile_);
-    const int px = x - r.x0, py = y - r.y0;
-    const size_t pixel = static_cast<size_t>(py) * r.w + px;
+    const size_t pixel = static_cast<size_t>(y - r.y0) * r.w + (x - r.x0);
+    if (staging_) {
+        std::swap(staging_->pixels[pixel], acc);  // the staged one was cleared at the last commit
+        staged_.push_back(static_cast<uint32_t>(pixel));
+        return;
+    }
+    addTo(next_->sums, pixel, acc);
+}
+
+void TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAccumulator& acc) {
+    const TileRect r = film_.tileRect(tile_);
     const size_t perBin = static_cast<size_t>(r.w) * r.h * 3;
     // The averages are read as float: a pass whose contribution would push a sum past FLT_MAX (a
     // light power near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this

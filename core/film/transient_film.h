@@ -12,10 +12,11 @@
 // sums (film_view.h); its last frame is steady - after.
 //
 // Concurrency: the image is split in 16x16 tiles. A tile has one writer at a time (the worker that
-// renders it in the current pass, TileWriter) and its own pass count. The writer adds its pass to a
-// copy of the tile's block and publishes the copy when it finishes (copy-on-write, see
-// film_snapshot.h for the memory this costs), so a reader always sees, per tile, the sum of the
-// passes that tile has completed - never a partially gathered pass - and never waits for a writer.
+// renders it in the current pass, TileWriter) and its own pass count. The writer stages its pass
+// (per-thread TileStaging) and adds it to the tile when it finishes, in place when no snapshot
+// holds the tile's block, else to a copy it then publishes (film_snapshot.h), so a reader always
+// sees, per tile, the sum of the passes that tile has completed - never a partially gathered pass.
+// Either way each sum gets the same one addition per pass: the films are bit-identical.
 // Sums are double (FilmSum, film_snapshot.h: per bin, and the steady-state, before and after sums);
 // the images read from them are float (film_view.h).
 #pragma once
@@ -111,6 +112,13 @@ inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally&
     splatSpread(time, acc, tally, L, Color(0.0), 0.0, 0.0, tReal, 0.0, tUnwarped, 0.0, kernel);
 }
 
+// One render thread's staging for the tile it writes: a pixel accumulator per pixel of a tile,
+// kept across tiles and passes (their touched bins are zeroed after each commit).
+struct TileStaging {
+    std::vector<PixelAccumulator> pixels;
+    int bins = 0;
+};
+
 class TransientFilm {
 public:
     static constexpr int kTile = FilmLayout::kTile;
@@ -125,19 +133,29 @@ public:
     uint64_t bytes() const;  // of the live film's blocks (the formula in memory_budget.cpp must agree)
 
     // Writer side (one writer per tile at a time): construct (waits for the tile's previous
-    // writer, copies the tile's block), add pixels, destroy (counts the pass, publishes the block).
+    // writer), add pixels, destroy (adds the pass to the tile, counts it, publishes).
+    // With a TileStaging (the driver gives one per thread), addPixel() swaps the pixel's
+    // accumulator into the staging (`acc` comes back cleared) and the destructor adds the staged
+    // pixels to the tile in place when no snapshot holds its block (no copy of the tile), else to
+    // a copy. Without one, the tile's block is copied at construction and pixels are added to the
+    // copy as they come (`acc` is left as it was; the caller clears it).
     class TileWriter {
     public:
-        TileWriter(TransientFilm& film, int tile);
+        TileWriter(TransientFilm& film, int tile, TileStaging* staging = nullptr);
         ~TileWriter();
         TileWriter(const TileWriter&) = delete;
         TileWriter& operator=(const TileWriter&) = delete;
-        void addPixel(int x, int y, const PixelAccumulator& acc);
+        void addPixel(int x, int y, PixelAccumulator& acc);
     private:
+        // Adds one pixel's pass to `sums` unless a sum would leave float's range (counted).
+        void addTo(TileSums& sums, size_t pixel, const PixelAccumulator& acc);
+        void commitStaged();
         TransientFilm& film_;
         int tile_;
         std::unique_lock<std::mutex> lock_;
-        std::shared_ptr<TileBlock> next_;
+        std::shared_ptr<TileBlock> next_;  // the copy (no staging)
+        TileStaging* staging_ = nullptr;
+        std::vector<uint32_t> staged_;      // pixels in the staging, in the order they came
     };
 
     // The tiles' current blocks: cheap (a pointer copy per tile), never waits for a writer.
@@ -167,11 +185,13 @@ public:
 private:
     struct Tile {
         std::mutex writer;   // held by the tile's TileWriter (and merge, clear)
-        mutable std::mutex publish;  // guards `block` (held for a pointer copy or swap only)
-        std::shared_ptr<const TileBlock> block;
+        // Guards `block`: held for a pointer copy or swap, and by an in-place add (which needs
+        // that no snapshot holds the block, i.e. block.use_count() == 1 under this lock).
+        mutable std::mutex publish;
+        std::shared_ptr<TileBlock> block;
     };
     std::shared_ptr<const TileBlock> current(int tile) const;
-    void publish(int tile, std::shared_ptr<const TileBlock> block);
+    void publish(int tile, std::shared_ptr<TileBlock> block);
 
     std::shared_ptr<const FilmLayout> layout_;
     std::unique_ptr<Tile[]> tiles_;

@@ -76,6 +76,7 @@ private:
     const Scene& scene_;
     RenderSettings settings_;
     std::unique_ptr<TransientFilm> film_;
+    std::vector<TileStaging> staging_;  // per render thread: the tile it is writing (TransientFilm::TileWriter)
     std::thread thread_;
     std::atomic<bool> running_{false}, stopRequested_{false}, abort_{false};
     PauseGate gate_;  // pause/resume between passes (takes its lock to notify: no lost wakeup)
