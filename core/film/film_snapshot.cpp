@@ -8,6 +8,7 @@ namespace tpb {
 
 void TileSums::zero(size_t pixels, int binCount) {
     passes = 0;
+    absBound = 0.0;
     steady.assign(pixels * 3, 0.0);
     for (int a = 0; a < 2; ++a) {
         bins[a].assign(pixels * static_cast<size_t>(binCount) * 3, FilmSum(0));
@@ -22,7 +23,7 @@ const std::vector<double>& TileBlock::cumulative(TimeAxis axis) const {
     if (cumulativeValid_[a]) return cumulative_[a];
     cumulativeValid_[a] = true;
     [&] {
-        const std::vector<FilmSum>& src = sums.bins[a];
+        const FilmSums& src = sums.bins[a];
         const size_t n = sums.before[a].size();  // pixels x rgb
         std::vector<double>& cum = cumulative_[a];
         cum.resize(src.size());

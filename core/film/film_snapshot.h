@@ -6,7 +6,7 @@
 // tile's sums live in one TileBlock held by std::shared_ptr. Readers see it as const. A TileWriter
 // (transient_film.h) gathers its pass's pixels into per-thread staging first and adds them to the
 // tile when it finishes: in place, under the tile's publish lock, when no snapshot holds the block
-// (the usual case: the viewer and the CLI drop snapshots after reading them, so a headless render
+// (TileBlock::readers() == 0; the usual case: the viewer and the CLI drop snapshots after reading them, so a headless render
 // never copies a tile); otherwise it copies the block, adds to the copy and publishes the copy
 // (a pointer swap under the same lock), leaving the snapshot's block untouched. A snapshot is the
 // vector of the tiles' current block pointers: taking one costs one pointer copy per tile and
@@ -23,8 +23,10 @@
 // bins x RGB doubles per pixel per axis read in continuous mode, for as long as that block lives
 // unchanged (an in-place add drops them; a block that the next pass replaces takes them with it).
 #pragma once
+#include "base/large_buffer.h"
 #include "estimators/time_splat.h"
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -41,14 +43,20 @@ struct TileRect { int x0, y0, w, h; };
 // extra double rounding per value, ~1e-16, against ~1e-7 in float: tests/film/test_transient_film.cpp).
 // Memory: bins x 2 axes x RGB x 8 bytes per pixel (memory_budget.h).
 using FilmSum = double;
+// The per-bin sums of a tile: large and written with a stride, so in huge pages (base/large_buffer.h).
+using FilmSums = std::vector<FilmSum, LargeBufferAllocator<FilmSum>>;
 
 // The sums of one tile over the passes it has completed (not averaged).
 struct TileSums {
     int64_t passes = 0;
     // Per axis: [bin][pixel in tile][rgb], so a frame reads one contiguous block per tile.
-    std::vector<FilmSum> bins[2];
+    FilmSums bins[2];
     std::vector<double> steady;                // [pixel][rgb]
     std::vector<double> before[2], after[2];  // per axis, [pixel][rgb]: light before the first bin / after the last
+    // An upper bound of |every sum| in the tile (grows by each pass's largest value; merges add the
+    // bounds): while bound + the largest value of a pixel's pass stays far from FLT_MAX, that pass
+    // cannot push a sum out of float's range and the writer skips the per-value check.
+    double absBound = 0.0;
     void zero(size_t pixels, int binCount);
 };
 
@@ -64,7 +72,15 @@ public:
     // snapshot holds the block: no reader can be using them).
     void invalidateCumulative();
 
+    // Readers that hold this block (snapshots and other leases from TransientFilm::current()).
+    // Taken under the tile's publish lock; dropped with release order when a lease ends, so a
+    // writer that reads 0 (acquire, under the same lock) happens after every read of the sums and
+    // may add to them in place. (shared_ptr::use_count() cannot say this: it is a relaxed read.)
+    int readers() const { return readers_.load(std::memory_order_acquire); }
+
 private:
+    friend class TransientFilm;
+    mutable std::atomic<int> readers_{0};
     mutable std::mutex cumulativeMutex_;
     mutable bool cumulativeValid_[2] = {false, false};
     mutable std::vector<double> cumulative_[2];

@@ -124,8 +124,20 @@ TransientFilm::TransientFilm(int width, int height, const TimeBins& time)
 }
 
 std::shared_ptr<const TileBlock> TransientFilm::current(int tile) const {
-    std::lock_guard<std::mutex> g(tiles_[tile].publish);
-    return tiles_[tile].block;
+    // A lease: the returned pointer owns the block and counts as one of its readers until the
+    // last copy of it is dropped (the deleter's release pairs with the writer's acquire in
+    // TileBlock::readers(), so in-place adds never overlap a read).
+    std::shared_ptr<TileBlock> block;
+    {
+        std::lock_guard<std::mutex> g(tiles_[tile].publish);
+        block = tiles_[tile].block;
+        block->readers_.fetch_add(1, std::memory_order_relaxed);
+    }
+    const TileBlock* raw = block.get();
+    return std::shared_ptr<const TileBlock>(raw, [keep = std::move(block)](const TileBlock* b) mutable {
+        b->readers_.fetch_sub(1, std::memory_order_release);
+        keep.reset();
+    });
 }
 
 void TransientFilm::publish(int tile, std::shared_ptr<TileBlock> block) {
@@ -182,6 +194,7 @@ void TransientFilm::merge(const TransientFilm& other) {
         TileSums sum = current(t)->sums;
         const TileSums& add = theirs->block(t).sums;
         sum.passes += add.passes;
+        sum.absBound += add.absBound;
         const auto addAll = [](auto& dst, const auto& src) {
             for (size_t i = 0; i < dst.size(); ++i) dst[i] += src[i];
         };
@@ -222,18 +235,21 @@ TransientFilm::TileWriter::~TileWriter() {
         return;
     }
     ++next_->sums.passes;
+    next_->sums.absBound += passMax_;
     film_.publish(tile_, std::move(next_));
 }
 
 void TransientFilm::TileWriter::commitStaged() {
     Tile& tile = film_.tiles_[tile_];
     const auto addStaged = [&](TileSums& sums) {
-        for (uint32_t p : staged_) addTo(sums, p, staging_->pixels[p]);
+        double passMax = 0.0;
+        for (uint32_t p : staged_) passMax = std::max(passMax, addTo(sums, p, staging_->pixels[p]));
         ++sums.passes;
+        sums.absBound += passMax;
     };
     {
         std::lock_guard<std::mutex> g(tile.publish);
-        if (tile.block.use_count() == 1) {  // no snapshot holds it, and none can take it without this lock
+        if (tile.block->readers() == 0) {  // no snapshot holds it, and none can take it without this lock
             addStaged(tile.block->sums);
             tile.block->invalidateCumulative();
         } else {
@@ -255,39 +271,60 @@ void TransientFilm::TileWriter::addPixel(int x, int y, PixelAccumulator& acc) {
         staged_.push_back(static_cast<uint32_t>(pixel));
         return;
     }
-    addTo(next_->sums, pixel, acc);
+    passMax_ = std::max(passMax_, addTo(next_->sums, pixel, acc));
 }
 
-void TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAccumulator& acc) {
+double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAccumulator& acc) {
     const TileRect r = film_.tileRect(tile_);
     const size_t perBin = static_cast<size_t>(r.w) * r.h * 3;
     // The averages are read as float: a pass whose contribution would push a sum past FLT_MAX (a
     // light power near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this
     // pixel and counted, so the film never holds (or shows) Inf. Checked first, then added, so a
-    // pixel gets all of the pass or none of it.
-    const auto fits = [](double sum, double add) {
-        const double r = sum + add;
-        return r >= -static_cast<double>(FLT_MAX) && r <= static_cast<double>(FLT_MAX);  // false for NaN too
+    // pixel gets all of the pass or none of it. The check reads the pixel's own values only
+    // (contiguous) while the tile's bound (TileSums::absBound) says no sum can get near FLT_MAX,
+    // and every sum (a strided read per bin) only when it does.
+    double largest = 0.0;
+    const auto grow = [&largest](double x) {  // a NaN makes `largest` NaN (the full check then drops it)
+        x = std::abs(x);
+        if (!(x <= largest)) largest = x;
     };
-    bool ok = true;
-    for (int a = 0; a < 2 && ok; ++a) {
+    const auto grow3 = [&grow](const Color& c) { grow(c.x); grow(c.y); grow(c.z); };
+    for (int a = 0; a < 2; ++a) {
         const TimeAxis axis = static_cast<TimeAxis>(a);
-        for (int k = acc.lo(axis); k <= acc.hi(axis) && ok; ++k) {
-            const double* v = acc.bin(axis, k);
-            const FilmSum* dst = &t.bins[a][static_cast<size_t>(k) * perBin + pixel * 3];
-            ok = fits(dst[0], v[0]) && fits(dst[1], v[1]) && fits(dst[2], v[2]);
-        }
+        if (acc.hi(axis) < acc.lo(axis)) continue;
+        const double* v = acc.bin(axis, acc.lo(axis));
+        const size_t n = static_cast<size_t>(acc.hi(axis) - acc.lo(axis) + 1) * 3;
+        for (size_t j = 0; j < n; ++j) grow(v[j]);
+        grow3(acc.before(axis));
+        grow3(acc.after(axis));
     }
+    grow3(acc.steady());
     const size_t i = pixel * 3;
-    const auto fits3 = [&](const std::vector<double>& sum, const Color& add) {
-        return fits(sum[i], add.x) && fits(sum[i + 1], add.y) && fits(sum[i + 2], add.z);
-    };
-    ok = ok && fits3(t.steady, acc.steady());
-    for (int a = 0; a < 2 && ok; ++a)
-        ok = fits3(t.before[a], acc.before(static_cast<TimeAxis>(a))) && fits3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
-    if (!ok) {
-        film_.stats.overflowedPixels.fetch_add(1, std::memory_order_relaxed);
-        return;
+    if (!(t.absBound + largest <= 0.25 * static_cast<double>(FLT_MAX))) {  // also catches NaN
+        const auto fits = [](double sum, double add) {
+            const double r = sum + add;
+            return r >= -static_cast<double>(FLT_MAX) && r <= static_cast<double>(FLT_MAX);  // false for NaN too
+        };
+        bool ok = true;
+        for (int a = 0; a < 2 && ok; ++a) {
+            const TimeAxis axis = static_cast<TimeAxis>(a);
+            for (int k = acc.lo(axis); k <= acc.hi(axis) && ok; ++k) {
+                const double* v = acc.bin(axis, k);
+                const FilmSum* dst = &t.bins[a][static_cast<size_t>(k) * perBin + pixel * 3];
+                ok = fits(dst[0], v[0]) && fits(dst[1], v[1]) && fits(dst[2], v[2]);
+            }
+        }
+        const auto fits3 = [&](const std::vector<double>& sum, const Color& add) {
+            return fits(sum[i], add.x) && fits(sum[i + 1], add.y) && fits(sum[i + 2], add.z);
+        };
+        ok = ok && fits3(t.steady, acc.steady());
+        for (int a = 0; a < 2 && ok; ++a)
+            ok = fits3(t.before[a], acc.before(static_cast<TimeAxis>(a))) && fits3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
+        if (!ok) {
+            film_.stats.overflowedPixels.fetch_add(1, std::memory_order_relaxed);
+            return 0.0;
+        }
+        if (!std::isfinite(largest)) largest = 0.0;  // unreachable with finite sums; keeps the bound finite
     }
     for (int a = 0; a < 2; ++a) {
         const TimeAxis axis = static_cast<TimeAxis>(a);
@@ -309,6 +346,7 @@ void TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAccu
         add3(t.before[a], acc.before(static_cast<TimeAxis>(a)));
         add3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
     }
+    return largest;
 }
 
 void TransientFilm::frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {

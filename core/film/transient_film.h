@@ -147,8 +147,9 @@ public:
         TileWriter& operator=(const TileWriter&) = delete;
         void addPixel(int x, int y, PixelAccumulator& acc);
     private:
-        // Adds one pixel's pass to `sums` unless a sum would leave float's range (counted).
-        void addTo(TileSums& sums, size_t pixel, const PixelAccumulator& acc);
+        // Adds one pixel's pass to `sums` unless a sum would leave float's range (counted);
+        // returns the largest |value| it added (for TileSums::absBound), 0 when dropped.
+        double addTo(TileSums& sums, size_t pixel, const PixelAccumulator& acc);
         void commitStaged();
         TransientFilm& film_;
         int tile_;
@@ -156,6 +157,7 @@ public:
         std::shared_ptr<TileBlock> next_;  // the copy (no staging)
         TileStaging* staging_ = nullptr;
         std::vector<uint32_t> staged_;      // pixels in the staging, in the order they came
+        double passMax_ = 0.0;              // largest value added (no staging)
     };
 
     // The tiles' current blocks: cheap (a pointer copy per tile), never waits for a writer.
@@ -186,7 +188,7 @@ private:
     struct Tile {
         std::mutex writer;   // held by the tile's TileWriter (and merge, clear)
         // Guards `block`: held for a pointer copy or swap, and by an in-place add (which needs
-        // that no snapshot holds the block, i.e. block.use_count() == 1 under this lock).
+        // that no snapshot holds the block, i.e. block->readers() == 0 under this lock).
         mutable std::mutex publish;
         std::shared_ptr<TileBlock> block;
     };
