@@ -70,7 +70,7 @@ public:
     void candidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out,
                     const CandidateTest& test) const override {
         for (const Piece& p : pieces_)
-            if (p.region == region && test(candidate(p))) out.push_back(candidate(p));  // already in (beam, piece) order
+            if (p.region == region && test(candidate(p), p.origin, p.dir)) out.push_back(candidate(p));  // already in (beam, piece) order
     }
     std::string name() const override { return "brute-force"; }
     size_t pieceCount() const override { return pieces_.size(); }
@@ -158,7 +158,7 @@ private:
         // Embree reached this piece's padded box: a candidate, kept if the estimator's test accepts it.
         if (p.region != ctx->region) return;
         const BeamPiece c = candidate(p);
-        if ((*ctx->test)(c)) ctx->hits->push_back(c);
+        if ((*ctx->test)(c, p.origin, p.dir)) ctx->hits->push_back(c);
         // No hit is reported to Embree: traversal goes on and visits every candidate piece.
     }
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}

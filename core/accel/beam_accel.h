@@ -48,11 +48,16 @@ inline uint32_t beamPieceCount(double length, double radius) {
 
 // An estimator's exact test of one candidate piece (false: its kernel cannot reach the segment).
 // A plain function and a context pointer, called from inside the traversal: no allocation, no
-// virtual call per candidate. A null `accept` accepts every candidate.
+// virtual call per candidate. A null `accept` accepts every candidate. The accelerator hands the
+// piece's axis from its own contiguous copy (`origin`, unit `dir` of the beam; for a point, the
+// point and dir 0): the same values as the Beam's, so the test needs no load of the beam (a cache
+// miss per candidate, most of which it rejects).
 struct CandidateTest {
-    bool (*accept)(const void* context, const BeamPiece& piece) = nullptr;
+    bool (*accept)(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) = nullptr;
     const void* context = nullptr;
-    bool operator()(const BeamPiece& p) const { return !accept || accept(context, p); }
+    bool operator()(const BeamPiece& p, const Vec3& origin, const Vec3& dir) const {
+        return !accept || accept(context, p, origin, dir);
+    }
 };
 
 class BeamAccel {

@@ -25,6 +25,7 @@ inline double maxComponent(const Color& c) { return std::max(c.x, std::max(c.y, 
 inline double average(const Color& c) { return (c.x + c.y + c.z) / 3.0; }
 inline bool isFinite(const Color& c) { return std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z); }
 inline bool isBlack(const Color& c) { return c.x == 0.0 && c.y == 0.0 && c.z == 0.0; }
+inline bool isGrey(const Color& c) { return c.x == c.y && c.y == c.z; }  // one channel stands for all three
 
 // Orthonormal basis around a unit vector n (Duff et al. 2017, branchless).
 inline void coordinateSystem(const Vec3& n, Vec3& t, Vec3& b) {

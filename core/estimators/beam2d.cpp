@@ -94,8 +94,10 @@ bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& p
     // Eq. 8: L_b = sigma_s rho(theta) Phi_b / (pi r^2) * int T(s_r) T_b(s_b(s_r)) ds_r
     const Color& tauB = g.tauB;
     const double invArea = 1.0 / (kPi * r * r);  // 1 / Omega_R(r^2)
-    const Color integral(transmittanceIntegral(m.sigma_t.x, tauB.x, o), transmittanceIntegral(m.sigma_t.y, tauB.y, o),
-                         transmittanceIntegral(m.sigma_t.z, tauB.z, o));
+    const bool grey = isGrey(m.sigma_t) && isGrey(tauB);
+    const double ix = transmittanceIntegral(m.sigma_t.x, tauB.x, o);  // grey media: one channel computes all three
+    const Color integral = grey ? Color(ix) : Color(ix, transmittanceIntegral(m.sigma_t.y, tauB.y, o),
+                                                    transmittanceIntegral(m.sigma_t.z, tauB.z, o));
     const double rho = m.phase.eval(-c);  // scattering from w_b into -w_r (towards the camera)
     const Color L = g.path.beta * m.sigma_s * rho * b.power * invArea * integral;
     // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r.
@@ -111,12 +113,10 @@ namespace {
 struct CylinderTest {
     const Ray& ray;
     double sMax, radius;
-    const std::vector<Beam>& beams;
-    static bool accept(const void* context, const BeamPiece& piece) {
+    static bool accept(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
         const auto& t = *static_cast<const CylinderTest*>(context);
-        const Beam& b = t.beams[piece.beam];
         RayBeamOverlap o;
-        return rayBeamOverlap(t.ray.o, t.ray.d, t.sMax, b.origin, b.dir, piece.sbLo, piece.sbHi, t.radius, o);
+        return rayBeamOverlap(t.ray.o, t.ray.d, t.sMax, origin, dir, piece.sbLo, piece.sbHi, t.radius, o);
     }
 };
 }  // namespace
@@ -129,7 +129,7 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
                           beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
     scratch.pieces.clear();
-    const CylinderTest test{seg.ray, seg.sMax, pass_.radius, map_->beams};
+    const CylinderTest test{seg.ray, seg.sMax, pass_.radius};
     accel_->candidates(seg.ray.o, seg.ray.d, seg.sMax, seg.region, scratch.pieces, {&CylinderTest::accept, &test});
     NearShapes near(*scene_, seg.ray, seg.sMax, pass_.radius, scratch.shapes);
     int64_t estimates = 0;

@@ -26,10 +26,9 @@ namespace {
 struct PointKernelTest {
     const Ray& ray;
     double sMax, radius;
-    const std::vector<VolumePhoton>& points;
-    static bool accept(const void* context, const BeamPiece& candidate) {
+    static bool accept(const void* context, const BeamPiece&, const Vec3& point, const Vec3&) {
         const auto& t = *static_cast<const PointKernelTest*>(context);
-        return rayPointDisc(t.ray.o, t.ray.d, t.sMax, t.points[candidate.beam].position, t.radius).has_value();
+        return rayPointDisc(t.ray.o, t.ray.d, t.sMax, point, t.radius).has_value();
     }
 };
 }  // namespace
@@ -44,7 +43,7 @@ int64_t Point2DEstimator::gather(const CameraSegment& seg, const PathState& path
     const Medium& m = region.medium;
     const double eta = region.ior, r = pass_.radius;
     scratch.pieces.clear();
-    const PointKernelTest test{ray, seg.sMax, r, map_->points};
+    const PointKernelTest test{ray, seg.sMax, r};
     accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&PointKernelTest::accept, &test});
     bool haveNear = false;
     const double invArea = 1.0 / (kPi * r * r);  // K_2 = 1 / (pi r^2)

@@ -35,10 +35,9 @@ namespace {
 struct PointKernelTest {
     const Ray& ray;
     double sMax, radius;
-    const std::vector<VolumePhoton>& points;
-    static bool accept(const void* context, const BeamPiece& candidate) {
+    static bool accept(const void* context, const BeamPiece&, const Vec3& point, const Vec3&) {
         const auto& t = *static_cast<const PointKernelTest*>(context);
-        return rayPointChord(t.ray.o, t.ray.d, t.sMax, t.points[candidate.beam].position, t.radius).has_value();
+        return rayPointChord(t.ray.o, t.ray.d, t.sMax, point, t.radius).has_value();
     }
 };
 }  // namespace
@@ -53,11 +52,12 @@ int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path
     const Medium& m = region.medium;
     const double eta = region.ior, r = pass_.radius;
     scratch.pieces.clear();
-    const PointKernelTest test{ray, seg.sMax, r, map_->points};
+    const PointKernelTest test{ray, seg.sMax, r};
     accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&PointKernelTest::accept, &test});
     bool haveNear = false;
     const double invVolume = 3.0 / (4.0 * kPi * r * r * r);  // K_3
     const Color kappa = pass_.profile == TimeProfile::Exact ? m.sigma_t : Color(0.0);
+    const bool grey = isGrey(m.sigma_t);
     int64_t estimates = 0;
     for (const BeamPiece& candidate : scratch.pieces) {
         const VolumePhoton& p = map_->points[candidate.beam];
@@ -68,9 +68,9 @@ int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path
             haveNear = true;
         }
         if (!kernelPointVisible(scene, scratch.shapes, ray.at(0.5 * (chord->sMinus + chord->sPlus)), p.position)) continue;
-        const Color integral(chordTransmittance(m.sigma_t.x, chord->sMinus, chord->sPlus),
-                             chordTransmittance(m.sigma_t.y, chord->sMinus, chord->sPlus),
-                             chordTransmittance(m.sigma_t.z, chord->sMinus, chord->sPlus));
+        const double ix = chordTransmittance(m.sigma_t.x, chord->sMinus, chord->sPlus);
+        const Color integral = grey ? Color(ix) : Color(ix, chordTransmittance(m.sigma_t.y, chord->sMinus, chord->sPlus),
+                                                        chordTransmittance(m.sigma_t.z, chord->sMinus, chord->sPlus));
         const double rho = m.phase.eval(-glm::dot(p.dirIn, ray.d));  // scattering from w_p into -w_r
         const Color L = path.beta * m.sigma_s * rho * p.power * invVolume * integral;
         // t(s) = t_cam + t_p + eta s (real), t_p (unwarped); energy density exp(-sigma_t s) on the chord.

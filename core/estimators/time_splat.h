@@ -59,6 +59,29 @@ inline double expMassFraction(double kappa, double s0, double s1, double u, doub
     return ExpProfile(kappa, s0, s1).mass(u, v);
 }
 
+// The profile of one estimate on its segment, per channel: built once and spread on both time
+// axes (the profile depends on kappa and [s0, s1] only, not on the axis). Grey media (the three
+// kappas equal) evaluate one channel.
+struct SegmentProfile {
+    double s0, s1;
+    bool grey;
+    ExpProfile x, y, z;
+    SegmentProfile(const Color& kappa, double a, double b)
+        : s0(a), s1(b), grey(kappa.x == kappa.y && kappa.y == kappa.z), x(kappa.x, a, b),
+          y(grey ? x : ExpProfile(kappa.y, a, b)), z(grey ? x : ExpProfile(kappa.z, a, b)) {}
+    // Unnormalised mass on the decaying side of s, per channel, s clipped to [s0, s1].
+    Color cumulative(double s) const {
+        s = std::clamp(s, s0, s1);
+        const double cx = x.cumulative(s);
+        return grey ? Color(cx) : Color(cx, y.cumulative(s), z.cumulative(s));
+    }
+    // Share of the energy between two points of the segment (in either order): |M(q) - M(p)|.
+    Color share(const Color& cp, const Color& cq) const {
+        const double fx = std::abs(cq.x - cp.x) * x.invTotal;
+        return grey ? Color(fx) : Color(fx, std::abs(cq.y - cp.y) * y.invTotal, std::abs(cq.z - cp.z) * z.invTotal);
+    }
+};
+
 // Energy of one estimate that fell outside the film, split by side: `before` arrived before the
 // film's first bin (it still counts for continuous emission: a step response includes everything
 // that arrived earlier), `after` after its last bin (it counts only for the steady state).
@@ -67,10 +90,14 @@ struct OutsideFilm {
     Color after{0.0};
 };
 
+// Cost: an estimate inside one bin goes there whole (no transcendental call: its share is 1);
+// otherwise one expm1 per channel per bin boundary it crosses, each boundary shared by the two
+// bins on its sides (k1 - k0 + 2 per channel, not 2 per bin).
 template <class Sink>
-inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Color& kappa, double s0, double s1,
-                             double a, double b, Sink&& sink) {
+inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a, double b,
+                             Sink&& sink) {
     OutsideFilm out;
+    const double s0 = p.s0, s1 = p.s1;
     const double tA0 = a + b * s0, tB0 = a + b * s1;
     const double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
     const double len = s1 - s0;
@@ -81,32 +108,34 @@ inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Colo
         else sink(k, energy);
         return out;
     }
-    const bool grey = kappa.x == kappa.y && kappa.y == kappa.z;
-    const ExpProfile px(kappa.x, s0, s1);
-    const ExpProfile py = grey ? px : ExpProfile(kappa.y, s0, s1);
-    const ExpProfile pz = grey ? px : ExpProfile(kappa.z, s0, s1);
-    const auto massOn = [&](double u, double v) {  // share of the energy on s in [u, v], clipped to [s0, s1]
-        u = std::max(u, s0);
-        v = std::min(v, s1);
-        if (!(v > u)) return Color(0.0);
-        const double fx = px.mass(u, v);
-        return grey ? Color(fx) : Color(fx, py.mass(u, v), pz.mass(u, v));
-    };
-    // t(s) = a + b s crosses the film's start and end at these s (b != 0 here: the interval spans time).
-    const double sStart = (tb.startOpl - a) / b, sEnd = (tb.endOpl() - a) / b;
-    if (tA < tb.startOpl) out.before = energy * (b > 0.0 ? massOn(s0, sStart) : massOn(sStart, s1));
-    if (tB > tb.endOpl()) out.after = energy * (b > 0.0 ? massOn(sEnd, s1) : massOn(s0, sEnd));
-    const int k0 = std::max(tb.binOf(tA), 0);
-    const int k1 = std::min(tb.binOf(tB), tb.bins - 1);
+    const int kA = tb.binOf(tA), kB = tb.binOf(tB);
+    if (kA == kB && kA >= 0 && kA < tb.bins) {  // wholly inside one bin
+        sink(kA, energy);
+        return out;
+    }
+    // t(s) = a + b s crosses bin boundary j (time start + j binWidth) at s = (t_j - a) / b (b != 0
+    // here: the interval spans time); the film's start is boundary 0, its end boundary `bins`.
+    const auto cumulativeAt = [&](int j) { return p.cumulative((tb.startOpl + j * tb.binWidth - a) / b); };
+    const Color c0 = p.cumulative(s0), c1 = p.cumulative(s1);
+    const bool forward = b > 0.0;  // s grows with t
+    const int k0 = std::max(kA, 0), k1 = std::min(kB, tb.bins - 1);
+    Color lo = cumulativeAt(k0);
+    if (tA < tb.startOpl) out.before = energy * p.share(forward ? c0 : c1, lo);
     for (int k = k0; k <= k1; ++k) {
-        const double tLo = tb.startOpl + k * tb.binWidth;
-        double u = (tLo - a) / b, v = (tLo + tb.binWidth - a) / b;
-        if (u > v) std::swap(u, v);
-        const Color f = massOn(u, v);
+        const Color hi = cumulativeAt(k + 1);
+        const Color f = p.share(lo, hi);
+        lo = hi;
         if (isBlack(f)) continue;
         sink(k, energy * f);
     }
+    if (tB > tb.endOpl()) out.after = energy * p.share(lo, forward ? c1 : c0);
     return out;
+}
+
+template <class Sink>
+inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Color& kappa, double s0, double s1,
+                             double a, double b, Sink&& sink) {
+    return splatTime(tb, energy, SegmentProfile(kappa, s0, s1), a, b, sink);
 }
 
 }  // namespace tpb

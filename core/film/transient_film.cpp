@@ -76,8 +76,9 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
 
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
                  double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
+    const SegmentProfile profile(kappa, s0, s1);  // the same on both axes
     splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) {
-        return splatTime(time, L, kappa, s0, s1, a, b, sink);
+        return splatTime(time, L, profile, a, b, sink);
     });
 }
 
