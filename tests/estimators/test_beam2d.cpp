@@ -192,6 +192,41 @@ TEST(TimeSplat, MassConservedAndMatchesQuadrature) {
     }
 }
 
+// The one-bin shortcut (no transcendental call) gives the bin all of the energy, exactly; a
+// coloured kappa splats each channel as the grey splat with that channel's kappa would (the shared
+// SegmentProfile evaluates channels independently, the grey path one channel for all three).
+TEST(TimeSplat, OneBinIsExactAndChannelsMatchGreySplats) {
+    const TimeBins tb{0.0, 1.0, 4};
+    int calls = 0;
+    Color got(0.0);
+    const OutsideFilm out = splatTime(tb, Color(2.0, 3.0, 5.0), Color(1.0, 40.0, -7.0), 0.2, 0.3, 1.1, 1.0,
+                                      [&](int k, const Color& c) { ++calls; EXPECT_EQ(k, 1); got = c; });
+    EXPECT_EQ(calls, 1);
+    EXPECT_EQ(got.x, 2.0);
+    EXPECT_EQ(got.y, 3.0);
+    EXPECT_EQ(got.z, 5.0);
+    EXPECT_TRUE(isBlack(out.before) && isBlack(out.after));
+
+    const TimeBins fine{0.5, 0.01, 60};
+    const Color kappa(2.0, 35.0, -12.0);
+    const double s0 = 0.1, s1 = 0.6, a = 0.6, b = -0.7;  // time runs backwards along s and crosses the film start
+    std::vector<Color> colour(60, Color(0.0));
+    const OutsideFilm oc = splatTime(fine, Color(1.0), kappa, s0, s1, a, b, [&](int k, const Color& c) { colour[k] += c; });
+    for (int ch = 0; ch < 3; ++ch) {
+        std::vector<double> grey(60, 0.0);
+        const OutsideFilm og = splatTime(fine, Color(1.0), Color(kappa[ch]), s0, s1, a, b,
+                                         [&](int k, const Color& c) { grey[k] += c.x; });
+        EXPECT_EQ(oc.before[ch], og.before.x) << ch;
+        EXPECT_EQ(oc.after[ch], og.after.x) << ch;
+        double total = oc.before[ch] + oc.after[ch];
+        for (int k = 0; k < 60; ++k) {
+            EXPECT_EQ(colour[k][ch], grey[k]) << "channel " << ch << " bin " << k;
+            total += colour[k][ch];
+        }
+        EXPECT_NEAR(total, 1.0, 1e-12) << ch;
+    }
+}
+
 TEST(TimeSplat, CollapsedIntervalGoesToOneBin) {
     TimeBins tb{0.0, 0.1, 10};
     std::vector<double> bins(10, 0.0);
