@@ -42,7 +42,6 @@ int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path,
     accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces);
     NearShapes near(*scene_, ray, seg.sMax, r, scratch.shapes);
     const double kernel = 1.0 / (2.0 * r);  // K1(d), |d| < r
-    const bool grey = isGrey(m.sigma_t) && isGrey(g.tauB);
     int64_t estimates = 0;
     for (const BeamPiece& piece : scratch.pieces) {
         const Beam& b = map_->beams[piece.beam];
@@ -58,8 +57,8 @@ int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path,
         if (!closestPointOnPiece(ca->sb, piece.sbLo, piece.sbHi, b.length)) continue;
         const Vec3 xr = ray.at(ca->sr), xb = b.origin + ca->sb * b.dir;
         if (!kernelPointVisible(*scene_, near.get(), xr, xb)) continue;
-        const double tx = std::exp(-m.sigma_t.x * ca->sr - g.tauB.x * ca->sb);  // grey media: one channel for all three
-        const Color T = grey ? Color(tx) : Color(tx, std::exp(-m.sigma_t.y * ca->sr - g.tauB.y * ca->sb),
+        const double tx = std::exp(-m.sigma_t.x * ca->sr - g.tauB.x * ca->sb);
+        const Color T = g.grey ? Color(tx) : Color(tx, std::exp(-m.sigma_t.y * ca->sr - g.tauB.y * ca->sb),
                                                  std::exp(-m.sigma_t.z * ca->sr - g.tauB.z * ca->sb));
         const double rho = m.phase.eval(-ca->cosTheta);  // from w_b into -w_r (towards the camera)
         const Color L = path.beta * m.sigma_s * rho * b.power * T * (kernel / ca->sinTheta);

@@ -94,9 +94,8 @@ bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& p
     // Eq. 8: L_b = sigma_s rho(theta) Phi_b / (pi r^2) * int T(s_r) T_b(s_b(s_r)) ds_r
     const Color& tauB = g.tauB;
     const double invArea = 1.0 / (kPi * r * r);  // 1 / Omega_R(r^2)
-    const bool grey = isGrey(m.sigma_t) && isGrey(tauB);
-    const double ix = transmittanceIntegral(m.sigma_t.x, tauB.x, o);  // grey media: one channel computes all three
-    const Color integral = grey ? Color(ix) : Color(ix, transmittanceIntegral(m.sigma_t.y, tauB.y, o),
+    const double ix = transmittanceIntegral(m.sigma_t.x, tauB.x, o);
+    const Color integral = g.grey ? Color(ix) : Color(ix, transmittanceIntegral(m.sigma_t.y, tauB.y, o),
                                                     transmittanceIntegral(m.sigma_t.z, tauB.z, o));
     const double rho = m.phase.eval(-c);  // scattering from w_b into -w_r (towards the camera)
     const Color L = g.path.beta * m.sigma_s * rho * b.power * invArea * integral;

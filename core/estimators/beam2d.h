@@ -75,6 +75,8 @@ struct SegmentGather {
     Color tauB;            // beamAttenuation()
     TimeProfile profile;
     const PathState& path;
+    // Grey medium and beam attenuation: one channel of the transmittance stands for all three.
+    bool grey = isGrey(medium.sigma_t) && isGrey(tauB);
 };
 
 // Eqs. 8, 12-15 for one candidate piece [sbLo, sbHi] of beam b: adds its estimate (times the

@@ -116,11 +116,10 @@ inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Segm
     // t(s) = a + b s crosses bin boundary j (time start + j binWidth) at s = (t_j - a) / b (b != 0
     // here: the interval spans time); the film's start is boundary 0, its end boundary `bins`.
     const auto cumulativeAt = [&](int j) { return p.cumulative((tb.startOpl + j * tb.binWidth - a) / b); };
-    const Color c0 = p.cumulative(s0), c1 = p.cumulative(s1);
-    const bool forward = b > 0.0;  // s grows with t
+    const bool forward = b > 0.0;  // s grows with t: the segment's early end is s0, else s1
     const int k0 = std::max(kA, 0), k1 = std::min(kB, tb.bins - 1);
     Color lo = cumulativeAt(k0);
-    if (tA < tb.startOpl) out.before = energy * p.share(forward ? c0 : c1, lo);
+    if (tA < tb.startOpl) out.before = energy * p.share(p.cumulative(forward ? s0 : s1), lo);
     for (int k = k0; k <= k1; ++k) {
         const Color hi = cumulativeAt(k + 1);
         const Color f = p.share(lo, hi);
@@ -128,7 +127,7 @@ inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Segm
         if (isBlack(f)) continue;
         sink(k, energy * f);
     }
-    if (tB > tb.endOpl()) out.after = energy * p.share(lo, forward ? c1 : c0);
+    if (tB > tb.endOpl()) out.after = energy * p.share(lo, p.cumulative(forward ? s1 : s0));
     return out;
 }
 
