@@ -138,6 +138,10 @@ void RenderOverrides::add(CLI::App* cmd) {
     cmd->add_option("--time", timeBudget, "Time budget in seconds")
         ->check(number(0.0, kInf, false, "seconds; 0 = no time budget"));
     cmd->add_option("--photons", photons, "Photons traced per pass")->transform(integer(1, INT64_MAX, "photons per pass"));
+    cmd->add_option("--warmup", warmup,
+                    "Warm-up passes: the first W passes trace photons/2^W, ..., photons/2 (a first picture sooner; "
+                    "default 0, the viewer 3)")
+        ->transform(integer(0, kMaxWarmupPasses, "0 = no warm-up"));
     cmd->add_option("--radius", radius, "Initial beam kernel radius, m (absolute)")
         ->check(number(0.0, kMaxSceneCoordinateM, true, "meters"));
     cmd->add_option("--alpha", alpha, "Progressive radius shrink parameter in (0, 1]")
@@ -182,6 +186,7 @@ SettingsOverrides RenderOverrides::settings() const {
     SettingsOverrides o;
     o.passes = passes;
     o.photons = photons;
+    o.warmup = warmup;
     o.timeBudget = timeBudget;
     o.radius = radius;
     o.alpha = alpha;

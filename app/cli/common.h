@@ -22,6 +22,7 @@ namespace tpb::app {
 
 struct RenderOverrides {
     std::optional<int64_t> passes, photons;
+    std::optional<int> warmup;
     std::optional<double> timeBudget, radius, alpha;
     std::optional<int> threads, width, height, bins, maxDepth;
     std::optional<uint64_t> seed;

@@ -26,6 +26,8 @@ void run(const ViewCmd& c) {
     // The integrator the viewer's Driver runs (checked by the flag's IsMember when parsed).
     prepared.settings.method = *parseMethod(c.method);
     prepared.settings.samplesPerPixel = c.spp;
+    // The viewer warms up (a first picture sooner, render_settings.h) unless told otherwise.
+    if (!c.ov.warmup && !prepared.source.wrote("render.warmup")) prepared.settings.warmupPasses = kViewerWarmupPasses;
     runViewer(prepared, c.view);
 }
 

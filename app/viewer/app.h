@@ -210,6 +210,10 @@ private:
     bool snapRequested_ = false;  // F12 / the button: save the window to the export folder
     int snapCount_ = 0;
 
+    // Timeline of the current accumulation (glfwGetTime, s): when it (re)started, when a fetched
+    // image first had light in it (-1: not yet), for the Progress section and the screenshot report.
+    double startedAt_ = 0.0, firstLightSec_ = -1.0;
+
     int settleFrames_ = 0;
     bool screenshotTaken_ = false;
     std::string scriptError_;  // a --click that could not be done

@@ -52,6 +52,8 @@ void Viewer::restart(const RenderSettings& s, const std::string& why) {
     ++generation_;
     edit_ = driver_->settings();
     driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
+    startedAt_ = glfwGetTime();
+    firstLightSec_ = -1.0;
     status_ = why;
     if (!why.empty()) {
         std::printf("%s (photons/pass %lld, alpha %.4g, initial radius %.6g m, pass limit %lld)\n", why.c_str(),
@@ -116,6 +118,8 @@ void Viewer::updateFrame() {
         image_.upload(snap->width(), snap->height(), frameRgb_.data());
         imageDirty_ = true;
         fitPendingExposure(key);
+        if (firstLightSec_ < 0.0 && std::any_of(frameRgb_.begin(), frameRgb_.end(), [](float v) { return v > 0.0f; }))
+            firstLightSec_ = glfwGetTime() - startedAt_;
         fetchSec_ = glfwGetTime() - now;  // the fit included (it sorts the lit pixels)
     }
     DisplayParams p = st_.display;

@@ -327,7 +327,16 @@ void Viewer::drawProgressSection() {
         ImGui::Text("geometry preview (steady image only)");
         ImGui::TextDisabled(" ");
     } else if (done > 0) {
-        ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
+        // During the warm-up (render_settings.h) the last pass traced fewer photons: say so.
+        const bool warmup = last.pass <= static_cast<uint64_t>(s.warmupPasses);
+        if (warmup)
+            ImGui::Text("kernel radius %.4g m (surface %.4g m), warm-up %llu/%d", last.beamRadius, last.surfaceRadius,
+                        static_cast<unsigned long long>(last.pass), s.warmupPasses);
+        else
+            ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
+        if (warmup && ImGui::IsItemHovered())
+            ImGui::SetTooltip("the first %d passes trace photons/2^%d ... photons/2 for a first picture sooner\n"
+                              "(Render settings: warm-up passes; --warmup)", s.warmupPasses, s.warmupPasses);
         // What the volume estimator gathers from: beams, photon points (point2d/point3d) or both.
         if (last.points > 0 && last.beams == 0)
             ImGui::Text("points per pass %lld  (%lld photons)", static_cast<long long>(last.points),
@@ -346,7 +355,9 @@ void Viewer::drawProgressSection() {
         ImGui::Text("time per pass %.3f s", last.passSec);
         ImGui::TextDisabled("trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
                             last.cameraSec);
-        ImGui::Text("total time %.2f s", last.elapsedSec);
+        // How fast the picture came (issue 15): the first fetched image with light in it.
+        if (firstLightSec_ >= 0.0) ImGui::Text("total time %.2f s  (first light after %.2f s)", last.elapsedSec, firstLightSec_);
+        else ImGui::Text("total time %.2f s", last.elapsedSec);
     } else {
         ImGui::TextDisabled("time per pass -");
         ImGui::TextDisabled("trace -, build -, camera -");
@@ -450,6 +461,13 @@ void Viewer::drawSettingsSection() {
     ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     track("photons / pass");
+    int warm = edit_.warmupPasses;
+    ImGui::InputInt("warm-up passes", &warm, 1, 1);
+    edit_.warmupPasses = std::clamp(warm, 0, kMaxWarmupPasses);
+    apply |= ImGui::IsItemDeactivatedAfterEdit();
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("the first W passes trace photons/2^W ... photons/2 (as --warmup); 0 = none");
+    track("warm-up passes");
     ImGui::InputDouble("alpha", &edit_.alpha, 0.05, 0.1, "%.3f");
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     track("alpha");
@@ -463,13 +481,14 @@ void Viewer::drawSettingsSection() {
     track("pass limit (0: none)");
     if (!apply) return;
     const RenderSettings& cur = driver_->settings();
-    if (edit_.photonsPerPass == cur.photonsPerPass && edit_.alpha == cur.alpha &&
+    if (edit_.photonsPerPass == cur.photonsPerPass && edit_.warmupPasses == cur.warmupPasses && edit_.alpha == cur.alpha &&
         edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
         return;
     // The edited fields as overrides, checked by the one validate() (render_settings.h); everything
     // else (seed, threads, surface radius...) as before.
     SettingsOverrides o;
     o.photons = edit_.photonsPerPass;
+    o.warmup = edit_.warmupPasses;
     o.alpha = edit_.alpha;
     o.radius = edit_.beamRadius0;
     o.passes = edit_.passes;

@@ -233,6 +233,12 @@ void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
                 static_cast<double>(st_.showSteady ? st_.evSteady : st_.evFrame), st_.bin, st_.showSteady ? 1 : 0,
                 st_.mode == EmissionMode::Delta ? "delta" : "continuous",
                 st_.axis == TimeAxis::Real ? "real" : "unwarped");
+    // How fast the picture came: seconds from the driver's start to the first fetched image with
+    // light, and to the end of each pass (the warm-up's effect; issue 15's targets: light within 1 s,
+    // four passes within 3 s).
+    std::printf("timeline first_light_s %.3f warmup %d pass_end_s", firstLightSec_, driver_->settings().warmupPasses);
+    for (const PassStats& ps : driver_->history()) std::printf(" %.3f", ps.elapsedSec);
+    std::printf("\n");
     // The controls (window pixels) now and in the first frame, drawn while the first pass rendered.
     std::printf("messages_area %.1f %.1f\n", controlsMinX_, controlsMaxX_);
     std::printf("layout_first passes %llu running %d\n", static_cast<unsigned long long>(firstPasses_),

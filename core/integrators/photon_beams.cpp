@@ -52,7 +52,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     PhotonPassParams pt;
     pt.seed = settings_.seed;
     pt.pass = ctx.pass;
-    pt.photons = settings_.photonsPerPass;
+    pt.photons = settings_.photonsForPass(ctx.pass);  // fewer during the warm-up
     pt.maxDepth = settings_.maxDepth;
     // Only what the volume estimator reads (beams, points at scattering events, or both).
     const VolumeEstimator::Needs needs = volume_->needs();

@@ -47,10 +47,17 @@ std::string timeKernelName(const TimeKernelSettings& k) {
     return "box:" + shortNumber(k.width);
 }
 
+int64_t RenderSettings::photonsForPass(uint64_t pass) const {
+    if (warmupPasses <= 0 || pass > static_cast<uint64_t>(warmupPasses)) return photonsPerPass;
+    const int shift = warmupPasses + 1 - static_cast<int>(pass);  // 1 .. warmupPasses
+    return std::max<int64_t>(1, photonsPerPass >> shift);
+}
+
 RenderSettings RenderSettings::fromDesc(const RenderDesc& r, double sceneDiagonal) {
     const double diag = sceneDiagonal > 0.0 ? sceneDiagonal : 1.0;
     RenderSettings s;
     s.photonsPerPass = r.photonsPerPass;
+    s.warmupPasses = r.warmup;
     s.beamRadius0 = r.radiusRelative ? r.radius * diag : r.radius;
     s.surfaceRadius0 = r.radiusRelative ? r.surfaceRadius * diag : r.surfaceRadius;
     s.alpha = r.alpha;
@@ -77,6 +84,7 @@ void RenderSettings::apply(const SettingsOverrides& o) {
         if (!o.passes) passes = 0;  // a time budget alone means: as many passes as fit
     }
     if (o.photons) photonsPerPass = *o.photons;
+    if (o.warmup) warmupPasses = *o.warmup;
     if (o.radius) beamRadius0 = *o.radius;
     if (o.alpha) alpha = *o.alpha;
     if (o.threads) threads = *o.threads;
@@ -206,6 +214,10 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
             "must be a finite number of seconds >= 0 (0 = no time budget)", shortNumber(timeBudgetSec));
     c.check(maxDepth >= 1, c.field("max_depth", "--max-depth", ov.maxDepth.has_value()),
             "must be >= 1 (1 = single scattering)", std::to_string(maxDepth));
+    c.check(warmupPasses >= 0 && warmupPasses <= kMaxWarmupPasses, c.field("warmup", "--warmup", ov.warmup.has_value()),
+            "must be an integer from 0 (no warm-up) to " + std::to_string(kMaxWarmupPasses) +
+                " (warm-up passes with fewer photons)",
+            std::to_string(warmupPasses));
     c.check(samplesPerPixel >= 1, c.field("samples_per_pixel", "--spp", ov.samplesPerPixel.has_value()),
             "must be >= 1", std::to_string(samplesPerPixel));
     // ---- the estimators and the time kernel (photon beams only) ----

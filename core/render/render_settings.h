@@ -38,6 +38,7 @@ std::string timeKernelName(const TimeKernelSettings& k);  // the inverse: "none"
 struct SettingsOverrides {
     std::optional<Method> method;
     std::optional<int64_t> passes, photons;
+    std::optional<int> warmup;         // --warmup
     std::optional<double> timeBudget;  // s; given without passes it means "as many passes as fit"
     std::optional<double> radius;      // m, absolute: the volume kernel of pass 1 (--radius)
     std::optional<double> alpha;
@@ -64,6 +65,9 @@ struct SettingsSource {
     double sceneDiagonal = 0.0;
 };
 
+inline constexpr int kViewerWarmupPasses = 3;  // the viewer's default warm-up (pass 1 at 1/8 of the photons)
+inline constexpr int kMaxWarmupPasses = 20;
+
 struct RenderSettings {
     Method method = Method::Beams;
 
@@ -76,6 +80,17 @@ struct RenderSettings {
 
     // ---- photon beams (paper Sec. 4) ----
     int64_t photonsPerPass = 20000;
+    // Warm-up (issue 15: a first picture fast, refinements often): the first W passes trace fewer
+    // photons, photonsPerPass / 2^(W + 1 - i) for pass i <= W (at least 1), so pass 1 costs about
+    // 1/2^W of a full one; every later pass is the one a render without warm-up runs (pass i depends
+    // only on (seed, i)). Each pass is still an estimate of the same expected film at its radius
+    // (its photons' powers are divided by its own photon count), so the progressive average of
+    // equally weighted passes stays consistent; the warm-up passes only add their extra variance,
+    // sum_i (2^(W+1-i) - 1) var_1 / n^2 after n passes, which the average forgets like 1/n^2.
+    // 0 = off (`tpb render`); `tpb view` uses kViewerWarmupPasses unless the scene or --warmup sets it.
+    int warmupPasses = 0;
+    // The photons traced in pass `pass` (1-based): photonsPerPass after the warm-up.
+    int64_t photonsForPass(uint64_t pass) const;
     double beamRadius0 = 0.01;     // m, kernel radius of pass 1 (volume)
     double surfaceRadius0 = 0.02;  // m, kernel radius of pass 1 (surface photons)
     double alpha = 0.7;            // progressive shrink, (0, 1]

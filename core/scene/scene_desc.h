@@ -117,6 +117,7 @@ struct TimeKernelSettings {
 
 struct RenderDesc {
     int64_t photonsPerPass = 20000;
+    int warmup = 0;               // warm-up passes with fewer photons (RenderSettings::warmupPasses)
     double radius = 0.01;         // initial kernel radius
     bool radiusRelative = true;   // radius is a fraction of the scene's bounding diagonal
     double surfaceRadius = 0.02;  // initial surface-photon kernel radius (same convention)

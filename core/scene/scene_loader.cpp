@@ -59,6 +59,7 @@
 //   ],
 //   "render": {
 //     "photons_per_pass": 20000,         // integer >= 1
+//     "warmup": 0,                       // 0..20 first passes with fewer photons (1/2^W ... 1/2); the viewer: 3
 //     "radius": 0.01 | "radius_relative": 0.01,  // volume kernel radius, > 0: absolute (m) or a
 //                                                // fraction of the scene diagonal [relative 0.01];
 //                                                // at most 0.25 of the diagonal (a wider kernel makes a
@@ -749,6 +750,7 @@ void readLight(Context& ctx, const JsonValue& obj, const std::string& path, Ligh
 void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     Bag b(ctx, obj, "render", "render settings");
     r.photonsPerPass = b.integer("photons_per_pass", INT64_MIN, INT64_MAX).value_or(r.photonsPerPass);
+    r.warmup = static_cast<int>(b.integer("warmup", INT_MIN, INT_MAX).value_or(r.warmup));
 
     // Both radii share RenderDesc::radiusRelative.
     const std::optional<double> abs = b.number("radius"), rel = b.number("radius_relative");

@@ -338,6 +338,54 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
     EXPECT_EQ(a.steady, b.steady);
 }
 
+// The warm-up (render_settings.h): pass i <= W traces photons/2^(W+1-i) photons and divides their
+// power by that count. Photon k of a pass is drawn from (seed, pass, k) alone, so warm-up pass 1 of
+// a render with 8N photons and W = 3 is exactly pass 1 of a render with N photons: the same film,
+// bit for bit (an estimate that kept dividing by 8N would be 8x too dark). Passes after the
+// warm-up are those of a render without it.
+TEST(TransientBeams, WarmupPassesAreFullPassesWithFewerPhotons) {
+    auto sc = sceneFrom(kSingleScatter);
+    RenderSettings few = sc.settings;
+    few.threads = 2;
+    few.maxDepth = 3;
+    few.photonsPerPass = 1000;
+    RenderSettings warm = few;
+    warm.photonsPerPass = 8000;
+    warm.warmupPasses = 3;
+    RenderSettings full = warm;
+    full.warmupPasses = 0;
+    const auto pass = [&](const RenderSettings& s, uint64_t p, PassStats* stats = nullptr) {
+        Driver drv(*sc, s, sc.time);
+        EXPECT_TRUE(drv.runPass(p));
+        if (stats) *stats = drv.lastPass();
+        Rendered r;
+        drv.film().volume(TimeAxis::Real, EmissionMode::Delta, r.volume);
+        drv.film().steadyImage(r.steady);
+        return r;
+    };
+    PassStats ws, fs;
+    const Rendered w1 = pass(warm, 1, &ws), f1 = pass(few, 1, &fs);
+    EXPECT_EQ(ws.photons, 1000);
+    EXPECT_EQ(fs.photons, 1000);
+    EXPECT_NEAR(ws.emittedFlux.x, sc->lights[0].power.x, 1e-9 * sc->lights[0].power.x);
+    ASSERT_EQ(w1.volume.size(), f1.volume.size());
+    double total = 0.0;
+    for (size_t i = 0; i < w1.volume.size(); ++i) {
+        ASSERT_EQ(w1.volume[i], f1.volume[i]) << i;
+        total += w1.volume[i];
+    }
+    EXPECT_GT(total, 0.0);
+    EXPECT_EQ(w1.steady, f1.steady);
+    PassStats w3;
+    pass(warm, 3, &w3);
+    EXPECT_EQ(w3.photons, 4000);
+    // Pass 4, the first after the warm-up: the full render's pass 4.
+    const Rendered w4 = pass(warm, 4, &ws), f4 = pass(full, 4, &fs);
+    EXPECT_EQ(ws.photons, 8000);
+    EXPECT_EQ(w4.volume, f4.volume);
+    EXPECT_EQ(w4.steady, f4.steady);
+}
+
 TEST(TransientBeams, ExactAndUniformProfilesCarryTheSameEnergy) {
     auto sc = sceneFrom(denseScene());
     RenderSettings ds = sc.settings;

@@ -347,3 +347,38 @@ TEST(SceneLoaderRender, EstimatorAndTimeKernelKeys) {
                 AllOf(StartsWith("t.json:7: render.volume_estimator: "), HasSubstr("allowed: ")));
     EXPECT_THAT(errorOf([&] { load(R"({"volume_estimator": 2})"); }), HasSubstr("expected a string"));
 }
+
+TEST(RenderSettings, WarmupHalvesThePhotonsOfTheFirstPasses) {
+    RenderDesc r;
+    r.photonsPerPass = 4000;
+    r.warmup = 3;
+    RenderSettings s = RenderSettings::fromDesc(r, 1.0);
+    EXPECT_EQ(s.warmupPasses, 3);
+    const int64_t want[] = {500, 1000, 2000, 4000, 4000, 4000};
+    for (uint64_t p = 1; p <= 6; ++p) EXPECT_EQ(s.photonsForPass(p), want[p - 1]) << "pass " << p;
+    s.warmupPasses = 0;  // off: every pass traces them all
+    for (uint64_t p = 1; p <= 4; ++p) EXPECT_EQ(s.photonsForPass(p), 4000);
+    s.photonsPerPass = 5;  // never fewer than one photon
+    s.warmupPasses = 4;
+    EXPECT_EQ(s.photonsForPass(1), 1);
+    EXPECT_EQ(s.photonsForPass(3), 1);
+    EXPECT_EQ(s.photonsForPass(4), 2);
+    EXPECT_EQ(s.photonsForPass(5), 5);
+    SettingsOverrides o;
+    o.warmup = 1;
+    s.apply(o);
+    EXPECT_EQ(s.warmupPasses, 1);
+}
+
+TEST(RenderSettingsValidate, WarmupOutOfRangeIsNamedByFileLineOrFlag) {
+    SceneDesc d = fileWith({{"render.warmup", 14}});
+    d.render.warmup = kMaxWarmupPasses + 1;
+    EXPECT_THAT(validateFile(d), StartsWith("scene.json:14: render.warmup: warmup must be an integer from 0"));
+    d.render.warmup = -1;
+    EXPECT_THAT(validateFile(d), HasSubstr("(got -1)"));
+    d.render.warmup = kMaxWarmupPasses;
+    EXPECT_EQ(validateFile(d), "");
+    SettingsOverrides o;
+    o.warmup = 99;
+    EXPECT_THAT(validateFlags(o), StartsWith("--warmup must be an integer from 0"));
+}

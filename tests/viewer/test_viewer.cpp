@@ -272,8 +272,9 @@ protected:
     static fs::path reference(const Mode& m) {
         const fs::path out = dir_ / ("ref_" + m.name);
         if (!refs_.count(m.name)) {
+            // With the viewer's warm-up (render_settings.h kViewerWarmupPasses): the same passes.
             refs_[m.name] = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs +
-                                         m.flags + " -q -o " + q(out),
+                                         m.flags + " --warmup 3 -q -o " + q(out),
                                      out);
         }
         EXPECT_EQ(refs_[m.name].code, 0) << "tpb render failed: " << refs_[m.name].err;
@@ -565,7 +566,8 @@ TEST_F(ViewerTest, SwitchingEmissionModeRefitsTheExposure) {
 // first pass can take many seconds). The first pass here gathers for a few seconds (more photons);
 // the viewer reports each fit with the passes completed at that moment.
 TEST_F(ViewerTest, AutoExposureFitsTheTilesFinishedDuringTheFirstPass) {
-    const Proc r = viewRun("midpass", "--seed 7 --threads 2 --photons 40000 --passes 1 --after-passes 1");
+    // No warm-up: the test needs a first pass long enough to see its tiles arrive.
+    const Proc r = viewRun("midpass", "--seed 7 --threads 2 --photons 40000 --warmup 0 --passes 1 --after-passes 1");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
     std::istringstream in(r.out);
     std::string line;
@@ -590,7 +592,8 @@ TEST_F(ViewerTest, AutoExposureFitsTheTilesFinishedDuringTheFirstPass) {
 // click aimed while it renders lands on the same control after. (The Pause row went away at the
 // end and the statistics rows came in after pass 1, moving the Export buttons by rows.)
 TEST_F(ViewerTest, ControlsKeepTheirPlaceWhenTheRenderFinishes) {
-    const Proc& r = view(kModes[0]);
+    // No warm-up and many photons: the first frame is drawn while pass 1 renders.
+    const Proc r = viewRun("layout", "--seed 7 --threads 2 --photons 40000 --warmup 0 --passes 2 --after-passes 2");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
     EXPECT_NE(r.out.find("layout_first passes 0 running 1"), std::string::npos) << r.out;
     const std::map<std::string, Rect> first = parseControls(r.out, "control_first");
@@ -710,3 +713,35 @@ TEST(ViewerCli, BadFlagValuesAreRefusedNamingTheFlag) {
 }
 
 }  // namespace
+
+// The viewer warms up by default (render_settings.h kViewerWarmupPasses) and reports its timeline:
+// when light was first on screen and when each pass ended (seconds from the start, increasing).
+// --warmup 0 turns the warm-up off. (No timing is asserted: the machines are shared.)
+TEST_F(ViewerTest, TimelineReportsFirstLightAndTheWarmup) {
+    const auto timeline = [](const std::string& out, int& warmup, std::vector<double>& ends) {
+        const size_t at = out.find("timeline first_light_s ");
+        if (at == std::string::npos) return -2.0;
+        double first = -2.0;
+        int used = 0;
+        if (std::sscanf(out.c_str() + at, "timeline first_light_s %lf warmup %d pass_end_s%n", &first, &warmup, &used) < 2)
+            return -2.0;
+        std::istringstream rest(out.substr(at + static_cast<size_t>(used), out.find('\n', at) - at - used));
+        for (double t; rest >> t;) ends.push_back(t);
+        return first;
+    };
+    const Proc& r = view(kModes[0]);
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    int warmup = -1;
+    std::vector<double> ends;
+    const double first = timeline(r.out, warmup, ends);
+    EXPECT_GE(first, 0.0) << r.out;  // the film has light: it was shown
+    EXPECT_EQ(warmup, 3);
+    ASSERT_EQ(ends.size(), 2u) << r.out;
+    EXPECT_GT(ends[0], 0.0);
+    EXPECT_GT(ends[1], ends[0]);
+    const Proc off = viewRun("nowarmup", kRenderArgs + " --warmup 0 --after-passes 1");
+    ASSERT_EQ(off.code, 0) << off.out << off.err;
+    ends.clear();
+    timeline(off.out, warmup, ends);
+    EXPECT_EQ(warmup, 0) << off.out;
+}
