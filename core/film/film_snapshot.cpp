@@ -6,12 +6,13 @@
 
 namespace tpb {
 
-void TileSums::zero(size_t pixels, int binCount) {
+void TileSums::zero(size_t pixels, int bins_) {
     passes = 0;
+    binCount = bins_;
     absBound = 0.0;
     steady.assign(pixels * 3, 0.0);
     for (int a = 0; a < 2; ++a) {
-        bins[a].assign(pixels * static_cast<size_t>(binCount) * 3, FilmSum(0));
+        bins[a].assign(pixels * static_cast<size_t>(bins_) * 3, FilmSum(0));
         before[a].assign(pixels * 3, 0.0);
         after[a].assign(pixels * 3, 0.0);
     }
@@ -24,16 +25,18 @@ const std::vector<double>& TileBlock::cumulative(TimeAxis axis) const {
     cumulativeValid_[a] = true;
     [&] {
         const FilmSums& src = sums.bins[a];
-        const size_t n = sums.before[a].size();  // pixels x rgb
+        const size_t pixels = sums.before[a].size() / 3;
         std::vector<double>& cum = cumulative_[a];
         cum.resize(src.size());
-        if (n == 0) return;
-        const size_t binCount = src.size() / n;
+        const size_t binCount = static_cast<size_t>(sums.binCount);
+        if (pixels == 0 || binCount == 0) return;
         // Bin 0 starts from what arrived before the film; each next bin adds to the previous one
         // (the same additions, in the same order, as a running sum over the bins).
-        for (size_t i = 0; i < n; ++i) cum[i] = sums.before[a][i] + src[i];
-        for (size_t k = 1; k < binCount; ++k)
-            for (size_t i = 0; i < n; ++i) cum[k * n + i] = cum[(k - 1) * n + i] + src[k * n + i];
+        for (size_t p = 0; p < pixels; ++p) {
+            const size_t i0 = sums.binIndex(p, 0);
+            for (int c = 0; c < 3; ++c) cum[i0 + c] = sums.before[a][p * 3 + c] + src[i0 + c];
+            for (size_t j = i0 + 3; j < i0 + binCount * 3; ++j) cum[j] = cum[j - 3] + src[j];
+        }
     }();
     return cumulative_[a];
 }

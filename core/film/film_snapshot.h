@@ -43,14 +43,17 @@ struct TileRect { int x0, y0, w, h; };
 // extra double rounding per value, ~1e-16, against ~1e-7 in float: tests/film/test_transient_film.cpp).
 // Memory: bins x 2 axes x RGB x 8 bytes per pixel (memory_budget.h).
 using FilmSum = double;
-// The per-bin sums of a tile: large and written with a stride, so in huge pages (base/large_buffer.h).
+// The per-bin sums of a tile: large, so in huge pages (base/large_buffer.h).
 using FilmSums = std::vector<FilmSum, LargeBufferAllocator<FilmSum>>;
 
 // The sums of one tile over the passes it has completed (not averaged).
 struct TileSums {
     int64_t passes = 0;
-    // Per axis: [bin][pixel in tile][rgb], so a frame reads one contiguous block per tile.
+    // Per axis: [pixel in tile][bin][rgb] (binIndex), so a pass adds each pixel's time series to one
+    // contiguous run (issue 15: the [bin][pixel] layout made every bin of the add a cache miss, a
+    // fifth of a 1024-bin pass); a frame reads one value per pixel with a stride of bins x 3.
     FilmSums bins[2];
+    int binCount = 0;
     std::vector<double> steady;                // [pixel][rgb]
     std::vector<double> before[2], after[2];  // per axis, [pixel][rgb]: light before the first bin / after the last
     // An upper bound of |every sum| in the tile (grows by each pass's largest value; merges add the
@@ -58,6 +61,10 @@ struct TileSums {
     // cannot push a sum out of float's range and the writer skips the per-value check.
     double absBound = 0.0;
     void zero(size_t pixels, int binCount);
+    // Index in bins[axis] of the red value of `bin` of the tile's pixel `pixel`.
+    size_t binIndex(size_t pixel, int bin) const {
+        return (pixel * static_cast<size_t>(binCount) + static_cast<size_t>(bin)) * 3;
+    }
 };
 
 class TileBlock {

@@ -21,6 +21,19 @@ void putTile(const FilmSnapshot& s, int tile, const T* src, double inv, std::vec
                     static_cast<float>(static_cast<double>(src[(static_cast<size_t>(py) * r.w + px) * 3 + c]) * inv);
 }
 
+// Writes bin `bin` of a tile's [pixel][bin][rgb] sums (times `inv`) into the W*H*3 image.
+template <class T>
+void putTileBin(const FilmSnapshot& s, int tile, const TileSums& sums, const T* src, int bin, double inv,
+                std::vector<float>& out) {
+    const TileRect& r = s.tileRect(tile);
+    for (int py = 0; py < r.h; ++py)
+        for (int px = 0; px < r.w; ++px) {
+            const T* v = src + sums.binIndex(static_cast<size_t>(py) * r.w + px, bin);
+            float* dst = &out[((static_cast<size_t>(r.y0 + py) * s.width()) + r.x0 + px) * 3];
+            for (int c = 0; c < 3; ++c) dst[c] = static_cast<float>(static_cast<double>(v[c]) * inv);
+        }
+}
+
 enum class PerPixel { Steady, Before, After };
 
 std::vector<float> perPixelImage(const FilmSnapshot& s, PerPixel which, TimeAxis axis) {
@@ -43,10 +56,8 @@ std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, Emi
     const int a = static_cast<int>(axis);
     for (int t = 0; t < s.tileCount(); ++t) {
         const TileBlock& b = s.block(t);
-        const size_t n = static_cast<size_t>(s.tileRect(t).w) * s.tileRect(t).h * 3;
-        const size_t offset = static_cast<size_t>(bin) * n;
-        if (mode == EmissionMode::Continuous) putTile(s, t, b.cumulative(axis).data() + offset, inversePasses(b.sums), out);
-        else putTile(s, t, b.sums.bins[a].data() + offset, inversePasses(b.sums), out);
+        if (mode == EmissionMode::Continuous) putTileBin(s, t, b.sums, b.cumulative(axis).data(), bin, inversePasses(b.sums), out);
+        else putTileBin(s, t, b.sums, b.sums.bins[a].data(), bin, inversePasses(b.sums), out);
     }
     return out;
 }
@@ -66,11 +77,10 @@ void forEachBin(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode
     const int a = static_cast<int>(axis);
     const double inv = inversePasses(t);
     const size_t pixel = static_cast<size_t>(y - r.y0) * r.w + (x - r.x0);
-    const size_t n = static_cast<size_t>(r.w) * r.h * 3;
     double run[3] = {0.0, 0.0, 0.0};
     if (mode == EmissionMode::Continuous) std::copy(&t.before[a][pixel * 3], &t.before[a][pixel * 3] + 3, run);
     for (int k = 0; k < s.bins(); ++k) {
-        const FilmSum* v = &t.bins[a][static_cast<size_t>(k) * n + pixel * 3];
+        const FilmSum* v = &t.bins[a][t.binIndex(pixel, k)];
         double rgb[3];
         for (int c = 0; c < 3; ++c) {
             run[c] = (mode == EmissionMode::Continuous ? run[c] : 0.0) + v[c];
@@ -114,12 +124,23 @@ std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mo
 }
 
 std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis) {
-    std::vector<double> energy(static_cast<size_t>(s.bins()), 0.0);
-    for (int k = 0; k < s.bins(); ++k) {
-        const std::vector<float> img = frameImage(s, k, axis, EmissionMode::Delta);
-        double sum = 0.0;
-        for (size_t p = 0; p + 2 < img.size(); p += 3) sum += luminance(Color(img[p], img[p + 1], img[p + 2]));
-        energy[static_cast<size_t>(k)] = sum;
+    // The luminance of each pixel's average as a frame shows it (float), summed over the image; read
+    // pixel by pixel, each one's time series contiguous (TileSums layout).
+    const int bins = s.bins();
+    std::vector<double> energy(static_cast<size_t>(bins), 0.0);
+    const int a = static_cast<int>(axis);
+    for (int t = 0; t < s.tileCount(); ++t) {
+        const TileSums& sums = s.block(t).sums;
+        const double inv = inversePasses(sums);
+        const TileRect& r = s.tileRect(t);
+        const size_t pixels = static_cast<size_t>(r.w) * r.h;
+        for (size_t p = 0; p < pixels; ++p) {
+            const FilmSum* v = &sums.bins[a][sums.binIndex(p, 0)];
+            for (int k = 0; k < bins; ++k, v += 3) {
+                const auto f = [inv](FilmSum x) { return static_cast<float>(static_cast<double>(x) * inv); };
+                energy[static_cast<size_t>(k)] += luminance(Color(f(v[0]), f(v[1]), f(v[2])));
+            }
+        }
     }
     return energy;
 }

@@ -276,14 +276,12 @@ void TransientFilm::TileWriter::addPixel(int x, int y, PixelAccumulator& acc) {
 }
 
 double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAccumulator& acc) {
-    const TileRect r = film_.tileRect(tile_);
-    const size_t perBin = static_cast<size_t>(r.w) * r.h * 3;
     // The averages are read as float: a pass whose contribution would push a sum past FLT_MAX (a
     // light power near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this
     // pixel and counted, so the film never holds (or shows) Inf. Checked first, then added, so a
     // pixel gets all of the pass or none of it. The check reads the pixel's own values only
-    // (contiguous) while the tile's bound (TileSums::absBound) says no sum can get near FLT_MAX,
-    // and every sum (a strided read per bin) only when it does.
+    // while the tile's bound (TileSums::absBound) says no sum can get near FLT_MAX, and every sum
+    // it adds to only when it does.
     double largest = 0.0;
     const auto grow = [&largest](double x) {  // a NaN makes `largest` NaN (the full check then drops it)
         x = std::abs(x);
@@ -311,7 +309,7 @@ double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAc
             const TimeAxis axis = static_cast<TimeAxis>(a);
             for (int k = acc.lo(axis); k <= acc.hi(axis) && ok; ++k) {
                 const double* v = acc.bin(axis, k);
-                const FilmSum* dst = &t.bins[a][static_cast<size_t>(k) * perBin + pixel * 3];
+                const FilmSum* dst = &t.bins[a][t.binIndex(pixel, k)];
                 ok = fits(dst[0], v[0]) && fits(dst[1], v[1]) && fits(dst[2], v[2]);
             }
         }
@@ -329,13 +327,12 @@ double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAc
     }
     for (int a = 0; a < 2; ++a) {
         const TimeAxis axis = static_cast<TimeAxis>(a);
-        for (int k = acc.lo(axis); k <= acc.hi(axis); ++k) {
-            const double* v = acc.bin(axis, k);
-            FilmSum* dst = &t.bins[a][static_cast<size_t>(k) * perBin + pixel * 3];
-            dst[0] += static_cast<FilmSum>(v[0]);
-            dst[1] += static_cast<FilmSum>(v[1]);
-            dst[2] += static_cast<FilmSum>(v[2]);
-        }
+        if (acc.hi(axis) < acc.lo(axis)) continue;
+        // The pixel's touched bins, contiguous in both (PixelAccumulator: [bin][rgb]).
+        const double* v = acc.bin(axis, acc.lo(axis));
+        FilmSum* dst = &t.bins[a][t.binIndex(pixel, acc.lo(axis))];
+        const size_t n = static_cast<size_t>(acc.hi(axis) - acc.lo(axis) + 1) * 3;
+        for (size_t j = 0; j < n; ++j) dst[j] += static_cast<FilmSum>(v[j]);
     }
     const auto add3 = [i](std::vector<double>& dst, const Color& c) {
         dst[i] += c.x;

@@ -52,10 +52,9 @@ TEST(FilmView, ContinuousFrameIsBeforePlusTheDeltaBinsSoFar) {
                     const int t = s->tileOf(x, y);
                     const TileRect& r = s->tileRect(t);
                     const size_t pix = static_cast<size_t>(y - r.y0) * r.w + (x - r.x0);
-                    const size_t n = static_cast<size_t>(r.w) * r.h * 3;
                     for (int c = 0; c < 3; ++c) {
                         const size_t i = (static_cast<size_t>(y) * W + x) * 3 + c;
-                        raw[i] += s->block(t).sums.bins[a][static_cast<size_t>(k) * n + pix * 3 + c];
+                        raw[i] += s->block(t).sums.bins[a][s->block(t).sums.binIndex(pix, k) + c];
                         sumDelta[i] += delta[i];
                         EXPECT_EQ(cont[i], static_cast<float>(raw[i] * (1.0 / 3.0))) << x << "," << y << " bin " << k;
                         maxRel = std::max(maxRel, std::abs(cont[i] - sumDelta[i]) / std::max(1e-30, std::abs(sumDelta[i])));
