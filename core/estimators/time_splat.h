@@ -34,14 +34,18 @@ struct TimeBins {
 // M(s) = (1 - exp(-|kappa| (s' - s0))) / (1 - exp(-|kappa| len)), s' = s (kappa >= 0) or s0 + s1 - s.
 // The mass in a bin is M(v) - M(u): one expm1 per bin boundary. (Differences of M lose relative
 // precision only in bins whose share is itself tiny, so the absolute error stays ~1e-16 of E.)
+// The normalisation 1 / total is computed on first use: an estimate that lands in one bin (most
+// of them on coarse films) never needs it, nor its expm1.
 struct ExpProfile {
-    double kappa, s0, s1, invTotal;
+    double kappa, s0, s1;
     bool uniform;
     ExpProfile(double k, double a, double b) : kappa(std::abs(k)), s0(a), s1(b) {
-        const double len = b - a;
-        uniform = !(kappa * len > 1e-12);
-        invTotal = uniform ? 1.0 / len : 1.0 / -std::expm1(-kappa * len);
+        uniform = !(kappa * (b - a) > 1e-12);
         reflect = k < 0.0;
+    }
+    double invTotal() const {
+        if (!(invTotal_ >= 0.0)) invTotal_ = uniform ? 1.0 / (s1 - s0) : 1.0 / -std::expm1(-kappa * (s1 - s0));
+        return invTotal_;
     }
     double cumulative(double s) const {  // unnormalised mass on the decaying side of s
         const double x = reflect ? (s1 - s) : (s - s0);
@@ -49,9 +53,12 @@ struct ExpProfile {
     }
     double mass(double u, double v) const {
         const double m = reflect ? cumulative(u) - cumulative(v) : cumulative(v) - cumulative(u);
-        return std::max(0.0, m) * invTotal;
+        return std::max(0.0, m) * invTotal();
     }
     bool reflect = false;
+
+private:
+    mutable double invTotal_ = -1.0;  // < 0: not computed yet
 };
 
 // Fraction of the mass of exp(-kappa s) on [s0, s1] that lies in [u, v] (s0 <= u <= v <= s1).
@@ -77,8 +84,8 @@ struct SegmentProfile {
     }
     // Share of the energy between two points of the segment (in either order): |M(q) - M(p)|.
     Color share(const Color& cp, const Color& cq) const {
-        const double fx = std::abs(cq.x - cp.x) * x.invTotal;
-        return grey ? Color(fx) : Color(fx, std::abs(cq.y - cp.y) * y.invTotal, std::abs(cq.z - cp.z) * z.invTotal);
+        const double fx = std::abs(cq.x - cp.x) * x.invTotal();
+        return grey ? Color(fx) : Color(fx, std::abs(cq.y - cp.y) * y.invTotal(), std::abs(cq.z - cp.z) * z.invTotal());
     }
 };
 
