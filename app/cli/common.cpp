@@ -144,6 +144,9 @@ void RenderOverrides::add(CLI::App* cmd) {
         ->transform(integer(0, kMaxWarmupPasses, "0 = no warm-up"));
     cmd->add_option("--radius", radius, "Initial beam kernel radius, m (absolute)")
         ->check(number(0.0, kMaxSceneCoordinateM, true, "meters"));
+    cmd->add_flag("--auto-radius", autoRadius,
+                  "Initial radius from the photon density of a pilot pass (as \"radius\": \"auto\"; `tpb info` shows it)")
+        ->excludes(cmd->get_option("--radius"));
     cmd->add_option("--alpha", alpha, "Progressive radius shrink parameter in (0, 1]")
         ->check(number(0.0, 1.0, true, "1 = no shrinking"));
     cmd->add_option("--threads", threads, "Worker threads (0 = all cores)")->transform(flags::threads());
@@ -189,6 +192,7 @@ SettingsOverrides RenderOverrides::settings() const {
     o.warmup = warmup;
     o.timeBudget = timeBudget;
     o.radius = radius;
+    o.autoRadius = autoRadius;
     o.alpha = alpha;
     o.threads = threads;
     o.maxDepth = maxDepth;

@@ -24,6 +24,7 @@ struct RenderOverrides {
     std::optional<int64_t> passes, photons;
     std::optional<int> warmup;
     std::optional<double> timeBudget, radius, alpha;
+    bool autoRadius = false;
     std::optional<int> threads, width, height, bins, maxDepth;
     std::optional<uint64_t> seed;
     std::string profile, beamLength, accel = "embree";

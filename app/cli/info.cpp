@@ -3,6 +3,7 @@
 #include "cli/flags.h"
 #include "cli/interrupt.h"
 #include "cli/commands.h"
+#include "render/auto_radius.h"
 
 #include <cmath>
 #include <cstdio>
@@ -77,6 +78,17 @@ void run(const std::string& path, const RenderOverrides& ov) {
     std::printf("render     %lld photons/pass, beam radius %.4g m, surface radius %.4g m, alpha %.3g, %lld passes%s\n",
                 static_cast<long long>(ds.photonsPerPass), ds.beamRadius0, ds.surfaceRadius0, ds.alpha,
                 static_cast<long long>(ds.passes), ds.timeBudgetSec > 0 ? (", budget " + std::to_string(ds.timeBudgetSec) + " s").c_str() : "");
+    // The photon density of a pilot pass, and the radius "auto" picks from it (render/auto_radius.h).
+    if (s->stages.beams && ds.method == Method::Beams) {
+        const RadiusPilot rp = pilotRadius(*s, ds, &interruptFlag());
+        throwIfInterrupted("while measuring the photon density (radius pilot)");
+        if (rp.measured)
+            std::printf("density    pilot pass of %lld photons: %s; the radius %.4g m gathers ~%.3g per ray%s\n",
+                        static_cast<long long>(rp.photons), rp.why.c_str(), ds.beamRadius0, rp.gathered(ds.beamRadius0),
+                        p.radiusPilot.measured ? " (chosen: \"radius\": \"auto\")" : "");
+        else
+            std::printf("density    %s\n", rp.why.c_str());
+    }
     std::printf("estimators volume %s, surface %s, time kernel %s\n", ds.volumeEstimator.c_str(), ds.surfaceEstimator.c_str(),
                 timeKernelName(ds.timeKernel).c_str());
     std::printf("stages\n");

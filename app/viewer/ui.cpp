@@ -2,6 +2,8 @@
 // the selected pixel's time profile bottom right). Layout follows the window size.
 #include "viewer/app.h"
 
+#include "render/auto_radius.h"
+
 #include "base/error.h"
 #include "estimators/estimator_names.h"
 
@@ -329,24 +331,24 @@ void Viewer::drawProgressSection() {
     } else if (done > 0) {
         // During the warm-up (render_settings.h) the last pass traced fewer photons: say so.
         const bool warmup = last.pass <= static_cast<uint64_t>(s.warmupPasses);
+        ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
+        char photons[64];
         if (warmup)
-            ImGui::Text("kernel radius %.4g m (surface %.4g m), warm-up %llu/%d", last.beamRadius, last.surfaceRadius,
-                        static_cast<unsigned long long>(last.pass), s.warmupPasses);
+            std::snprintf(photons, sizeof photons, "%lld photons, warm-up %llu/%d", static_cast<long long>(last.photons),
+                          static_cast<unsigned long long>(last.pass), s.warmupPasses);
         else
-            ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
+            std::snprintf(photons, sizeof photons, "%lld photons", static_cast<long long>(last.photons));
+        // What the volume estimator gathers from: beams, photon points (point2d/point3d) or both.
+        if (last.points > 0 && last.beams == 0)
+            ImGui::Text("points per pass %lld  (%s)", static_cast<long long>(last.points), photons);
+        else if (last.points > 0)
+            ImGui::Text("beams %lld, points %lld per pass  (%s)", static_cast<long long>(last.beams),
+                        static_cast<long long>(last.points), photons);
+        else
+            ImGui::Text("beams per pass %lld  (%s)", static_cast<long long>(last.beams), photons);
         if (warmup && ImGui::IsItemHovered())
             ImGui::SetTooltip("the first %d passes trace photons/2^%d ... photons/2 for a first picture sooner\n"
                               "(Render settings: warm-up passes; --warmup)", s.warmupPasses, s.warmupPasses);
-        // What the volume estimator gathers from: beams, photon points (point2d/point3d) or both.
-        if (last.points > 0 && last.beams == 0)
-            ImGui::Text("points per pass %lld  (%lld photons)", static_cast<long long>(last.points),
-                        static_cast<long long>(last.photons));
-        else if (last.points > 0)
-            ImGui::Text("beams %lld, points %lld per pass  (%lld photons)", static_cast<long long>(last.beams),
-                        static_cast<long long>(last.points), static_cast<long long>(last.photons));
-        else
-            ImGui::Text("beams per pass %lld  (%lld photons)", static_cast<long long>(last.beams),
-                        static_cast<long long>(last.photons));
     } else {
         ImGui::TextDisabled(failed ? "kernel radius -" : "kernel radius -  (first pass in progress...)");
         ImGui::TextDisabled("stored per pass -");
@@ -475,6 +477,21 @@ void Viewer::drawSettingsSection() {
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("beam kernel radius of pass 1 (as --radius)");
     track("initial radius (m)");
+    // From the photon density of a pilot pass (render/auto_radius.h, as --auto-radius): one photon
+    // pass on this thread, tens of milliseconds.
+    if (ImGui::Button("auto radius")) {
+        const RadiusPilot rp = pilotRadius(scene_, edit_);
+        if (rp.measured) {
+            edit_.beamRadius0 = std::min(rp.radius, kMaxRadiusFraction * scene_.bounds.diagonal());
+            apply = true;
+        }
+        status_ = "auto radius: " + rp.why;
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("the initial radius from a pilot pass's photon density: a camera ray through the\n"
+                          "medium gathers about %.0f beams (%.0f photon points) per pass (--auto-radius)",
+                          kAutoBeamsPerRay, kAutoPointsPerRay);
+    track("auto radius");
     const int64_t one = 1, ten = 10;
     ImGui::InputScalar("pass limit (0: none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
     apply |= ImGui::IsItemDeactivatedAfterEdit();

@@ -57,6 +57,27 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     for (const std::string& w : p.settings.validate({&desc, &overrides, diag}))
         if (std::find(desc.warnings.begin(), desc.warnings.end(), w) == desc.warnings.end()) warn(w);  // (the loader's)
 
+    // "radius": "auto" (unless --radius overrides it) or --auto-radius: from a pilot pass's photon
+    // density (auto_radius.h), capped like any radius; the surface radius, unless given, keeps the
+    // default ratio to it (2x). Without a measurement the radius stays the default fraction.
+    if ((desc.render.radiusAuto && !overrides.radius) || overrides.autoRadius) {
+        p.radiusPilot = pilotRadius(*p.scene, p.settings, options.pilot.control.abort);
+        const std::string where = overrides.autoRadius ? "--auto-radius: " : desc.where("render.radius") + "render.radius: auto: ";
+        if (p.radiusPilot.measured) {
+            double r = p.radiusPilot.radius;
+            if (r > kMaxRadiusFraction * diag) {
+                warn(where + "the photon density asks for " + shortNumber(r) + " m, capped at " +
+                     shortNumber(kMaxRadiusFraction * diag) + " m (a quarter of the scene's diagonal); use more photons");
+                r = kMaxRadiusFraction * diag;
+            }
+            const bool surfaceGiven = desc.locs.count("render.surface_radius") || desc.locs.count("render.surface_radius_relative");
+            if (!surfaceGiven) p.settings.surfaceRadius0 *= r / p.settings.beamRadius0;
+            p.settings.beamRadius0 = r;
+        } else {
+            warn(where + p.radiusPilot.why + "; the radius stays " + shortNumber(p.settings.beamRadius0) + " m");
+        }
+    }
+
     // The pilot sees the file's settings (with --max-depth and --threads), whatever the other flags.
     p.pilotSettings = RenderSettings::fromDesc(desc.render, diag);
     if (overrides.maxDepth) p.pilotSettings.maxDepth = *overrides.maxDepth;

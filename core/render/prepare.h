@@ -4,6 +4,7 @@
 // description (the scene path, where each key was written) is kept beside the scene in a
 // SceneSource; nothing reads the description after this step.
 #pragma once
+#include "render/auto_radius.h"
 #include "render/render_settings.h"
 #include "render/time_range.h"
 #include "scene/scene.h"
@@ -35,6 +36,7 @@ struct PreparedRender {
     FilmDesc film;                 // the film as described (autoRange: whether the pilot fits it)
     TimeBins time;                 // the film's time axis
     TimeRangeFit fit;              // what the pilot measured (heuristic window when it did not run)
+    RadiusPilot radiusPilot;       // "radius": "auto" / --auto-radius: what chose the radius (else not measured)
     SceneSource source;
 };
 

@@ -60,7 +60,8 @@
 //   "render": {
 //     "photons_per_pass": 20000,         // integer >= 1
 //     "warmup": 0,                       // 0..20 first passes with fewer photons (1/2^W ... 1/2); the viewer: 3
-//     "radius": 0.01 | "radius_relative": 0.01,  // volume kernel radius, > 0: absolute (m) or a
+//     "radius": 0.01 | "auto" | "radius_relative": 0.01,  // volume kernel radius, > 0: absolute (m),
+//                                                // "auto" (a pilot pass's photon density), or a
 //                                                // fraction of the scene diagonal [relative 0.01];
 //                                                // at most 0.25 of the diagonal (a wider kernel makes a
 //                                                // pass cost rays x beams), warned about above 0.05
@@ -753,7 +754,15 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     r.warmup = static_cast<int>(b.integer("warmup", INT_MIN, INT_MAX).value_or(r.warmup));
 
     // Both radii share RenderDesc::radiusRelative.
-    const std::optional<double> abs = b.number("radius"), rel = b.number("radius_relative");
+    // "radius": "auto": from the photon density of a pilot pass (render/auto_radius.h).
+    if (const JsonValue* v = b.get("radius"); v && v->isString()) {
+        if (v->text != "auto")
+            b.fail("radius", "radius must be a length in m or \"auto\" (from a pilot pass's photon density), got \"" +
+                                 v->text + "\"");
+        r.radiusAuto = true;
+    }
+    const std::optional<double> abs = r.radiusAuto ? std::nullopt : b.number("radius"), rel = b.number("radius_relative");
+    if (r.radiusAuto && rel) b.fail("radius_relative", "give either radius (m or \"auto\") or radius_relative, not both");
     const std::optional<double> sAbs = b.number("surface_radius"), sRel = b.number("surface_radius_relative");
     if (abs && rel) b.fail("radius_relative", "give either radius (m) or radius_relative, not both");
     if (sAbs && sRel)
