@@ -86,8 +86,8 @@ struct RenderSettings {
     // 1/2^W of a full one; every later pass is the one a render without warm-up runs (pass i depends
     // only on (seed, i)). Each pass is still an estimate of the same expected film at its radius
     // (its photons' powers are divided by its own photon count), so the progressive average of
-    // equally weighted passes stays consistent; the warm-up passes only add their extra variance,
-    // sum_i (2^(W+1-i) - 1) var_1 / n^2 after n passes, which the average forgets like 1/n^2.
+    // equally weighted passes stays consistent; the warm-up passes only add variance: after n
+    // passes (2^(W+1) - W - 2) / n relative to the average's own (11/n for W = 3; README).
     // 0 = off (`tpb render`); `tpb view` uses kViewerWarmupPasses unless the scene or --warmup sets it.
     int warmupPasses = 0;
     // The photons traced in pass `pass` (1-based): photonsPerPass after the warm-up.
