@@ -83,8 +83,8 @@ void run(const std::string& path, const RenderOverrides& ov) {
         const RadiusPilot rp = pilotRadius(*s, ds, &interruptFlag());
         throwIfInterrupted("while measuring the photon density (radius pilot)");
         if (rp.measured)
-            std::printf("density    pilot pass of %lld photons: %s; the radius %.4g m gathers ~%.3g per ray%s\n",
-                        static_cast<long long>(rp.photons), rp.why.c_str(), ds.beamRadius0, rp.gathered(ds.beamRadius0),
+            std::printf("density    pilot pass of %lld photons (x%.3g for the pass): %s; the radius %.4g m gathers ~%.3g per ray%s\n",
+                        static_cast<long long>(rp.photons), rp.scale, rp.why.c_str(), ds.beamRadius0, rp.gathered(ds.beamRadius0),
                         p.radiusPilot.measured ? " (chosen: \"radius\": \"auto\")" : "");
         else
             std::printf("density    %s\n", rp.why.c_str());

@@ -404,6 +404,8 @@ void runViewer(const PreparedRender& prepared, const ViewOptions& o) {
     std::signal(SIGINT, onSigint);  // Ctrl-C closes the window like the close button
     try {
         Viewer viewer(prepared, ds, o, window.get());
+        std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n", prepared.source.path.c_str());
+        std::fflush(stdout);
         viewer.run();
     } catch (...) {
         std::signal(SIGINT, SIG_DFL);

@@ -1,9 +1,11 @@
 #include "render/auto_radius.h"
 
+#include "base/error.h"
 #include "estimators/estimator.h"
 #include "photons/photon_tracer.h"
 #include "render/memory_budget.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -45,7 +47,7 @@ bool clipToBox(const Vec3& o, const Vec3& d, double len, const Bounds3& b, doubl
 
 double RadiusPilot::gathered(double r) const {
     if (!(boxArea > 0.0)) return 0.0;
-    if (pointKernel) return 4.0 * kPi * r * r * static_cast<double>(points) / boxArea;
+    if (pointKernel) return 4.0 * kPi * r * r * static_cast<double>(points) * scale / boxArea;
     return 2.0 * kPi * r * beamLength / boxArea;
 }
 
@@ -61,15 +63,25 @@ RadiusPilot pilotRadius(const Scene& scene, const RenderSettings& settings, cons
     PhotonPassParams pt;
     pt.seed = settings.seed;
     pt.pass = 0;  // not a pass of the render (those are 1, 2, ...)
-    pt.photons = settings.photonsPerPass;
+    pt.photons = std::min<int64_t>(settings.photonsPerPass, kAutoPilotPhotons);
+    out.scale = static_cast<double>(settings.photonsPerPass) / static_cast<double>(std::max<int64_t>(pt.photons, 1));
     pt.maxDepth = settings.maxDepth;
     pt.storeBeams = true;
     pt.storePoints = true;
     pt.storeSurfacePhotons = false;
     pt.beamLength = settings.beamLength;
     pt.threads = settings.threads > 0 ? settings.threads : 1;
-    pt.maxMapBytes = settings.maxPhotonMapBytes > 0 ? settings.maxPhotonMapBytes : maxFilmBytes();
-    const PhotonMap map = tracePhotons(scene, pt, abort);
+    // At most 64 MiB (~30x a typical 4000-photon map): a medium where photons never die (albedo 1,
+    // a huge max_depth) is reported as unmeasured within a second instead of filling the budget.
+    const uint64_t budget = settings.maxPhotonMapBytes > 0 ? settings.maxPhotonMapBytes : maxFilmBytes();
+    pt.maxMapBytes = std::min<uint64_t>(budget, kAutoPilotMaxMapBytes);
+    PhotonMap map;
+    try {
+        map = tracePhotons(scene, pt, abort);
+    } catch (const UserError&) {  // the photon map over the memory budget: the render will say so
+        out.why = "the pilot's photon map outgrew the memory budget";
+        return out;
+    }
     out.photons = map.emitted;
 
     // The scattering region holding most of the beam length.
@@ -101,7 +113,7 @@ RadiusPilot pilotRadius(const Scene& scene, const RenderSettings& settings, cons
         if (b.region != out.region || !std::isfinite(b.length) || !clipToBox(b.origin, b.dir, b.length, clip, t0, t1))
             continue;
         ++out.beams;
-        out.beamLength += t1 - t0;
+        out.beamLength += (t1 - t0) * out.scale;
         box.expand(b.origin + t0 * b.dir);
         box.expand(b.origin + t1 * b.dir);
     }
@@ -118,7 +130,7 @@ RadiusPilot pilotRadius(const Scene& scene, const RenderSettings& settings, cons
         return out;
     }
     out.meanChord = 4.0 * out.boxVolume / out.boxArea;
-    out.radius = out.pointKernel ? std::sqrt(out.target * out.boxArea / (4.0 * kPi * static_cast<double>(out.points)))
+    out.radius = out.pointKernel ? std::sqrt(out.target * out.boxArea / (4.0 * kPi * static_cast<double>(out.points) * out.scale))
                                  : out.target * out.boxArea / (2.0 * kPi * out.beamLength);
     out.measured = std::isfinite(out.radius) && out.radius > 0.0;
     char buf[256];

@@ -63,6 +63,8 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     if ((desc.render.radiusAuto && !overrides.radius) || overrides.autoRadius) {
         p.radiusPilot = pilotRadius(*p.scene, p.settings, options.pilot.control.abort);
         const std::string where = overrides.autoRadius ? "--auto-radius: " : desc.where("render.radius") + "render.radius: auto: ";
+        // The implicit default (no radius written) stays quiet when there is nothing to measure.
+        const bool asked = overrides.autoRadius || desc.locs.count("render.radius");
         if (p.radiusPilot.measured) {
             double r = p.radiusPilot.radius;
             if (r > kMaxRadiusFraction * diag) {
@@ -73,7 +75,7 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
             const bool surfaceGiven = desc.locs.count("render.surface_radius") || desc.locs.count("render.surface_radius_relative");
             if (!surfaceGiven) p.settings.surfaceRadius0 *= r / p.settings.beamRadius0;
             p.settings.beamRadius0 = r;
-        } else {
+        } else if (asked) {
             warn(where + p.radiusPilot.why + "; the radius stays " + shortNumber(p.settings.beamRadius0) + " m");
         }
     }

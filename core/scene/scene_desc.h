@@ -120,7 +120,9 @@ struct RenderDesc {
     int warmup = 0;               // warm-up passes with fewer photons (RenderSettings::warmupPasses)
     double radius = 0.01;         // initial kernel radius
     bool radiusRelative = true;   // radius is a fraction of the scene's bounding diagonal
-    bool radiusAuto = false;      // "radius": "auto": chosen by prepareRender from a pilot pass
+    // "radius": "auto", also the default when no volume radius is written: chosen by prepareRender
+    // from a pilot pass (render/auto_radius.h); `radius` is then the fallback without a medium.
+    bool radiusAuto = true;
     double surfaceRadius = 0.02;  // initial surface-photon kernel radius (same convention)
     double alpha = 0.7;           // progressive shrink parameter, (0, 1]
     int passes = 16;              // 0 = until the time budget

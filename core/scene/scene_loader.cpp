@@ -61,7 +61,8 @@
 //     "photons_per_pass": 20000,         // integer >= 1
 //     "warmup": 0,                       // 0..20 first passes with fewer photons (1/2^W ... 1/2); the viewer: 3
 //     "radius": 0.01 | "auto" | "radius_relative": 0.01,  // volume kernel radius, > 0: absolute (m),
-//                                                // "auto" (a pilot pass's photon density), or a
+//                                                // "auto" (a pilot pass's photon density: also
+//                                                // the default when neither is written), or a
 //                                                // fraction of the scene diagonal [relative 0.01];
 //                                                // at most 0.25 of the diagonal (a wider kernel makes a
 //                                                // pass cost rays x beams), warned about above 0.05
@@ -755,14 +756,15 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
 
     // Both radii share RenderDesc::radiusRelative.
     // "radius": "auto": from the photon density of a pilot pass (render/auto_radius.h).
+    bool autoWritten = false;
     if (const JsonValue* v = b.get("radius"); v && v->isString()) {
         if (v->text != "auto")
             b.fail("radius", "radius must be a length in m or \"auto\" (from a pilot pass's photon density), got \"" +
                                  v->text + "\"");
-        r.radiusAuto = true;
+        autoWritten = r.radiusAuto = true;
     }
-    const std::optional<double> abs = r.radiusAuto ? std::nullopt : b.number("radius"), rel = b.number("radius_relative");
-    if (r.radiusAuto && rel) b.fail("radius_relative", "give either radius (m or \"auto\") or radius_relative, not both");
+    const std::optional<double> abs = autoWritten ? std::nullopt : b.number("radius"), rel = b.number("radius_relative");
+    if (autoWritten && rel) b.fail("radius_relative", "give either radius (m or \"auto\") or radius_relative, not both");
     const std::optional<double> sAbs = b.number("surface_radius"), sRel = b.number("surface_radius_relative");
     if (abs && rel) b.fail("radius_relative", "give either radius (m) or radius_relative, not both");
     if (sAbs && sRel)
@@ -771,6 +773,7 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
         b.fail(sAbs ? "surface_radius" : "surface_radius_relative",
                "the volume and surface radii must both be absolute (radius, surface_radius) or both relative "
                "(radius_relative, surface_radius_relative)");
+    if (abs || rel) r.radiusAuto = false;  // a written radius; none (or "auto"): from the pilot
     if (abs || sAbs) r.radiusRelative = false;
     if (rel || sRel) r.radiusRelative = true;
     if (auto v = abs ? abs : rel) r.radius = *v;

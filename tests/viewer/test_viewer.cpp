@@ -475,9 +475,14 @@ TEST_F(ViewerTest, TogglesChangeThePicture) {
 // tears down GL/ImGui/GLFW and exits 0 without waiting for the render to finish.
 TEST_F(ViewerTest, ClosingDuringRenderExitsZero) {
     const fs::path script = dir_ / "close.sh";
+    // Ctrl-C once the window is up (the viewer says so; a background job of `sh` ignores SIGINT
+    // until the viewer installs its handler, so a signal during the scene load would be lost).
+    const fs::path log = dir_ / "close.log";
     std::ofstream(script) << std::string(TPB_BINARY) << " view " << q(dir_ / "scene.json")
-                          << " --passes 0 --photons 20000 --threads 2 &\n"
-                          << "pid=$!\nsleep 3\nkill -INT $pid\nwait $pid\necho \"viewer_exit=$?\"\n";
+                          << " --passes 0 --photons 20000 --threads 2 > " << q(log) << " 2>&1 &\n"
+                          << "pid=$!\ni=0\nwhile ! grep -q 'window open' " << q(log)
+                          << " && [ $i -lt 500 ]; do sleep 0.1; i=$((i+1)); done\n"
+                          << "sleep 1\nkill -INT $pid\nwait $pid\necho \"viewer_exit=$?\"\ncat " << q(log) << "\n";
     const Proc r = runXvfb("timeout 60 sh " + q(script), dir_ / "close");
     EXPECT_NE(r.out.find("viewer_exit=0"), std::string::npos) << r.out << r.err;
 }
