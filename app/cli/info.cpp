@@ -80,7 +80,8 @@ void run(const std::string& path, const RenderOverrides& ov) {
                 static_cast<long long>(ds.passes), ds.timeBudgetSec > 0 ? (", budget " + std::to_string(ds.timeBudgetSec) + " s").c_str() : "");
     // The photon density of a pilot pass, and the radius "auto" picks from it (render/auto_radius.h).
     if (s->stages.beams && ds.method == Method::Beams) {
-        const RadiusPilot rp = pilotRadius(*s, ds, &interruptFlag());
+        // Measured once: prepareRender's when the radius is "auto", else here.
+        const RadiusPilot rp = p.radiusPilot.measured ? p.radiusPilot : pilotRadius(*s, ds, &interruptFlag());
         throwIfInterrupted("while measuring the photon density (radius pilot)");
         if (rp.measured)
             std::printf("density    pilot pass of %lld photons (x%.3g for the pass): %s; the radius %.4g m gathers ~%.3g per ray%s\n",
