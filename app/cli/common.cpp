@@ -204,7 +204,7 @@ SettingsOverrides RenderOverrides::settings() const {
     if (profile == "uniform") o.profile = TimeProfile::Uniform;
     if (beamLength == "short") o.beamLength = BeamLength::Short;
     if (beamLength == "long") o.beamLength = BeamLength::Long;
-    o.accel = accel == "brute" ? AccelBackend::BruteForce : AccelBackend::Embree;
+    if (accel) o.accel = *accel == "brute" ? AccelBackend::BruteForce : AccelBackend::Embree;
     if (ptFreeFlight) o.equiangular = false;
     o.volumeEstimator = estimator;
     o.surfaceEstimator = surfaceEstimator;
@@ -221,6 +221,10 @@ void RenderOverrides::rejectBeamsOnlyFlags(const std::string& method) const {
 }
 
 PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo) {
+    return loadAndBuild(path, ov.settings(), lo);
+}
+
+PreparedRender loadAndBuild(const std::string& path, const SettingsOverrides& ov, const LoadOptions& lo) {
     const bool tty = isatty(STDERR_FILENO) && !lo.quiet;
     const double t0 = nowSec();
     double lastPrint = t0 - 9.0;  // not on a terminal: a first line after 1 s, then one every 10 s
@@ -239,7 +243,7 @@ PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, 
             lastPrint = now;
         }
     };
-    PreparedRender p = prepareRender(loadScene(path), ov.settings(), po);
+    PreparedRender p = prepareRender(loadScene(path), ov, po);
     if (p.film.autoRange) {
         if (tty) std::fprintf(stderr, "\r%60s\r", "");
         throwIfInterrupted("while fitting the film's time range (pilot pass)");
@@ -476,7 +480,9 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& command, c
         [[maybe_unused]] const ssize_t n = ::pwrite(lockFd_, holder.data(), holder.size(), 0);
     }
 
-    removed_ = removeOutputs(dir, previousOutputs(dir));
+    PreviousOutputs prev = previousOutputs(dir);
+    for (const std::string& k : outputs.keep) prev.files.erase(k);  // a resume's checkpoint (cli/resume.h)
+    removed_ = removeOutputs(dir, prev);
 
     nlohmann::json m;
     m["written_by"] = "tpb " + command;

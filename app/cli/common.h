@@ -27,7 +27,8 @@ struct RenderOverrides {
     bool autoRadius = false;
     std::optional<int> threads, width, height, bins, maxDepth;
     std::optional<uint64_t> seed;
-    std::string profile, beamLength, accel = "embree";
+    std::string profile, beamLength;
+    std::optional<std::string> accel;  // "embree" | "brute"; unset = the default (embree)
     std::optional<std::string> estimator, surfaceEstimator, timeKernel;  // names checked by validate()
     bool ptFreeFlight = false;  // path tracer: no equiangular sampling (for comparisons)
 
@@ -47,6 +48,8 @@ struct LoadOptions {
 // settings, the film's time axis), printing the warnings to stderr; fits an automatic film range
 // with the pilot (progress on a terminal; Ctrl-C/SIGTERM abort it: Interrupted, see interrupt.h).
 PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo = {});
+// The same with the overrides as values (a resume: the checkpoint's flags, cli/resume.h).
+PreparedRender loadAndBuild(const std::string& path, const SettingsOverrides& ov, const LoadOptions& lo = {});
 
 // Warns on stderr when the film dropped pixel sums that would have overflowed its floats
 // (FilmStats::overflowedPixels), naming the fix; returns that count.
@@ -65,6 +68,9 @@ struct OutputFiles {
     std::vector<std::string> files;  // relative to the folder
     std::string framesDir;           // "" = no frames; else frame_NNNNN.exr for bins first..last step
     int firstBin = 0, lastBin = -1, binStep = 1;
+    // Files of the previous run that stay even when its manifest lists them (the checkpoint a
+    // resume reads, until the resumed render replaces it).
+    std::vector<std::string> keep;
 };
 class OutputFolder {
 public:

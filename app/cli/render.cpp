@@ -5,6 +5,7 @@
 #include "cli/converge.h"
 #include "cli/interrupt.h"
 #include "cli/commands.h"
+#include "cli/resume.h"
 #include "base/error.h"
 #include "film/film_export.h"
 #include "io/image_io.h"
@@ -13,6 +14,8 @@
 #include <nlohmann/json.hpp>
 
 #include <climits>
+#include <filesystem>
+#include <optional>
 #include <cstdio>
 #include <unistd.h>
 
@@ -30,6 +33,12 @@ struct RenderCmd {
     double stripEv = 0.0;
     std::string method = "beams";
     int spp = 1;
+    // Checkpoints (render/checkpoint.h, cli/resume.h).
+    std::string resume;            // --resume DIR
+    bool outGiven = false;         // -o given (a resume writes into the checkpoint's folder otherwise)
+    bool checkpoint = false;       // --checkpoint: one when the render ends
+    double checkpointEveryMin = 0.0;  // --checkpoint-every: and every that many minutes
+    bool noCheckpoint = false;     // --no-checkpoint: none when Ctrl-C or SIGTERM stops the render
 };
 
 nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const ExportOptions& opt, double wallSec) {
@@ -92,6 +101,15 @@ void checkFlagConflicts(const RenderCmd& c) {
     if (c.unwarp && c.realTime)
         throw UserError("--unwarp and --real-time contradict each other: give one of them (frames are in real time "
                         "unless --unwarp or the scene's render.unwarp asks for unwarped time)");
+    if (c.method == "pt" && (c.checkpoint || c.checkpointEveryMin > 0.0 || !c.resume.empty()))
+        throw UserError(std::string(!c.resume.empty() ? "--resume" : c.checkpoint ? "--checkpoint" : "--checkpoint-every") +
+                        " applies to the photon beams only so far; --method pt renders its reference passes in one "
+                        "go: drop the flag or use --method beams");
+    if (c.noCheckpoint && (c.checkpoint || c.checkpointEveryMin > 0.0))
+        throw UserError("--no-checkpoint contradicts --checkpoint / --checkpoint-every: give one of them");
+    if (c.scene.empty() && c.resume.empty())
+        throw UserError("tpb render: give a scene file (tpb render SCENE), or --resume DIR to continue a render from "
+                        "its checkpoint");
     if (c.continuous && c.delta)
         throw UserError("--continuous and --delta contradict each other: give one of them (frames are for a delta "
                         "pulse unless --continuous or the scene's render.emission asks for continuous emission)");
@@ -102,7 +120,19 @@ void run(RenderCmd& c) {
     checkFlagConflicts(c);      // (each flag's range was checked when the command line was parsed)
     // Every setting is resolved and checked (prepareRender) before the first file is written (no
     // preview.exr is left behind by a bad --alpha or by photons that would not fit in memory).
-    const PreparedRender prepared = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    // A resume loads the checkpoint's scene with its flags (the pass count, time budget and threads
+    // may change) and refuses a render that differs from it; its outputs go to the checkpoint's
+    // folder unless -o says otherwise.
+    std::optional<ResumeSource> resume;
+    if (!c.resume.empty()) {
+        resume = findCheckpoint(c.resume);
+        if (!c.outGiven) c.out = std::filesystem::path(resume->path).parent_path().string();
+        if (c.out.empty()) c.out = ".";
+    }
+    const SettingsOverrides flags =
+        resume ? resumeOverrides(resume->info.overrides, c.ov.settings()) : c.ov.settings();
+    const PreparedRender prepared = resume ? prepareResume(*resume, c.scene, c.ov.settings(), LoadOptions{c.quiet})
+                                           : loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
     const Scene* scene = prepared.scene.get();
     const RenderSettings& ds = prepared.settings;
 
@@ -124,7 +154,12 @@ void run(RenderCmd& c) {
     if (c.method == "pt") checkPathTracedRequest(prepared, outputs);
 
     // The folder is this render's from here on: locked, the previous render's outputs removed.
-    const OutputFolder folder(c.out, "render", renderOutputFiles(outputs, prepared.time.bins));
+    const std::string checkpointPath = (std::filesystem::path(c.out) / kCheckpointFile).string();
+    OutputFiles files = renderOutputFiles(outputs, prepared.time.bins);
+    if (c.method != "pt" && !(c.noCheckpoint && !resume)) files.files.push_back(kCheckpointFile);
+    std::error_code ec;
+    if (resume && std::filesystem::equivalent(resume->path, checkpointPath, ec)) files.keep.push_back(kCheckpointFile);
+    const OutputFolder folder(c.out, "render", files);
     if (!c.quiet && !folder.removed().empty())
         std::printf("removed %zu files of an earlier render in %s (listed in its manifest)\n", folder.removed().size(),
                     c.out.c_str());
@@ -147,10 +182,40 @@ void run(RenderCmd& c) {
     if (ds.passes == 0 && ds.timeBudgetSec == 0.0)
         std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
     Driver drv(*scene, ds, prepared.time);
+    uint64_t resumedPasses = 0;
+    if (resume) {
+        resumedPasses = restoreCheckpoint(*resume, prepared, drv);
+        if (!c.quiet)
+            std::printf("resumed %llu passes from %s (written %s)%s\n", static_cast<unsigned long long>(resumedPasses),
+                        resume->path.c_str(), resume->info.created.c_str(),
+                        ds.passes > 0 && int64_t(resumedPasses) >= ds.passes
+                            ? "; the pass limit is reached already: give --passes N (the total) to render more"
+                            : "");
+    }
+    std::string checkpointWritten;
+    const auto writeCheckpointNow = [&](const char* when) {
+        try {
+            const double t = nowSec();
+            saveCheckpoint(checkpointPath, prepared, flags, drv);
+            checkpointWritten = checkpointPath;
+            if (!c.quiet)
+                std::fprintf(stderr, "%scheckpoint (%s): %llu passes written to %s in %.2f s\n",
+                             isatty(STDERR_FILENO) ? "\r" : "", when,
+                             static_cast<unsigned long long>(drv.history().size()), checkpointPath.c_str(), nowSec() - t);
+        } catch (const UserError& e) {
+            std::fprintf(stderr, "warning: no checkpoint written: %s\n", e.what());
+        }
+    };
+    double lastCheckpoint = nowSec();
 
     const bool tty = isatty(STDERR_FILENO) && !c.quiet;
     const double t0 = nowSec();
     drv.start([&](const PassStats& p) {
+        // Between passes, on the driver's thread: no tile is being written.
+        if (c.checkpointEveryMin > 0.0 && nowSec() - lastCheckpoint >= 60.0 * c.checkpointEveryMin) {
+            writeCheckpointNow("periodic");
+            lastCheckpoint = nowSec();
+        }
         if (c.quiet) return;
         const int64_t total = ds.passes;
         if (tty) {
@@ -192,8 +257,16 @@ void run(RenderCmd& c) {
         std::fprintf(stderr, "interrupted by %s: writing the %llu finished passes\n", interruptName().c_str(),
                      static_cast<unsigned long long>(drv.completedPasses()));
 
-    const OutputReport rep =
-        writeRenderOutputs(drv.film(), outputs, [&] { return summaryJson(prepared, drv, opt, wall); });
+    // The checkpoint first (the state a long render cannot get back), then the images.
+    if (c.checkpoint || c.checkpointEveryMin > 0.0 || (stoppedBySignal && !c.noCheckpoint) ||
+        (resume && c.checkpointEveryMin == 0.0 && !c.noCheckpoint))
+        writeCheckpointNow(stoppedBySignal ? "interrupted" : "end of the render");
+    const OutputReport rep = writeRenderOutputs(drv.film(), outputs, [&] {
+        nlohmann::json j = summaryJson(prepared, drv, opt, wall);
+        if (resume) j["resumed"] = {{"checkpoint", resume->path}, {"passes", resumedPasses}, {"written", resume->info.created}};
+        j["checkpoint"] = checkpointWritten;
+        return j;
+    });
     warnFilmOverflow(prepared.source, drv.film());
     int64_t regionOverflows = 0;
     for (const PassStats& p : drv.history()) regionOverflows += p.regionOverflows + p.camera.regionOverflows;
@@ -222,8 +295,8 @@ void registerRender(CLI::App& app) {
     auto c = std::make_shared<RenderCmd>();
     CLI::App* cmd = app.add_subcommand("render", "Render a scene headless: preview.exr, EXR frames per time bin, "
                                                  "steady.exr and summary.json");
-    cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
-    cmd->add_option("-o,--out", c->out, "Output folder (created if needed; locked while rendering; the outputs of "
+    cmd->add_option("scene", c->scene, "Scene file (with --resume: the checkpoint's scene unless given)");
+    CLI::Option* out = cmd->add_option("-o,--out", c->out, "Output folder (created if needed; locked while rendering; the outputs of "
                                         "an earlier render in it are replaced, other files are kept)");
     c->ov.add(cmd);
     cmd->add_flag("--unwarp", c->unwarp, "Frames in camera-unwarped time (camera path excluded)");
@@ -244,7 +317,22 @@ void registerRender(CLI::App& app) {
         ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
     cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
-    cmd->callback([c] { run(*c); });
+    cmd->add_option("--resume", c->resume,
+                    "Continue the render whose checkpoint is in this folder (or this .tpbck file): same scene and "
+                    "flags; --passes (the total), --time and --threads may change")
+        ->type_name("DIR");
+    cmd->add_flag("--checkpoint", c->checkpoint,
+                  "Write a checkpoint (checkpoint.tpbck in the output folder) when the render ends, to --resume it");
+    cmd->add_option("--checkpoint-every", c->checkpointEveryMin,
+                    "Also write the checkpoint every MIN minutes (between passes)")
+        ->check(flags::number(0.0, 1e9, true, "minutes"))
+        ->type_name("MIN");
+    cmd->add_flag("--no-checkpoint", c->noCheckpoint,
+                  "Write no checkpoint when Ctrl-C or SIGTERM stops the render (written by default then)");
+    cmd->callback([c, out] {
+        c->outGiven = out->count() > 0;
+        run(*c);
+    });
 }
 
 }  // namespace tpb::app

@@ -3,8 +3,11 @@
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "cli/flags.h"
+#include "cli/resume.h"
+#include "base/error.h"
 #include "viewer/app.h"
 
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <string>
@@ -19,16 +22,33 @@ struct ViewCmd {
     ViewOptions view;
     std::string method = "beams";
     int spp = 1;
+    std::string resume;  // --resume DIR
 };
 
 void run(const ViewCmd& c) {
+    if (c.scene.empty() && c.resume.empty())
+        throw UserError("tpb view: give a scene file (tpb view SCENE), or --resume DIR to go on refining a checkpoint");
+    ViewOptions view = c.view;
+    view.flags = c.ov.settings();
+    if (!c.resume.empty()) {  // the checkpoint's scene and settings (cli/resume.h), refined further
+        if (c.method != "beams") throw UserError("--resume: checkpoints are of the photon beams; drop --method " + c.method);
+        const ResumeSource src = findCheckpoint(c.resume);
+        view.flags = resumeOverrides(src.info.overrides, c.ov.settings());
+        PreparedRender prepared = prepareResume(src, c.scene, c.ov.settings());
+        auto checkpoint = std::make_unique<Checkpoint>(readCheckpoint(src.path));
+        if (fingerprintChanges(checkpoint->info.fingerprint, renderFingerprint(prepared)).size() > 0)
+            throw UserError(src.path + ": changed while being resumed");
+        if (view.exportFolder.empty()) view.exportFolder = std::filesystem::path(src.path).parent_path().string();
+        runViewer(prepared, view, std::move(checkpoint));
+        return;
+    }
     PreparedRender prepared = loadAndBuild(c.scene, c.ov);
     // The integrator the viewer's Driver runs (checked by the flag's IsMember when parsed).
     prepared.settings.method = *parseMethod(c.method);
     prepared.settings.samplesPerPixel = c.spp;
     // The viewer warms up (a first picture sooner, render_settings.h) unless told otherwise.
     if (!c.ov.warmup && !prepared.source.wrote("render.warmup")) prepared.settings.warmupPasses = kViewerWarmupPasses;
-    runViewer(prepared, c.view);
+    runViewer(prepared, view);
 }
 
 }  // namespace
@@ -38,7 +58,11 @@ void registerView(CLI::App& app) {
     ViewOptions* o = &c->view;
     CLI::App* cmd = app.add_subcommand(
         "view", "Interactive viewer: the render refines in the background while you scrub through time");
-    cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
+    cmd->add_option("scene", c->scene, "Scene file (with --resume: the checkpoint's scene unless given)");
+    cmd->add_option("--resume", c->resume,
+                    "Go on refining the checkpoint in this folder (or this .tpbck file): same scene and settings; "
+                    "\"Save checkpoint\" writes it back there")
+        ->type_name("DIR");
     c->ov.add(cmd);
     cmd->add_option("--method", c->method,
                     "Renderer shown live: beams (progressive photon beams) | pt (unbiased path tracer) | preview "

@@ -6,6 +6,7 @@
 // Its own CMake target (tpb_viewer): no CLI11, no nlohmann. `tpb view`'s flags are registered in
 // app/cli/view_command.cpp, which prepares the render (prepareRender) and calls runViewer.
 #pragma once
+#include "render/checkpoint.h"
 #include "render/driver.h"
 #include "render/prepare.h"
 #include "viewer/export.h"
@@ -39,6 +40,9 @@ struct ViewOptions {
     std::vector<int> windowSize{1280, 800};
     bool unwarp = false, realTime = false, continuous = false, delta = false;
     bool falseColor = false, noSrgb = false, steady = false;
+    // The flags the render runs with, stored in the checkpoints "Save checkpoint" writes (to
+    // <export folder>/checkpoint.tpbck: render/checkpoint.h) so `--resume` can reproduce it.
+    SettingsOverrides flags;
 };
 
 // What the user looks at (changed by the UI, never by other threads).
@@ -109,7 +113,9 @@ ExposureFit fitExposure(const std::vector<float>& rgb);
 
 class Viewer {
 public:
-    Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window);
+    // `resume`: a checkpoint of this render to go on from (tpb view --resume), or null.
+    Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window,
+           std::unique_ptr<Checkpoint> resume = nullptr);
     ~Viewer();  // stops the driver and joins the helper threads (GL objects go with the members)
     void run();
 
@@ -121,6 +127,8 @@ private:
     void updateBinEnergy();
     void fitPendingExposure(const FetchKey& key);
     void pollExport();
+    void requestCheckpoint();  // "Save checkpoint": pauses, then writes once the pass in progress ends
+    void pollCheckpoint();
     void startExport(const ExportRequest& req);
     FetchKey frameKey() const;
     FetchKey profileKey() const;
@@ -152,6 +160,7 @@ private:
     void takeScreenshot(int fbWidth, int fbHeight);
     void saveSnapshot(int fbWidth, int fbHeight);
 
+    const PreparedRender& prepared_;  // the render as prepared (checkpoints record it)
     const Scene& scene_;
     TimeBins time_;          // the film's time axis
     std::string scenePath_;  // for the title and the info panel
@@ -182,6 +191,13 @@ private:
     std::future<ProfileResult> profileJob_;
     FetchKey profileRequested_, profileKey_;
     std::vector<float> profileRgb_, profileLum_;
+
+    // Checkpoints: the one to resume from at the first start, and the one being written (the
+    // driver stays paused until it is on disk).
+    std::unique_ptr<Checkpoint> resume_;
+    enum class CheckpointStage { Idle, WaitingForPassEnd, Writing } checkpointStage_ = CheckpointStage::Idle;
+    bool checkpointWasPaused_ = false;
+    std::future<std::string> checkpointJob_;  // "" or the error
 
     ExportJob export_;
     std::vector<std::string> exportLog_;  // the last export's files
@@ -223,6 +239,6 @@ private:
 
 // Opens the window and runs the viewer on a prepared render until it is closed (or, with
 // --screenshot, until the picture is taken).
-void runViewer(const PreparedRender& prepared, const ViewOptions& options);
+void runViewer(const PreparedRender& prepared, const ViewOptions& options, std::unique_ptr<Checkpoint> resume = nullptr);
 
 }  // namespace tpb::app

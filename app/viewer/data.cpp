@@ -6,6 +6,10 @@
 // tiles it shows alive while the render replaces them).
 #include "viewer/app.h"
 
+#include <chrono>
+#include <filesystem>
+#include <future>
+
 #include "film/film_view.h"
 
 #include <GLFW/glfw3.h>
@@ -47,8 +51,19 @@ int peakEnergyBin(const std::vector<double>& energy) {
 }
 
 void Viewer::restart(const RenderSettings& s, const std::string& why) {
+    if (checkpointStage_ == CheckpointStage::Writing) {  // finish it (it holds the old driver)
+        checkpointJob_.wait();
+        pollCheckpoint();
+    }
+    checkpointStage_ = CheckpointStage::Idle;
     if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
     driver_ = std::make_shared<Driver>(scene_, s, time_);
+    if (resume_) {  // the first start of `tpb view --resume`: go on from the checkpoint's passes
+        const uint64_t n = resume_->info.passes;
+        driver_->restore(std::move(resume_->film), std::move(resume_->history));
+        resume_.reset();
+        std::printf("resumed %llu passes from the checkpoint\n", static_cast<unsigned long long>(n));
+    }
     ++generation_;
     edit_ = driver_->settings();
     driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
@@ -60,6 +75,51 @@ void Viewer::restart(const RenderSettings& s, const std::string& why) {
                     static_cast<long long>(s.photonsPerPass), s.alpha, s.beamRadius0, static_cast<long long>(s.passes));
         std::fflush(stdout);
     }
+}
+
+void Viewer::requestCheckpoint() {
+    if (checkpointStage_ != CheckpointStage::Idle) return;
+    checkpointWasPaused_ = driver_->paused();
+    driver_->pause();  // between passes: the checkpoint is written once the pass in progress ends
+    checkpointStage_ = CheckpointStage::WaitingForPassEnd;
+    status_ = "checkpoint: waiting for the pass in progress to end";
+}
+
+void Viewer::pollCheckpoint() {
+    if (checkpointStage_ == CheckpointStage::WaitingForPassEnd) {
+        const std::vector<PassStats> history = driver_->history();
+        const auto snap = driver_->snapshot();
+        const bool between = snap->minPasses() == snap->maxPasses() &&
+                             snap->minPasses() == static_cast<int64_t>(history.size());
+        if (!between) return;  // a pass is still being added (paused takes effect after it)
+        const std::string path = (std::filesystem::path(st_.outDir) / kCheckpointFile).string();
+        const CheckpointInfo info = checkpointInfoFor(prepared_, driver_->settings(), opt_.flags, history.size());
+        checkpointStage_ = CheckpointStage::Writing;
+        status_ = "checkpoint: writing " + path;
+        checkpointJob_ = std::async(std::launch::async, [d = driver_, path, info, history]() -> std::string {
+            try {
+                std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+                writeCheckpoint(path, info, d->film(), history);
+                return "";
+            } catch (const std::exception& e) {
+                return std::string("error: ") + e.what();
+            }
+        });
+        return;
+    }
+    if (checkpointStage_ != CheckpointStage::Writing ||
+        checkpointJob_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+        return;
+    const std::string err = checkpointJob_.get();
+    const std::string path = (std::filesystem::path(st_.outDir) / kCheckpointFile).string();
+    status_ = err.empty() ? "checkpoint of " + std::to_string(driver_->history().size()) + " passes written to " + path +
+                                " (tpb render --resume " + st_.outDir + ")"
+                          : "checkpoint failed: " + err;
+    std::printf("%s\n", status_.c_str());
+    std::fflush(stdout);
+    checkpointStage_ = CheckpointStage::Idle;
+    if (!checkpointWasPaused_) driver_->resume();
+    glfwPostEmptyEvent();
 }
 
 float Viewer::binCentreOpl(int bin) const {

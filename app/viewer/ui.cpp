@@ -380,6 +380,14 @@ void Viewer::drawProgressSection() {
     ImGui::SameLine();
     if (ImGui::Button("Restart", ImVec2(80, 0))) restart(driver_->settings(), "accumulation restarted");
     track("Restart");
+    ImGui::SameLine();
+    ImGui::BeginDisabled(checkpointStage_ != CheckpointStage::Idle || driver_->settings().method != Method::Beams);
+    if (ImGui::Button("Save checkpoint")) requestCheckpoint();
+    ImGui::EndDisabled();
+    track("Save checkpoint");
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+        ImGui::SetTooltip("the film and its passes to <export folder>/checkpoint.tpbck, between passes;\n"
+                          "go on later with tpb render --resume FOLDER or tpb view --resume FOLDER");
 }
 
 // The photon-beams estimators (estimators/estimator_names.h) and the progressive time kernel: a

@@ -105,8 +105,8 @@ public:
 }  // namespace
 
 Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt,
-               GLFWwindow* window)
-    : scene_(*prepared.scene), time_(prepared.time), scenePath_(prepared.source.path), opt_(opt), window_(window) {
+               GLFWwindow* window, std::unique_ptr<Checkpoint> resume)
+    : prepared_(prepared), scene_(*prepared.scene), time_(prepared.time), scenePath_(prepared.source.path), opt_(opt), window_(window) {
     const Scene& scene = scene_;
     program_.load(TPB_SHADER_DIR);
     const int maxTex = maxTextureSize();
@@ -148,6 +148,7 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     }
     frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
     image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
+    resume_ = std::move(resume);
     restart(settings, "");
 }
 
@@ -155,13 +156,16 @@ Viewer::~Viewer() {
     // Helper threads first (they only read the film), then the render workers; the GL objects
     // (members) are deleted afterwards, while the context still exists.
     export_.cancelAndJoin();
+    if (checkpointJob_.valid()) checkpointJob_.wait();  // a checkpoint being written is finished, not cut
     if (profileJob_.valid()) profileJob_.wait();
     if (binEnergyJob_.valid()) binEnergyJob_.wait();
     if (driver_) driver_->stop();
 }
 
 bool Viewer::settled() {
-    if (driver_->running() || export_.busy() || profileJob_.valid() || binEnergyJob_.valid()) return false;
+    if (driver_->running() || export_.busy() || profileJob_.valid() || binEnergyJob_.valid() ||
+        checkpointStage_ != CheckpointStage::Idle)
+        return false;
     if (st_.autoBin && !(binEnergyRequested_ == binEnergyKey())) return false;
     if (!(frameKey_ == frameKey()) || !frameComplete_) return false;
     return profileKey_ == profileKey();
@@ -303,6 +307,8 @@ void Viewer::run() {
         glfwGetFramebufferSize(window_, &fbw, &fbh);
         if (fbw <= 0 || fbh <= 0 || glfwGetWindowAttrib(window_, GLFW_ICONIFIED)) {  // minimised: nothing to draw
             pollExport();
+        pollCheckpoint();
+            pollCheckpoint();
             glfwWaitEventsTimeout(0.1);
             continue;
         }
@@ -318,6 +324,7 @@ void Viewer::run() {
         gKeys.clear();
         advancePlayback(dt);
         pollExport();
+        pollCheckpoint();
         updateFrame();
         updateProfile();
         updateBinEnergy();
@@ -381,12 +388,12 @@ void checkShownTime(const ViewOptions& o, const TimeBins& tb) {
 
 }  // namespace
 
-void runViewer(const PreparedRender& prepared, const ViewOptions& o) {
+void runViewer(const PreparedRender& prepared, const ViewOptions& o, std::unique_ptr<Checkpoint> resume) {
     const Scene* scene = prepared.scene.get();
     RenderSettings ds = prepared.settings;
     const bool shot = !o.screenshot.empty();
-    if (shot) {  // run exactly N passes, then take the picture
-        ds.passes = o.afterPasses;
+    if (shot) {  // run exactly N passes (beyond a resumed checkpoint's), then take the picture
+        ds.passes = o.afterPasses + (resume ? static_cast<int64_t>(resume->info.passes) : 0);
         ds.timeBudgetSec = 0.0;
     }
     if (o.windowSize.size() != 2 || o.windowSize[0] < 64 || o.windowSize[1] < 64)
@@ -403,7 +410,7 @@ void runViewer(const PreparedRender& prepared, const ViewOptions& o) {
     gInterrupted = false;
     std::signal(SIGINT, onSigint);  // Ctrl-C closes the window like the close button
     try {
-        Viewer viewer(prepared, ds, o, window.get());
+        Viewer viewer(prepared, ds, o, window.get(), std::move(resume));
         std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n", prepared.source.path.c_str());
         std::fflush(stdout);
         viewer.run();

@@ -180,6 +180,18 @@ void TransientFilm::clear() {
     for (int a = 0; a < 2; ++a) { stats.outside[a] = 0.0; stats.before[a] = 0.0; stats.inside[a] = 0.0; }
 }
 
+void TransientFilm::restoreTile(int tile, TileSums sums) {
+    if (tile < 0 || tile >= tileCount()) throw std::invalid_argument("TransientFilm::restoreTile: no tile " + std::to_string(tile));
+    const size_t px = layout_->pixels(tile);
+    bool ok = sums.binCount == bins() && sums.steady.size() == px * 3;
+    for (int a = 0; a < 2; ++a)
+        ok = ok && sums.bins[a].size() == px * static_cast<size_t>(bins()) * 3 && sums.before[a].size() == px * 3 &&
+             sums.after[a].size() == px * 3;
+    if (!ok) throw std::invalid_argument("TransientFilm::restoreTile: tile " + std::to_string(tile) + " has the wrong size");
+    std::lock_guard<std::mutex> g(tiles_[tile].writer);
+    publish(tile, std::make_shared<TileBlock>(std::move(sums)));
+}
+
 void TransientFilm::merge(const TransientFilm& other) {
     if (&other == this) throw std::invalid_argument("TransientFilm::merge: a film cannot be merged into itself");
     const TimeBins &ta = time(), &tb = other.time();

@@ -168,6 +168,9 @@ public:
     // time axis. The merged sums equal one film of all the passes to < 1e-12 relative (one extra
     // double rounding per value, FilmSum in film_snapshot.h).
     void merge(const TransientFilm& other);
+    // Replaces a tile's sums and pass count (a checkpoint being read: render/checkpoint.h). Throws
+    // std::invalid_argument unless they have the tile's size and the film's bins.
+    void restoreTile(int tile, TileSums sums);
 
     // Shorthands that take a snapshot and read it (film_view.h).
     void frame(int bin, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const;

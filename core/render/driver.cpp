@@ -3,6 +3,7 @@
 #include "base/parallel.h"
 
 #include <chrono>
+#include <stdexcept>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -62,6 +63,18 @@ bool Driver::runPass(uint64_t pass) {
     }
     completed_ = pass;
     return true;
+}
+
+void Driver::restore(std::unique_ptr<TransientFilm> film, std::vector<PassStats> history) {
+    if (running_) throw std::logic_error("Driver::restore while passes run");
+    const TimeBins &a = film->time(), &b = film_->time();
+    if (film->width() != film_->width() || film->height() != film_->height() || a.bins != b.bins ||
+        a.startOpl != b.startOpl || a.binWidth != b.binWidth)
+        throw std::invalid_argument("Driver::restore: the film differs in size or time axis from this render's");
+    film_ = std::move(film);
+    std::lock_guard<std::mutex> g(mutex_);
+    history_ = std::move(history);
+    completed_ = history_.size();
 }
 
 void Driver::start(std::function<void(const PassStats&)> onPass) {

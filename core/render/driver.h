@@ -38,6 +38,11 @@ public:
     // Runs one pass synchronously (all threads). Returns false if aborted midway (film untouched
     // for tiles not rendered; a partly rendered pass leaves those tiles one pass ahead).
     bool runPass(uint64_t pass);
+    // Continues a render from a checkpoint (render/checkpoint.h): the film (same size and time axis
+    // as this driver's, else std::invalid_argument) replaces this driver's, its finished passes and
+    // their statistics become this driver's history, and the next pass start() runs is
+    // history.size() + 1. Only before start() (or after the run ended).
+    void restore(std::unique_ptr<TransientFilm> film, std::vector<PassStats> history);
 
     void start(std::function<void(const PassStats&)> onPass = {});
     void pause();

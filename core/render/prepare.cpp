@@ -48,6 +48,7 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     applyFilmShape(desc, overrides);
 
     PreparedRender p;
+    p.sceneFingerprint = sceneFingerprint(desc);
     p.scene = Scene::build(desc);
     const double diag = p.scene->bounds.diagonal() > 0.0 ? p.scene->bounds.diagonal() : 1.0;
 
@@ -72,7 +73,8 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
                      shortNumber(kMaxRadiusFraction * diag) + " m (a quarter of the scene's diagonal); use more photons");
                 r = kMaxRadiusFraction * diag;
             }
-            const bool surfaceGiven = desc.locs.count("render.surface_radius") || desc.locs.count("render.surface_radius_relative");
+            const bool surfaceGiven = desc.locs.count("render.surface_radius") ||
+                                      desc.locs.count("render.surface_radius_relative") || overrides.surfaceRadius;
             if (!surfaceGiven) p.settings.surfaceRadius0 *= r / p.settings.beamRadius0;
             p.settings.beamRadius0 = r;
         } else if (asked) {
@@ -99,6 +101,13 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     p.source.version = desc.version;
     p.source.locs = std::move(desc.locs);
     return p;
+}
+
+Fingerprint renderFingerprint(const PreparedRender& p) {
+    Fingerprint f = p.sceneFingerprint;
+    for (auto& kv : settingsFingerprint(p.settings)) f.push_back(std::move(kv));
+    for (auto& kv : timeFingerprint(p.time)) f.push_back(std::move(kv));
+    return f;
 }
 
 }  // namespace tpb

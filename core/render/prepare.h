@@ -5,6 +5,7 @@
 // SceneSource; nothing reads the description after this step.
 #pragma once
 #include "render/auto_radius.h"
+#include "render/fingerprint.h"
 #include "render/render_settings.h"
 #include "render/time_range.h"
 #include "scene/scene.h"
@@ -38,7 +39,11 @@ struct PreparedRender {
     TimeRangeFit fit;              // what the pilot measured (heuristic window when it did not run)
     RadiusPilot radiusPilot;       // "radius": "auto" / --auto-radius: what chose the radius (else not measured)
     SceneSource source;
+    Fingerprint sceneFingerprint;  // the description after the film-shape overrides (fingerprint.h)
 };
+
+// Everything that decides the passes of this render: scene, settings, time axis (fingerprint.h).
+Fingerprint renderFingerprint(const PreparedRender& p);
 
 struct PrepareOptions {
     PilotOptions pilot;  // run (default), photons, abort flag and progress

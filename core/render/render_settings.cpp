@@ -86,6 +86,7 @@ void RenderSettings::apply(const SettingsOverrides& o) {
     if (o.photons) photonsPerPass = *o.photons;
     if (o.warmup) warmupPasses = *o.warmup;
     if (o.radius) beamRadius0 = *o.radius;
+    if (o.surfaceRadius) surfaceRadius0 = *o.surfaceRadius;
     if (o.alpha) alpha = *o.alpha;
     if (o.threads) threads = *o.threads;
     if (o.maxDepth) maxDepth = *o.maxDepth;

@@ -41,6 +41,7 @@ struct SettingsOverrides {
     std::optional<int> warmup;         // --warmup
     std::optional<double> timeBudget;  // s; given without passes it means "as many passes as fit"
     std::optional<double> radius;      // m, absolute: the volume kernel of pass 1 (--radius)
+    std::optional<double> surfaceRadius;  // m, absolute: the surface kernel of pass 1 (checkpoints, render/checkpoint.h)
     bool autoRadius = false;           // --auto-radius: the radius from a pilot pass (auto_radius.h)
     std::optional<double> alpha;
     std::optional<int> threads, maxDepth, samplesPerPixel;

@@ -1122,3 +1122,84 @@ TEST_F(CliErrors, ConvergeMeasuresEstimatorVariantsAndRefusesBadOnes) {
     while (std::getline(csv, line)) methods.insert(line.substr(0, line.find(',')));
     EXPECT_EQ(methods, (std::set<std::string>{"beams", "beam2d+box:0.05"}));
 }
+
+// Issue 16, checkpoint and resume (render/checkpoint.h): SIGTERM mid-render writes a checkpoint;
+// `tpb render --resume DIR` goes on to the pass limit the render had, and its film (the
+// checkpoint's payload: every sum, bit for bit) and steady.exr equal those of one uninterrupted run.
+namespace {
+std::string checkpointPayload(const fs::path& p) {
+    const std::string b = slurp(p);
+    if (b.size() < 16) return {};
+    uint64_t n = 0;
+    std::memcpy(&n, b.data() + 8, 8);
+    return 16 + n <= b.size() ? b.substr(16 + n) : std::string();
+}
+}  // namespace
+
+TEST_F(CliErrors, SigtermWritesACheckpointAndTheResumeEqualsAnUninterruptedRun) {
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 10000, "
+                                                                            "\"passes\": 16, \"seed\": 1}"));
+    const fs::path out = dir_ / "out";
+    const double t0 = now();
+    const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2", "--strip", "0",
+                                "--radius", "0.02"}, dir_, {});
+    ASSERT_GT(pid, 0);
+    ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "pass 1:", pid, 60.0)) << slurp(dir_ / "stderr.txt");
+    kill(pid, SIGTERM);
+    const Proc p = waitTpb(pid, dir_, t0, 120.0);
+    EXPECT_EQ(p.code, 143) << p.err;
+    ASSERT_TRUE(fs::exists(out / "checkpoint.tpbck")) << p.err;
+    EXPECT_NE(p.err.find("checkpoint (interrupted): "), std::string::npos) << p.err;
+    const int done = nlohmann::json::parse(slurp(out / "summary.json"))["passes"].get<int>();
+    EXPECT_GE(done, 1);
+
+    // Resumed with another thread count; the flags (--radius) come from the checkpoint.
+    const Proc r = runTpb({"render", "--resume", out.string(), "--threads", "1", "--strip", "0"}, dir_, {}, 300.0);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("resumed " + std::to_string(done) + " passes from "), std::string::npos) << r.out;
+    const nlohmann::json sum = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_EQ(sum["passes"].get<int>(), 16);
+    EXPECT_EQ(sum["resumed"]["passes"].get<int>(), done);
+    EXPECT_EQ(sum["per_pass"].size(), 16u);
+
+    const fs::path whole = dir_ / "whole";
+    const Proc w = runTpb({"render", scene.string(), "-o", whole.string(), "--strip", "0", "--radius", "0.02",
+                           "--checkpoint", "-q"}, dir_, {}, 300.0);
+    ASSERT_EQ(w.code, 0) << w.err;
+    const std::string a = checkpointPayload(out / "checkpoint.tpbck"), b = checkpointPayload(whole / "checkpoint.tpbck");
+    ASSERT_FALSE(a.empty());
+    EXPECT_TRUE(a == b) << "the resumed film differs from the uninterrupted one";
+    EXPECT_EQ(slurp(out / "steady.exr"), slurp(whole / "steady.exr"));
+    EXPECT_EQ(slurp(out / "frames" / "frame_00004.exr"), slurp(whole / "frames" / "frame_00004.exr"));
+}
+
+TEST_F(CliErrors, ResumeRefusesAChangedSceneOrSettingAndNamesWhatChanged) {
+    const fs::path scene = write("scene.json", insideScene());
+    const fs::path out = dir_ / "out";
+    ASSERT_EQ(runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q"},
+                     dir_).code, 0);
+    const std::string cp = slurp(out / "checkpoint.tpbck");
+    ASSERT_FALSE(cp.empty());
+
+    std::string edited = insideScene();
+    edited.replace(edited.find("\"power\": 5"), 10, "\"power\": 6");
+    write("scene.json", edited);
+    Proc p = runTpb({"render", "--resume", out.string(), "--passes", "4"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("lights[0].power: the checkpoint has (5, 5, 5), this run has (6, 6, 6)"), std::string::npos)
+        << p.err;
+    EXPECT_EQ(slurp(out / "checkpoint.tpbck"), cp) << "a refused resume must leave the checkpoint alone";
+
+    write("scene.json", insideScene());
+    p = runTpb({"render", "--resume", out.string(), "--seed", "9"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("--seed 9: the checkpoint's render ran with 1"), std::string::npos) << p.err;
+
+    p = runTpb({"render", "--resume", (dir_ / "nowhere").string()}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("no checkpoint"), std::string::npos) << p.err;
+
+    p = runTpb({"render", "--resume", out.string(), "--passes", "3", "-q"}, dir_);
+    EXPECT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["passes"].get<int>(), 3);
+}

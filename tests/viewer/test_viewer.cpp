@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
 #pragma GCC diagnostic ignored "-Wsign-compare"
@@ -749,4 +751,45 @@ TEST_F(ViewerTest, TimelineReportsFirstLightAndTheWarmup) {
     ends.clear();
     timeline(off.out, warmup, ends);
     EXPECT_EQ(warmup, 0) << off.out;
+}
+
+namespace {
+std::string checkpointPayload(const fs::path& p) {
+    const std::string b = slurp(p);
+    if (b.size() < 16) return {};
+    uint64_t n = 0;
+    std::memcpy(&n, b.data() + 8, 8);
+    return 16 + n <= b.size() ? b.substr(16 + n) : std::string();
+}
+}  // namespace
+
+// Issue 16: "Save checkpoint" writes the viewer's film between passes; `tpb render --resume` goes on
+// from it to a film bit-identical to one `tpb render` of all the passes (with the viewer's warm-up),
+// and `tpb view --resume` opens it and refines it further.
+TEST_F(ViewerTest, SavedCheckpointResumesToTheFilmOfOneUninterruptedRender) {
+    const fs::path out = dir_ / "ckpt";
+    const Proc r = viewRun("ckpt", kRenderArgs + " --after-passes 2 --export-folder " + q(out) +
+                                       " --click 'Progress/Save checkpoint'");
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    ASSERT_TRUE(fs::exists(out / "checkpoint.tpbck")) << r.out << r.err;
+    EXPECT_NE(r.out.find("checkpoint of 2 passes written to "), std::string::npos) << r.out;
+
+    const Proc resumed = runShell(std::string(TPB_BINARY) + " render --resume " + q(out) +
+                                      " --passes 4 --no-frames --strip 0 -q", out / "resume");
+    ASSERT_EQ(resumed.code, 0) << resumed.err;
+    const fs::path whole = dir_ / "ckpt_whole";
+    const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") +
+                                " --seed 7 --threads 2 --warmup 3 --passes 4 --checkpoint --no-frames --strip 0 -q -o " + q(whole),
+                            whole);
+    ASSERT_EQ(w.code, 0) << w.err;
+    const std::string a = checkpointPayload(out / "checkpoint.tpbck");
+    ASSERT_FALSE(a.empty());
+    EXPECT_TRUE(a == checkpointPayload(whole / "checkpoint.tpbck")) << "resumed film differs from the uninterrupted one";
+
+    const Proc v = runXvfb(std::string(TPB_BINARY) + " view --resume " + q(out) +
+                               " --after-passes 1 --window-size 1280 800 --screenshot " + q(dir_ / "ckpt_view.png"),
+                           dir_ / "ckpt_view");
+    EXPECT_EQ(v.code, 0) << v.out << v.err;
+    EXPECT_NE(v.out.find("resumed 4 passes from the checkpoint"), std::string::npos) << v.out;
+    EXPECT_NE(v.out.find("after 5 passes"), std::string::npos) << v.out;
 }

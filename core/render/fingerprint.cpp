@@ -1,0 +1,223 @@
+#include "render/fingerprint.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+namespace tpb {
+
+namespace {
+
+std::string num(double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    return b;
+}
+std::string num(int64_t v) { return std::to_string(v); }
+std::string num(int v) { return std::to_string(v); }
+std::string num(uint64_t v) { return std::to_string(v); }
+std::string num(bool v) { return v ? "true" : "false"; }
+std::string num(const Vec3& v) { return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")"; }
+std::string num(const Mat4& m) {
+    std::string s = "[";
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) s += (c || r ? ", " : "") + num(m[c][r]);
+    return s + "]";
+}
+
+struct Writer {
+    Fingerprint fp;
+    template <class T>
+    void operator()(const std::string& key, const T& v) { fp.emplace_back(key, num(v)); }
+    void text(const std::string& key, const std::string& v) { fp.emplace_back(key, v); }
+};
+
+const char* shapeName(ShapeType t) {
+    switch (t) {
+        case ShapeType::Mesh: return "mesh";
+        case ShapeType::Sphere: return "sphere";
+        case ShapeType::Quad: return "quad";
+        case ShapeType::Box: return "box";
+    }
+    return "?";
+}
+const char* materialName(MaterialType t) {
+    switch (t) {
+        case MaterialType::Diffuse: return "diffuse";
+        case MaterialType::Mirror: return "mirror";
+        case MaterialType::Dielectric: return "dielectric";
+        case MaterialType::Null: return "null";
+    }
+    return "?";
+}
+const char* lightName(LightType t) {
+    switch (t) {
+        case LightType::Point: return "point";
+        case LightType::Spot: return "spot";
+        case LightType::AreaQuad: return "area";
+        case LightType::Laser: return "laser";
+    }
+    return "?";
+}
+
+}  // namespace
+
+std::string fileFingerprint(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return "unreadable";
+    uint64_t h = 0xcbf29ce484222325ull;
+    char buf[1 << 16];
+    while (in) {
+        in.read(buf, sizeof buf);
+        const std::streamsize n = in.gcount();
+        for (std::streamsize i = 0; i < n; ++i) {
+            h ^= static_cast<unsigned char>(buf[i]);
+            h *= 0x100000001b3ull;
+        }
+    }
+    char out[20];
+    std::snprintf(out, sizeof out, "%016llx", static_cast<unsigned long long>(h));
+    return out;
+}
+
+Fingerprint sceneFingerprint(const SceneDesc& d) {
+    Writer w;
+    w("camera.position", d.camera.position);
+    w("camera.look_at", d.camera.lookAt);
+    w("camera.up", d.camera.up);
+    w("camera.fov_y_deg", d.camera.fovYDeg);
+    w("camera.width", d.camera.width);
+    w("camera.height", d.camera.height);
+    w("film.auto_range", d.film.autoRange);
+    w("film.bins", d.film.bins);
+    if (!d.film.autoRange) {
+        w("film.start_opl", d.film.startOpl);
+        w("film.bin_width_opl", d.film.binWidthOpl);
+    }
+    w("global_medium", d.globalMedium);
+    for (size_t i = 0; i < d.media.size(); ++i) {
+        const MediumDesc& m = d.media[i];
+        const std::string k = "media[" + std::to_string(i) + "].";
+        w.text(k + "name", m.name);
+        w(k + "sigma_s", m.sigma_s);
+        w(k + "sigma_a", m.sigma_a);
+        w(k + "ior", m.ior);
+        w(k + "g", m.g);
+    }
+    for (size_t i = 0; i < d.materials.size(); ++i) {
+        const MaterialDesc& m = d.materials[i];
+        const std::string k = "materials[" + std::to_string(i) + "].";
+        w.text(k + "name", m.name);
+        w.text(k + "type", materialName(m.type));
+        w(k + "albedo", m.albedo);
+        w(k + "specular", m.specular);
+        w(k + "ior", m.ior);
+    }
+    for (size_t i = 0; i < d.shapes.size(); ++i) {
+        const ShapeDesc& s = d.shapes[i];
+        const std::string k = "shapes[" + std::to_string(i) + "].";
+        w.text(k + "name", s.name);
+        w.text(k + "type", shapeName(s.type));
+        w(k + "material", s.material);
+        w(k + "interior_medium", s.interiorMedium);
+        w(k + "flip_normals", s.flipNormals);
+        w(k + "area_light", s.areaLight);
+        switch (s.type) {
+            case ShapeType::Mesh:
+                w.text(k + "mesh", std::filesystem::path(s.meshPath).filename().string());  // not the folder: resumable from elsewhere
+                w.text(k + "mesh_bytes_fnv1a64", fileFingerprint(s.meshPath));
+                w(k + "transform", s.transform);
+                break;
+            case ShapeType::Sphere:
+                w(k + "center", s.center);
+                w(k + "radius", s.radius);
+                break;
+            case ShapeType::Quad:
+                w(k + "corner", s.corner);
+                w(k + "edge_u", s.edgeU);
+                w(k + "edge_v", s.edgeV);
+                break;
+            case ShapeType::Box:
+                w(k + "min", s.boxMin);
+                w(k + "max", s.boxMax);
+                w(k + "transform", s.transform);
+                break;
+        }
+    }
+    for (size_t i = 0; i < d.lights.size(); ++i) {
+        const LightDesc& l = d.lights[i];
+        const std::string k = "lights[" + std::to_string(i) + "].";
+        w.text(k + "name", l.name);
+        w.text(k + "type", lightName(l.type));
+        w(k + "power", l.power);
+        w(k + "emit_opl", l.emitOpl);
+        switch (l.type) {
+            case LightType::Point: w(k + "position", l.position); break;
+            case LightType::Spot:
+                w(k + "position", l.position);
+                w(k + "direction", l.direction);
+                w(k + "cutoff_deg", l.spotCutoffDeg);
+                w(k + "falloff_deg", l.spotFalloffDeg);
+                break;
+            case LightType::AreaQuad:
+                w(k + "corner", l.corner);
+                w(k + "edge_u", l.edgeU);
+                w(k + "edge_v", l.edgeV);
+                break;
+            case LightType::Laser:
+                w(k + "position", l.position);
+                w(k + "direction", l.direction);
+                w(k + "radius", l.laserRadius);
+                break;
+        }
+    }
+    return w.fp;
+}
+
+Fingerprint settingsFingerprint(const RenderSettings& s) {
+    Writer w;
+    w.text("render.method", methodName(s.method));
+    w("render.seed", s.seed);
+    w("render.max_depth", s.maxDepth);
+    if (s.method == Method::Beams) {
+        w("render.photons", s.photonsPerPass);
+        w("render.warmup", s.warmupPasses);
+        w("render.radius_m", s.beamRadius0);
+        w("render.surface_radius_m", s.surfaceRadius0);
+        w("render.alpha", s.alpha);
+        w.text("render.time_profile", s.profile == TimeProfile::Exact ? "exact" : "uniform");
+        w.text("render.beam_length", s.beamLength == BeamLength::Short ? "short" : "long");
+        w.text("render.accel", s.accel == AccelBackend::Embree ? "embree" : "brute-force");
+        w.text("render.estimator", s.volumeEstimator);
+        w.text("render.surface_estimator", s.surfaceEstimator);
+        w.text("render.time_kernel", timeKernelName(s.timeKernel));
+    } else if (s.method == Method::PathTracer) {
+        w("render.spp", s.samplesPerPixel);
+        w("render.equiangular", s.equiangular);
+    }
+    return w.fp;
+}
+
+Fingerprint timeFingerprint(const TimeBins& t) {
+    Writer w;
+    w("film.time.bins", t.bins);
+    w("film.time.start_opl_m", t.startOpl);
+    w("film.time.bin_width_opl_m", t.binWidth);
+    return w.fp;
+}
+
+std::vector<std::string> fingerprintChanges(const Fingerprint& checkpoint, const Fingerprint& now) {
+    std::map<std::string, std::string> a(checkpoint.begin(), checkpoint.end()), b(now.begin(), now.end());
+    std::vector<std::string> out;
+    for (const auto& [k, v] : checkpoint) {
+        const auto it = b.find(k);
+        if (it == b.end()) out.push_back(k + ": only in the checkpoint (" + v + ")");
+        else if (it->second != v) out.push_back(k + ": the checkpoint has " + v + ", this run has " + it->second);
+    }
+    for (const auto& [k, v] : now)
+        if (!a.count(k)) out.push_back(k + ": only in this run (" + v + ")");
+    return out;
+}
+
+}  // namespace tpb
