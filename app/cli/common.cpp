@@ -7,6 +7,7 @@
 #include "base/error.h"
 #include "estimators/estimator_names.h"
 #include "film/film_view.h"
+#include "film/picture_export.h"
 #include "render/time_range.h"
 
 #include "cli/commands.h"
@@ -503,6 +504,10 @@ OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     OutputFiles f;
     f.files = {"preview.exr", "preview.png", "steady.exr", "steady.png", "summary.json"};
     if (r.strip > 0) f.files.push_back("strip.png");
+    if (r.npy)
+        for (const std::string& n : volumeFileNames()) f.files.push_back(n);
+    if (r.contactSheet > 0) f.files.push_back("contact_sheet.png");
+    if (r.mp4) f.files.push_back("transient.mp4");
     const int frames = exportFrameCount(bins, r.opt);
     if (!r.noFrames && frames > 0) {
         f.framesDir = "frames";
@@ -542,6 +547,70 @@ void reportPlannedOutputs(const PreparedRender& p, const RenderOutputs& r, doubl
                      static_cast<unsigned long long>(frames), humanBytes(need).c_str(), r.out.c_str(),
                      humanBytes(freeBytes).c_str());
 }
+
+namespace {
+
+// A progress bar on a terminal, a line every 10 s in a log.
+class ExportProgress {
+public:
+    ExportProgress(const char* what, bool tty, bool quiet) : what_(what), tty_(tty), quiet_(quiet), t0_(nowSec()), last_(t0_) {}
+    ~ExportProgress() {
+        if (tty_ && shown_) std::fprintf(stderr, "\n");
+    }
+    void operator()(int done, int total) {
+        if (tty_) {
+            const int width = 30, fill = total > 0 ? static_cast<int>(30.0 * done / total) : 0;
+            std::fprintf(stderr, "\r%s [%.*s%*s] %d/%d", what_, fill, "##############################", width - fill, "",
+                         done, total);
+            shown_ = true;
+        } else if (!quiet_ && nowSec() - last_ >= 10.0) {
+            last_ = nowSec();
+            std::fprintf(stderr, "%s: %d/%d after %.0f s\n", what_, done, total, last_ - t0_);
+        }
+    }
+
+private:
+    const char* what_;
+    bool tty_, quiet_, shown_ = false;
+    double t0_, last_;
+};
+
+// transient.npy & co, contact_sheet.png, transient.mp4, after the frames and the strip. A first
+// signal stops the one being written (it leaves no file) and the ones after it.
+void writePictureOutputs(const FilmSnapshot& snap, const RenderOutputs& r, OutputReport& rep,
+                         const std::atomic<bool>* cancel, bool tty) {
+    const auto stopped = [&](const char* what) {
+        if (!(cancel && cancel->load())) return false;
+        rep.interrupted = true;
+        if (rep.error.empty()) rep.error = "interrupted by " + interruptName() + " while writing " + what;
+        return true;
+    };
+    if (r.npy && !rep.interrupted) {
+        std::vector<std::string> names;
+        {
+            ExportProgress bar("writing transient.npy (rows)", tty, r.quiet);
+            names = exportVolumeNpy(snap, r.out, r.opt, r.provenance, std::ref(bar), cancel);
+        }
+        rep.kept.insert(rep.kept.end(), names.begin(), names.end());
+        stopped("transient.npy");
+    }
+    const bool needTone = (r.contactSheet > 0 || r.mp4) && !rep.interrupted;
+    const ToneMap tone = needTone ? autoExposedToneMap(snap, r.opt, r.tone) : r.tone;
+    if (r.contactSheet > 0 && !rep.interrupted) {
+        exportContactSheet(snap, r.out + "/contact_sheet.png", r.contactSheet, r.opt, tone);
+        rep.kept.push_back("contact_sheet.png");
+    }
+    if (r.mp4 && !rep.interrupted) {
+        int n = 0;
+        {
+            ExportProgress bar("encoding transient.mp4", tty, r.quiet);
+            n = exportMp4(snap, r.out + "/transient.mp4", r.opt, tone, r.fps, std::ref(bar), cancel);
+        }
+        if (!stopped("transient.mp4") && n > 0) rep.kept.push_back("transient.mp4");
+    }
+}
+
+}  // namespace
 
 OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& r,
                                 const std::function<nlohmann::json()>& summary) {
@@ -598,12 +667,14 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
             exportStripPng(*snap, r.out + "/strip.png", r.strip, r.opt, r.stripEv);
             rep.kept.push_back("strip.png");
         }
+        writePictureOutputs(*snap, r, rep, cancel, tty);
     } catch (const UserError& e) {
         if (tty) std::fprintf(stderr, "\n");
         rep.error = e.what();
         if (rep.framesWritten > 0 && rep.framesWritten < rep.framesExpected) rep.kept.push_back("frames/ (partial)");
     }
-    if (rep.interrupted && rep.framesWritten > 0) rep.kept.back() = "frames/ (partial)";
+    if (rep.interrupted && rep.framesWritten > 0 && rep.framesWritten < rep.framesExpected)
+        std::replace(rep.kept.begin(), rep.kept.end(), std::string("frames/"), std::string("frames/ (partial)"));
     try {
         writeSummary(true);
     } catch (const UserError&) {

@@ -4,6 +4,7 @@
 // fitted slope, and an equal-time strip of frames (the paper's Figure 4 layout).
 // Also the path-tracer back end of `tpb render --method pt` (cli_converge.h).
 #include "cli/converge.h"
+#include "render/provenance.h"
 
 #include "cli/flags.h"
 #include "cli/summary.h"
@@ -180,7 +181,9 @@ void renderPathTraced(const PreparedRender& prepared, const PathTracedRenderRequ
         std::fprintf(stderr, "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
                              "light is missing from this render\n", static_cast<long long>(st.laserSamples));
 
-    const OutputReport rep = writeRenderOutputs(film, req, [&] {
+    PathTracedRenderRequest outputs = req;
+    outputs.provenance = provenanceOf(drv, prepared.source.path);
+    const OutputReport rep = writeRenderOutputs(film, outputs, [&] {
         return ptSummary(prepared, ps, film, req.opt, st, passTimes, wall);
     });
     warnFilmOverflow(prepared.source, film);

@@ -10,6 +10,8 @@
 #include "film/film_export.h"
 #include "io/image_io.h"
 #include "integrators/preview.h"
+#include "io/video_encoder.h"
+#include "render/provenance.h"
 
 #include <nlohmann/json.hpp>
 
@@ -39,6 +41,9 @@ struct RenderCmd {
     bool checkpoint = false;       // --checkpoint: one when the render ends
     double checkpointEveryMin = 0.0;  // --checkpoint-every: and every that many minutes
     bool noCheckpoint = false;     // --no-checkpoint: none when Ctrl-C or SIGTERM stops the render
+    bool npy = false, mp4 = false, falseColour = false, noSrgb = false;
+    double fps = 24.0, videoEv = 0.0;
+    int contactSheet = 0;
 };
 
 nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const ExportOptions& opt, double wallSec) {
@@ -118,6 +123,7 @@ void checkFlagConflicts(const RenderCmd& c) {
 void run(RenderCmd& c) {
     InterruptScope interrupts;  // Ctrl-C and SIGTERM, from the start (the pilot polls them too)
     checkFlagConflicts(c);      // (each flag's range was checked when the command line was parsed)
+    if (c.mp4) requireFfmpeg("--mp4");  // before hours of rendering, not after
     // Every setting is resolved and checked (prepareRender) before the first file is written (no
     // preview.exr is left behind by a bad --alpha or by photons that would not fit in memory).
     // A resume loads the checkpoint's scene with its flags (the pass count, time budget and threads
@@ -150,6 +156,13 @@ void run(RenderCmd& c) {
     outputs.strip = c.strip;
     outputs.stripEv = c.stripEv;
     outputs.spp = c.spp;
+    outputs.npy = c.npy;
+    outputs.mp4 = c.mp4;
+    outputs.fps = c.fps;
+    outputs.contactSheet = c.contactSheet;
+    outputs.tone.exposureEv = static_cast<float>(c.videoEv);
+    outputs.tone.falseColor = c.falseColour;
+    outputs.tone.srgb = !c.noSrgb;
 
     if (c.method == "pt") checkPathTracedRequest(prepared, outputs);
 
@@ -257,6 +270,7 @@ void run(RenderCmd& c) {
         std::fprintf(stderr, "interrupted by %s: writing the %llu finished passes\n", interruptName().c_str(),
                      static_cast<unsigned long long>(drv.completedPasses()));
 
+    outputs.provenance = provenanceOf(drv, prepared.source.path);
     // The checkpoint first (the state a long render cannot get back), then the images.
     if (c.checkpoint || c.checkpointEveryMin > 0.0 || (stoppedBySignal && !c.noCheckpoint) ||
         (resume && c.checkpointEveryMin == 0.0 && !c.noCheckpoint))
@@ -315,6 +329,20 @@ void registerRender(CLI::App& app) {
         ->check(CLI::IsMember({"beams", "pt"}));
     cmd->add_option("--spp", c->spp, "--method pt: camera paths per pixel per pass")
         ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
+    cmd->add_flag("--npy", c->npy,
+                  "Also write the transient volume for NumPy: transient.npy (H x W x bins x 3 float32, the frames' "
+                  "axis and emission), steady.npy, before.npy, after.npy and transient.json (the time axis, the render)");
+    cmd->add_flag("--mp4", c->mp4, "Also write transient.mp4, the frames as a video (H.264, needs ffmpeg on PATH)");
+    cmd->add_option("--fps", c->fps, "Frames per second of transient.mp4")
+        ->check(flags::number(0.0, 240.0, true, "frames per second"));
+    cmd->add_option("--contact-sheet", c->contactSheet,
+                    "Also write contact_sheet.png: N frames in a grid, each labelled with its time (0 = none)")
+        ->transform(flags::integer(0, 4096, "frames in the grid; 0 = no contact sheet"));
+    cmd->add_option("--video-ev", c->videoEv,
+                    "Extra exposure (EV) of transient.mp4 and contact_sheet.png (auto-exposed to the brightest frame first)")
+        ->check(flags::number(-64.0, 64.0, false, "EV"));
+    cmd->add_flag("--false-colour", c->falseColour, "transient.mp4 and contact_sheet.png in false colour (log luminance)");
+    cmd->add_flag("--no-srgb", c->noSrgb, "transient.mp4 and contact_sheet.png without sRGB encoding");
     cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
     cmd->add_option("--resume", c->resume,

@@ -102,14 +102,7 @@ struct ControlRect {
     bool visible = true;  // not scrolled out of view
 };
 
-// Exposure that maps the 99th percentile of the lit pixels' luminance to 1 (black pixels, e.g. of
-// tiles not rendered yet, are left out).
-struct ExposureFit {
-    bool found = false;  // some pixel has light
-    float ev = 0.0f;
-    size_t litPixels = 0;
-};
-ExposureFit fitExposure(const std::vector<float>& rgb);
+// The automatic exposure: fitExposure (core/film/tone_map.h).
 
 class Viewer {
 public:

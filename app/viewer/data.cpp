@@ -21,24 +21,6 @@
 
 namespace tpb::app {
 
-ExposureFit fitExposure(const std::vector<float>& rgb) {
-    std::vector<float> lum;
-    lum.reserve(rgb.size() / 3);
-    for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
-        const float l = static_cast<float>(luminance(Color(rgb[i], rgb[i + 1], rgb[i + 2])));
-        if (std::isfinite(l) && l > 0.0f) lum.push_back(l);
-    }
-    ExposureFit fit;
-    fit.litPixels = lum.size();
-    fit.found = !lum.empty();
-    if (!fit.found) return fit;
-    // The 99th percentile of the lit pixels maps to 1 (a few highlights may clip).
-    const size_t k = std::min(lum.size() - 1, static_cast<size_t>(0.99 * static_cast<double>(lum.size())));
-    std::nth_element(lum.begin(), lum.begin() + static_cast<std::ptrdiff_t>(k), lum.end());
-    fit.ev = std::clamp(-std::log2(lum[k]), -64.0f, 64.0f);
-    return fit;
-}
-
 int peakEnergyBin(const std::vector<double>& energy) {
     int best = -1;
     double peak = 0.0;

@@ -8,17 +8,16 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
+#include "film/tone_map.h"
+
 #include <string>
 #include <vector>
 
 namespace tpb::app {
 
-struct DisplayParams {
-    float exposureEv = 0.0f;
-    bool srgb = true;
-    bool falseColor = false;
-    float decades = 4.0f;  // false-colour range below the white point
-};
+// Exposure, sRGB, false colour: the CPU tone map's parameters (core/film/tone_map.h), applied by
+// the shader (shaders/display.frag) the same way.
+using DisplayParams = ToneMap;
 
 // A film-sized image: raw linear RGB floats (GL_RGB32F) and the display-mapped result (RGBA8,
 // rendered through an FBO, one fragment per pixel). texture() is what ImGui::Image draws.

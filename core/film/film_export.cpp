@@ -66,16 +66,10 @@ void exportProfileCsv(const FilmSnapshot& film, int x, int y, const std::string&
     writeTextFile(path, os.str());
 }
 
-std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& path, int count, const ExportOptions& opt,
-                                double exposureEv) {
+std::vector<int> energeticBins(const FilmSnapshot& film, int count, TimeAxis axis) {
     count = std::clamp(count, 1, film.bins());
-    const int W = film.width(), H = film.height();
-    std::vector<int> binsUsed;
-    std::vector<float> strip(static_cast<size_t>(W) * count * H * 3, 0.0f), img;
-    std::vector<float> lum;
-    // Frames spread over the part of the time axis that carries the energy: from the 0.5% to the
-    // 90% quantile of the (delta) arrival-time distribution summed over the image.
-    const std::vector<double> perBin = binEnergy(film, opt.axis);
+    // From the 0.5% to the 90% quantile of the (delta) arrival-time distribution summed over the image.
+    const std::vector<double> perBin = binEnergy(film, axis);
     double total = 0.0;
     for (double v : perBin) total += std::max(v, 0.0);
     int kLo = 0, kHi = film.bins() - 1;
@@ -89,10 +83,21 @@ std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& pat
         }
         kLo = std::max(kLo, 0);
     }
+    std::vector<int> bins;
+    for (int i = 0; i < count; ++i)
+        bins.push_back(std::min(kHi, kLo + static_cast<int>(std::lround(i * double(kHi - kLo) / std::max(1, count - 1)))));
+    return bins;
+}
+
+std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& path, int count, const ExportOptions& opt,
+                                double exposureEv) {
+    const std::vector<int> binsUsed = energeticBins(film, count, opt.axis);
+    count = static_cast<int>(binsUsed.size());
+    const int W = film.width(), H = film.height();
+    std::vector<float> strip(static_cast<size_t>(W) * count * H * 3, 0.0f), img;
+    std::vector<float> lum;
     for (int i = 0; i < count; ++i) {
-        const int k = std::min(kHi, kLo + static_cast<int>(std::lround(i * double(kHi - kLo) / std::max(1, count - 1))));
-        binsUsed.push_back(k);
-        img = frameImage(film, k, opt.axis, opt.mode);
+        img = frameImage(film, binsUsed[i], opt.axis, opt.mode);
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x)
                 for (int c = 0; c < 3; ++c)

@@ -36,6 +36,11 @@ std::string frameFileName(int bin);
 // How many frames exportFrames writes for a film of `bins` bins with these options.
 int exportFrameCount(int bins, const ExportOptions& opt);
 
+// `count` bins (clamped to [1, bins]) evenly spaced over the part of the time axis that carries the
+// energy: from the 0.5% to the 90% quantile of the delta arrival times summed over the image (the
+// whole film when it is black). strip.png and the contact sheet (picture_export.h) show these.
+std::vector<int> energeticBins(const FilmSnapshot& film, int count, TimeAxis axis);
+
 // A PNG strip of `count` frames side by side (sRGB), for a quick look or a README: evenly spaced
 // over the part of the time axis that carries the energy (0.5% to 90% of the arrival times).
 // Exposure: 2^exposureEv times a normalisation that maps the 99.5th percentile of the strip's

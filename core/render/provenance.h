@@ -1,0 +1,32 @@
+// The render an export came from (film/volume_export.h VolumeProvenance), read from a Driver: the
+// settings it runs with and the radii of its last finished pass. Used by `tpb render --npy` and
+// the viewer's volume export, so both side files say the same things.
+#pragma once
+#include "film/volume_export.h"
+#include "render/driver.h"
+
+namespace tpb {
+
+inline VolumeProvenance provenanceOf(const Driver& drv, const std::string& scenePath) {
+    const RenderSettings& s = drv.settings();
+    VolumeProvenance v;
+    v.scene = scenePath;
+    v.method = methodName(s.method);
+    v.volumeEstimator = s.volumeEstimator;
+    v.surfaceEstimator = s.surfaceEstimator;
+    v.timeKernel = timeKernelName(s.timeKernel);
+    v.seed = s.seed;
+    v.photonsPerPass = s.photonsPerPass;
+    v.samplesPerPixel = s.samplesPerPixel;
+    v.alpha = s.alpha;
+    v.beamRadius0 = s.beamRadius0;
+    v.surfaceRadius0 = s.surfaceRadius0;
+    if (drv.completedPasses() > 0) {
+        const PassStats last = drv.lastPass();
+        v.beamRadius = last.beamRadius;
+        v.surfaceRadius = last.surfaceRadius;
+    }
+    return v;
+}
+
+}  // namespace tpb

@@ -1,0 +1,181 @@
+// The machine-readable and picture outputs of the tpb binary (TPB_BINARY): `tpb render --npy
+// --mp4 --contact-sheet` writes its files, lists them in the folder's manifest and summary.json,
+// and refuses --mp4 before rendering when ffmpeg is missing; `tpb info --json` prints one JSON
+// object with the keys the README documents.
+#include "support/temp_dir.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::ostringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+std::string q(const fs::path& p) {
+    std::string s = p.string();
+    s.insert(s.begin(), '\'');
+    s.push_back('\'');
+    return s;
+}
+
+struct Proc {
+    int code = -1;
+    std::string out, err;
+};
+
+// Runs `env` `tpb args` through the shell, stdout and stderr to files in `dir`.
+Proc runTpb(const std::string& args, const fs::path& dir, const std::string& env = "") {
+    const std::string cmd = (env.empty() ? "" : "env " + env + " ") + q(TPB_BINARY) + " " + args + " >" +
+                            q(dir / "stdout.txt") + " 2>" + q(dir / "stderr.txt") + " </dev/null";
+    const int st = std::system(cmd.c_str());
+    Proc p;
+    p.code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    p.out = slurp(dir / "stdout.txt");
+    p.err = slurp(dir / "stderr.txt");
+    return p;
+}
+
+// A small closed box in fog with a point light: 21x14 px (odd width), 12 bins.
+const char* kScene = R"({
+  "version": 1,
+  "camera": {"position": [0, 0.5, 0.9], "look_at": [0, 0.5, 0], "resolution": [21, 14]},
+  "film": {"bins": 12},
+  "media": {"fog": {"sigma_s": 0.5, "sigma_a": 0.05}},
+  "global_medium": "fog",
+  "materials": {"white": {"type": "diffuse", "albedo": 0.7}},
+  "shapes": [{"type": "box", "min": [-1, 0, -1], "max": [1, 1, 1], "material": "white", "flip_normals": true}],
+  "lights": [{"type": "point", "position": [0, 0.8, 0], "power": 5}],
+  "render": {"photons_per_pass": 2000, "passes": 2, "seed": 1}
+}
+)";
+
+// Width and height from a PNG's IHDR chunk.
+std::pair<int, int> pngSize(const fs::path& p) {
+    const std::string b = slurp(p);
+    if (b.size() < 24 || b.substr(1, 3) != "PNG") return {0, 0};
+    const auto be = [&](size_t i) {
+        return (static_cast<unsigned char>(b[i]) << 24) | (static_cast<unsigned char>(b[i + 1]) << 16) |
+               (static_cast<unsigned char>(b[i + 2]) << 8) | static_cast<unsigned char>(b[i + 3]);
+    };
+    return {static_cast<int>(be(16)), static_cast<int>(be(20))};
+}
+
+class CliOutputs : public ::testing::Test {
+protected:
+    void SetUp() override {
+        tmp_ = std::make_unique<tpb::test::TempDir>("clio_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        dir_ = tmp_->path();
+        scene_ = tmp_->write("scene.json", kScene);
+    }
+    std::unique_ptr<tpb::test::TempDir> tmp_;
+    fs::path dir_, scene_;
+};
+
+}  // namespace
+
+TEST_F(CliOutputs, Mp4WithoutFfmpegIsRefusedBeforeRendering) {
+    const fs::path empty = dir_ / "empty_path";
+    fs::create_directory(empty);
+    const Proc p = runTpb("render " + q(scene_) + " -o " + q(dir_ / "out") + " --mp4", dir_, "PATH=" + empty.string());
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(p.err, "error: ffmpeg not found on PATH: install it with apt-get install ffmpeg, or drop --mp4\n");
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing rendered, nothing written";
+}
+
+TEST_F(CliOutputs, NpyMp4AndContactSheetAreWrittenAndListed) {
+    const bool ffmpeg = std::system("command -v ffmpeg >/dev/null 2>&1") == 0;
+    const fs::path out = dir_ / "out";
+    const std::string flags = std::string(" --npy --contact-sheet 5 --unwarp --continuous -q") + (ffmpeg ? " --mp4 --fps 10" : "");
+    const Proc p = runTpb("render " + q(scene_) + " -o " + q(out) + flags, dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    std::vector<std::string> want = {"transient.npy", "transient.json", "steady.npy", "before.npy", "after.npy",
+                                     "contact_sheet.png"};
+    if (ffmpeg) want.push_back("transient.mp4");
+    const json manifest = json::parse(slurp(out / ".tpb-manifest.json"));
+    const json summary = json::parse(slurp(out / "summary.json"));
+    for (const std::string& f : want) {
+        EXPECT_TRUE(fs::exists(out / f)) << f;
+        EXPECT_GT(fs::file_size(out / f), 0u) << f;
+        EXPECT_NE(std::find(manifest["files"].begin(), manifest["files"].end(), f), manifest["files"].end()) << f;
+        EXPECT_NE(std::find(summary["outputs"]["files"].begin(), summary["outputs"]["files"].end(), f),
+                  summary["outputs"]["files"].end()) << f;
+    }
+    // transient.npy: header + 14 x 21 x 12 x 3 floats; the side file names the axis and the render.
+    EXPECT_EQ(fs::file_size(out / "transient.npy"), 128u + 14u * 21 * 12 * 3 * 4);
+    const json side = json::parse(slurp(out / "transient.json"));
+    EXPECT_EQ(side["shape"], json({14, 21, 12, 3}));
+    EXPECT_EQ(side["time"]["axis"], "unwarped");
+    EXPECT_EQ(side["time"]["emission"], "continuous");
+    EXPECT_EQ(side["time"]["bins"], 12);
+    EXPECT_EQ(side["render"]["scene"], scene_.string());
+    EXPECT_EQ(side["render"]["passes"], 2);
+    EXPECT_EQ(side["render"]["seed"], 1);
+    EXPECT_EQ(side["render"]["photons_per_pass"], 2000);
+    EXPECT_EQ(side["render"]["volume_estimator"], summary["settings"]["volume_estimator"]);
+    EXPECT_DOUBLE_EQ(side["time"]["start_opl_m"].get<double>(), summary["film"]["start_opl_m"].get<double>());
+    EXPECT_GT(side["render"]["beam_radius_m"].get<double>(), 0.0);
+    // Contact sheet: 5 frames in 3 columns x 2 rows of (21 + label) px cells.
+    const auto [w, h] = pngSize(out / "contact_sheet.png");
+    EXPECT_EQ(h, 2 * (14 + 9) + 3 * 2);
+    EXPECT_GE(w, 3 * 21 + 4 * 2);
+    if (ffmpeg && std::system("command -v ffprobe >/dev/null 2>&1") == 0) {
+        const std::string cmd = "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                                "stream=nb_read_frames,width,height -of csv=p=0 " + q(out / "transient.mp4") + " > " +
+                                q(dir_ / "probe.txt");
+        ASSERT_EQ(std::system(cmd.c_str()), 0);
+        EXPECT_EQ(slurp(dir_ / "probe.txt"), "22,14,12\n") << "one frame per bin, the odd width padded";
+    }
+    // A second render into the folder without the flags removes them (they were in the manifest).
+    const Proc again = runTpb("render " + q(scene_) + " -o " + q(out) + " -q --no-frames", dir_);
+    ASSERT_EQ(again.code, 0) << again.err;
+    for (const std::string& f : want) EXPECT_FALSE(fs::exists(out / f)) << f;
+}
+
+// Ctrl-C while ffmpeg encodes: the encoding stops, ffmpeg is killed, no transient.mp4 (nor its
+// temporary file) is left, the outputs written before it stay and summary.json says why (exit
+// 130). The ffmpeg here is a stand-in that writes a partial file and reads its input slowly.
+TEST_F(CliOutputs, CtrlCDuringEncodingLeavesNoHalfWrittenMp4) {
+    const fs::path bin = dir_ / "fakebin";
+    fs::create_directory(bin);
+    const fs::path marker = dir_ / "ffmpeg_started";
+    std::ofstream(bin / "ffmpeg") << "#!/bin/sh\nfor a; do out=\"$a\"; done\necho partial > \"$out\"\ntouch " << q(marker)
+                                  << "\nwhile dd bs=65536 count=1 of=/dev/null 2>/dev/null; do sleep 0.2; done\n";
+    fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+    const fs::path out = dir_ / "out";
+    const std::string script =
+        "PATH=" + bin.string() + ":/usr/bin:/bin " + q(TPB_BINARY) + " render " + q(scene_) + " -o " + q(out) +
+        " --width 256 --height 256 --passes 1 --no-frames --strip 0 --npy --mp4 -q >" + q(dir_ / "stdout.txt") + " 2>" +
+        q(dir_ / "stderr.txt") + " & pid=$!; i=0; while [ ! -e " + q(marker) +
+        " ] && [ $i -lt 1500 ]; do sleep 0.02; i=$((i+1)); done; sleep 0.3; kill -INT $pid; wait $pid; echo $? > " +
+        q(dir_ / "rc.txt");
+    ASSERT_EQ(std::system(("sh -c " + q(script)).c_str()), 0);
+    ASSERT_TRUE(fs::exists(marker)) << slurp(dir_ / "stderr.txt");
+    EXPECT_EQ(slurp(dir_ / "rc.txt"), "130\n") << slurp(dir_ / "stderr.txt");
+    EXPECT_FALSE(fs::exists(out / "transient.mp4"));
+    for (const auto& e : fs::directory_iterator(out))
+        EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+    EXPECT_TRUE(fs::exists(out / "transient.npy")) << "written before the encoding: kept";
+    const json summary = json::parse(slurp(out / "summary.json"));
+    EXPECT_NE(summary["outputs"]["error"].get<std::string>().find("while writing transient.mp4"), std::string::npos)
+        << summary["outputs"].dump();
+    EXPECT_NE(slurp(dir_ / "stderr.txt").find("kept in"), std::string::npos);
+}
