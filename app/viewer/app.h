@@ -64,6 +64,7 @@ struct ViewState {
     double playAccum = 0.0;
     int selX = 0, selY = 0;  // pixel of the profile; selY is the streak's row
     std::string outDir = "out/view";
+    int sheetFrames = 16;  // frames of the contact sheet export
 };
 
 // Identifies the film data a buffer was fetched for.

@@ -1,6 +1,9 @@
 #include "viewer/export.h"
 
 #include "base/error.h"
+#include "film/picture_export.h"
+#include "film/volume_export.h"
+#include "render/provenance.h"
 
 #include <cstdio>
 
@@ -29,6 +32,12 @@ std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode) {
     return "profile_x" + std::to_string(x) + "_y" + std::to_string(y) + "_" + axisModeTag(axis, mode) + ".csv";
 }
 
+std::string exportVolumeDir(TimeAxis axis, EmissionMode mode) { return "volume_" + axisModeTag(axis, mode); }
+std::string exportMp4Name(TimeAxis axis, EmissionMode mode) { return "transient_" + axisModeTag(axis, mode) + ".mp4"; }
+std::string exportContactSheetName(TimeAxis axis, EmissionMode mode) {
+    return "contact_sheet_" + axisModeTag(axis, mode) + ".png";
+}
+
 bool ExportJob::start(std::shared_ptr<const Driver> driver, const ExportRequest& req) {
     if (running_.load()) return false;
     if (thread_.joinable()) thread_.join();
@@ -54,7 +63,9 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
     opt.axis = req.axis;
     opt.mode = req.mode;
     const int frames = req.allFrames ? film.bins() : 0;
-    total_ = (req.frame ? 1 : 0) + frames + (req.steady ? 1 : 0) + (req.streak ? 1 : 0) + (req.profile ? 1 : 0);
+    // Progress units: a file, a frame, a row of the volume, a frame of the video.
+    total_ = (req.frame ? 1 : 0) + frames + (req.steady ? 1 : 0) + (req.streak ? 1 : 0) + (req.profile ? 1 : 0) +
+             (req.volume ? film.height() : 0) + (req.mp4 ? film.bins() : 0) + (req.contactSheet ? 1 : 0);
     auto step = [&](const std::string& stage) {
         std::lock_guard<std::mutex> g(mutex_);
         stage_ = stage;
@@ -99,6 +110,28 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
             const int base = done_.load();
             const int n = exportFrames(film, dir, opt, [&](int d, int) { done_ = base + d; }, &cancel_);
             wrote(dir + "/ (" + std::to_string(n) + " frames)");
+        }
+        if (req.volume && !cancel_) {
+            step("volume (.npy rows)");
+            const std::string dir = req.dir + "/" + exportVolumeDir(req.axis, req.mode);
+            const int base = done_.load();
+            const std::vector<std::string> names = exportVolumeNpy(
+                film, dir, opt, provenanceOf(*driver, req.scenePath), [&](int d, int) { done_ = base + d; }, &cancel_);
+            if (!cancel_) wrote(dir + "/ (transient.npy, transient.json, steady/before/after.npy)");
+        }
+        if (req.contactSheet && !cancel_) {
+            step("contact sheet");
+            const std::string path = req.dir + "/" + exportContactSheetName(req.axis, req.mode);
+            exportContactSheet(film, path, req.sheetFrames, opt, req.tone);
+            wrote(path);
+            ++done_;
+        }
+        if (req.mp4 && !cancel_) {
+            step("MP4");
+            const std::string path = req.dir + "/" + exportMp4Name(req.axis, req.mode);
+            const int base = done_.load();
+            if (exportMp4(film, path, opt, req.tone, req.fps, [&](int d, int) { done_ = base + d; }, &cancel_) > 0)
+                wrote(path);
         }
         if (cancel_) {
             std::lock_guard<std::mutex> g(mutex_);

@@ -1,11 +1,13 @@
 // The viewer's exports, run on a background thread so the window keeps drawing: the current
-// frame, all frames, the steady-state image, the streak image of a row and a pixel's profile, in
+// frame, all frames, the steady-state image, the streak image of a row, a pixel's profile, the
+// whole volume for NumPy, an MP4 of the frames and a contact sheet (tone-mapped as shown), in
 // the time axis and emission mode shown. The job reads one snapshot of the film (film_snapshot.h),
 // taken when it starts, so its files show the same passes and a restart or closing the window never
 // frees the data under it. Only film_export.h is called from the thread.
 #pragma once
 #include "render/driver.h"
 #include "film/film_export.h"
+#include "film/tone_map.h"
 
 #include <atomic>
 #include <memory>
@@ -19,9 +21,16 @@ namespace tpb::app {
 struct ExportRequest {
     std::string dir = "out/view";
     bool frame = false, allFrames = false, steady = false, streak = false, profile = false;
+    bool volume = false;       // volume_<tag>/: transient.npy & co (film/volume_export.h)
+    bool mp4 = false;          // transient_<tag>.mp4 (film/picture_export.h, ffmpeg)
+    bool contactSheet = false; // contact_sheet_<tag>.png
     int bin = 0, row = 0, x = 0, y = 0;
     TimeAxis axis = TimeAxis::Real;
     EmissionMode mode = EmissionMode::Delta;
+    ToneMap tone;              // the MP4's and contact sheet's mapping: what the screen shows
+    double fps = 24.0;
+    int sheetFrames = 16;
+    std::string scenePath;     // for transient.json
 };
 
 // File names (relative to the request's folder).
@@ -30,6 +39,9 @@ std::string exportFrameName(int bin, TimeAxis axis, EmissionMode mode);  // fram
 std::string exportFramesDir(TimeAxis axis, EmissionMode mode);           // frames_real_delta
 std::string exportStreakName(int row, TimeAxis axis, EmissionMode mode); // streak_row0031_real_delta.exr
 std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode);  // profile_x12_y40_real_delta.csv
+std::string exportVolumeDir(TimeAxis axis, EmissionMode mode);           // volume_real_delta
+std::string exportMp4Name(TimeAxis axis, EmissionMode mode);             // transient_real_delta.mp4
+std::string exportContactSheetName(TimeAxis axis, EmissionMode mode);    // contact_sheet_real_delta.png
 
 class ExportJob {
 public:

@@ -533,12 +533,15 @@ void Viewer::drawSettingsSection() {
 }
 
 void Viewer::drawExportSection() {
-    if (!section("Export (EXR)", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!section("Export", ImGuiTreeNodeFlags_DefaultOpen)) return;
     ImGui::InputText("folder", &st_.outDir);
+    // The axis and emission of the exports are the ones shown (the image's title says which; the
+    // file names carry them): a tooltip, so that every Export button stays in view in an 800-pixel
+    // window with the volume/MP4/contact sheet row.
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("exports are in %s time, %s (as shown)", st_.axis == TimeAxis::Real ? "real" : "unwarped",
+                          st_.mode == EmissionMode::Delta ? "delta pulse" : "continuous emission");
     track("folder");
-    // Short names: the long ones were cut off (and wrapping would move the buttons with the mode).
-    ImGui::TextDisabled("in %s time, %s", st_.axis == TimeAxis::Real ? "real" : "unwarped",
-                        st_.mode == EmissionMode::Delta ? "delta pulse" : "continuous");
     ExportRequest r;
     r.dir = st_.outDir.empty() ? "." : st_.outDir;
     r.bin = st_.bin;
@@ -547,6 +550,10 @@ void Viewer::drawExportSection() {
     r.y = st_.selY;
     r.axis = st_.axis;
     r.mode = st_.mode;
+    r.tone = st_.display;  // the MP4 and the contact sheet as the screen shows the frames
+    r.tone.exposureEv = st_.evFrame;
+    r.sheetFrames = st_.sheetFrames;
+    r.scenePath = scenePath_;
     const bool busy = export_.busy();
     ImGui::BeginDisabled(busy);
     bool go = false;
@@ -563,6 +570,21 @@ void Viewer::drawExportSection() {
     ImGui::SameLine();
     if (ImGui::Button("Pixel profile (CSV)")) go = r.profile = true;
     track("Pixel profile (CSV)");
+    if (ImGui::Button("Volume (.npy)")) go = r.volume = true;
+    track("Volume (.npy)");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("transient.npy (H x W x bins x 3 float32) + steady/before/after.npy and transient.json\n"
+                          "(time axis, render) for numpy.load, in volume_<axis>_<emission>/");
+    ImGui::SameLine();
+    if (ImGui::Button("MP4")) go = r.mp4 = true;
+    track("MP4");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("every frame at 24 fps with this exposure and colour map (ffmpeg)");
+    ImGui::SameLine();
+    if (ImGui::Button("Contact sheet")) go = r.contactSheet = true;
+    track("Contact sheet");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("%d frames over the lit part of the time axis in a grid, labelled with their time (PNG)",
+                          st_.sheetFrames);
     ImGui::EndDisabled();
     if (ImGui::Button("Window screenshot (F12)")) snapRequested_ = true;
     track("Window screenshot (F12)");

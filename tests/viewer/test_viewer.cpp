@@ -25,6 +25,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -496,7 +497,7 @@ TEST_F(ViewerTest, SteadyStateExportButtonWritesSteadyExr) {
     const fs::path out = dir_ / "steady_button";
     const Proc r = viewRun("steady_button", kRenderArgs + " --after-passes 2 --export-folder " + q(out) +
                                                 " --click 'Export/Steady state'");
-    EXPECT_NE(r.out.find("click: Export (EXR)/Steady state"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("click: Export/Steady state"), std::string::npos) << r.out;
     ASSERT_TRUE(fs::exists(out / "steady.exr")) << r.out << r.err;
     EXPECT_EQ(r.code, 0) << r.out << r.err;
     EXPECT_NE(r.out.find("exported: " + (out / "steady.exr").string()), std::string::npos) << r.out;
@@ -520,7 +521,7 @@ TEST_F(ViewerTest, NoTwoControlsShareAnImGuiId) {
     EXPECT_EQ(r.code, 0) << r.out << r.err;
     EXPECT_EQ(r.err.find("share an ImGui ID"), std::string::npos) << r.err;
     const std::map<std::string, Rect> controls = parseControls(r.out, "control");
-    for (const char* name : {"Time/Pause", "Progress/Pause", "View/Steady state", "Export (EXR)/Steady state",
+    for (const char* name : {"Time/Pause", "Progress/Pause", "View/Steady state", "Export/Steady state",
                              "Render settings/alpha", "Display/decades"})
         EXPECT_TRUE(controls.count(name)) << name << " not drawn:\n" << r.out;
 }
@@ -792,4 +793,58 @@ TEST_F(ViewerTest, SavedCheckpointResumesToTheFilmOfOneUninterruptedRender) {
     EXPECT_EQ(v.code, 0) << v.out << v.err;
     EXPECT_NE(v.out.find("resumed 4 passes from the checkpoint"), std::string::npos) << v.out;
     EXPECT_NE(v.out.find("after 5 passes"), std::string::npos) << v.out;
+}
+
+// The Export section's Volume (.npy), MP4 and Contact sheet buttons (issue 16), clicked like a
+// user in camera-unwarped time: the volume holds the independent render's frames value for value
+// (transient.npy's bin k = frames/frame_k.exr), its side file names the axis and the passes, the
+// contact sheet is a PNG, and the MP4 has one frame per bin (when ffmpeg/ffprobe are installed).
+TEST_F(ViewerTest, ExportButtonsWriteTheVolumeTheMp4AndTheContactSheet) {
+    const bool ffmpeg = std::system("command -v ffmpeg >/dev/null 2>&1 && command -v ffprobe >/dev/null 2>&1") == 0;
+    const fs::path out = dir_ / "issue16_buttons";
+    const Proc r = viewRun("issue16_buttons", kRenderArgs + " --unwarp --after-passes 2 --export-folder " + q(out) +
+                                                  " --click 'Export/Volume (.npy)' --click 'Export/Contact sheet'" +
+                                                  (ffmpeg ? " --click 'Export/MP4'" : ""));
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const fs::path vol = out / "volume_unwarped_delta";
+    ASSERT_TRUE(fs::exists(vol / "transient.npy")) << r.out << r.err;
+    for (const char* f : {"transient.json", "steady.npy", "before.npy", "after.npy"}) EXPECT_TRUE(fs::exists(vol / f)) << f;
+    std::ifstream f(vol / "transient.npy", std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    ASSERT_GT(bytes.size(), 10u);
+    const size_t header = 10 + (static_cast<unsigned char>(bytes[8]) | (static_cast<unsigned char>(bytes[9]) << 8));
+    ASSERT_EQ(bytes.size(), header + static_cast<size_t>(kFilm) * kFilm * kBins * 3 * 4);
+    EXPECT_NE(bytes.find("'shape': (64, 64, 32, 3)"), std::string::npos);
+    const fs::path ref = reference(kModes[1]);  // the independent render, unwarped delta
+    double worst = 0.0;
+    for (int k : {bin(), kBins / 2}) {
+        const Exr frame = readExrFile(ref / "frames" / frameName(k));
+        for (int y = 0; y < kFilm; ++y)
+            for (int x = 0; x < kFilm; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    float v = 0.0f;
+                    std::memcpy(&v, bytes.data() + header + ((static_cast<size_t>(y) * kFilm + x) * kBins + k) * 12 + c * 4, 4);
+                    const float want = frame.rgb[(static_cast<size_t>(y) * kFilm + x) * 3 + c];
+                    worst = std::max(worst, std::abs(double(v) - want) / std::max(1e-20, std::abs(double(want))));
+                }
+    }
+    EXPECT_LE(worst, 1e-6);
+    std::ifstream js(vol / "transient.json");
+    const std::string side((std::istreambuf_iterator<char>(js)), std::istreambuf_iterator<char>());
+    EXPECT_NE(side.find("\"axis\": \"unwarped\""), std::string::npos) << side;
+    EXPECT_NE(side.find("\"passes\": 2"), std::string::npos) << side;
+    const Image8 sheet = readPng(out / "contact_sheet_unwarped_delta.png");
+    EXPECT_GT(sheet.w, 4 * kFilm);  // 16 frames: 4 x 4
+    EXPECT_GT(sheet.h, 4 * kFilm);
+    if (ffmpeg) {
+        const fs::path mp4 = out / "transient_unwarped_delta.mp4";
+        ASSERT_TRUE(fs::exists(mp4)) << r.out << r.err;
+        const std::string cmd = "ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames "
+                                "-of csv=p=0 " + q(mp4) + " > " + q(out / "probe.txt");
+        ASSERT_EQ(std::system(cmd.c_str()), 0);
+        std::ifstream p(out / "probe.txt");
+        int frames = 0;
+        p >> frames;
+        EXPECT_EQ(frames, kBins);
+    }
 }
