@@ -529,19 +529,55 @@ std::string methodLabel(const std::string& m) {
     return "photon beams " + m;
 }
 
+// The columns of convergence.csv, in order, for one row; convergence.json's "rows" holds the same
+// values under the same names (null where the CSV cell is empty: not measured or not finite).
+std::vector<std::pair<const char*, json>> rowColumns(const Row& r) {
+    return {{"method", r.method},
+            {"checkpoint", r.checkpoint},
+            {"elapsed_s", jnum(r.elapsed)},
+            {"passes", r.passes},
+            {"samples_per_pixel", r.spp},
+            {"kernel_radius_m", jnum(r.radius)},
+            {"rel_rmse_volume", jnum(r.err.volume)},
+            {"rel_rmse_steady", jnum(r.err.steady)},
+            {"steady_total_diff", jnum(r.err.steadyTotalDiff)},
+            {"rel_rmse_volume_corrected", jnum(r.corrVolume)},
+            {"rel_rmse_steady_corrected", jnum(r.corrSteady)},
+            {"wall_s", jnum(r.wall)},
+            {"cpu_s", jnum(r.cpu)},
+            {"rel_l1_volume", jnum(r.err.volumeL1)},
+            {"rel_l1_steady", jnum(r.err.steadyL1)}};
+}
+
 void writeCsv(const std::string& path, const std::vector<MethodResult>& results) {
     std::ostringstream os;
-    os << "method,checkpoint,elapsed_s,passes,samples_per_pixel,kernel_radius_m,rel_rmse_volume,rel_rmse_steady,"
-          "steady_total_diff,rel_rmse_volume_corrected,rel_rmse_steady_corrected,wall_s,cpu_s,rel_l1_volume,"
-          "rel_l1_steady\n";
+    const auto header = rowColumns(Row{});
+    for (size_t i = 0; i < header.size(); ++i) os << (i ? "," : "") << header[i].first;
+    os << '\n';
     for (const MethodResult& m : results)
-        for (const Row& r : m.rows)
-            os << r.method << ',' << r.checkpoint << ',' << csvNum(r.elapsed) << ',' << r.passes << ',' << r.spp << ','
-               << csvNum(r.radius) << ',' << csvNum(r.err.volume) << ',' << csvNum(r.err.steady) << ','
-               << csvNum(r.err.steadyTotalDiff) << ',' << csvNum(r.corrVolume) << ',' << csvNum(r.corrSteady) << ','
-               << csvNum(r.wall) << ',' << csvNum(r.cpu) << ',' << csvNum(r.err.volumeL1) << ','
-               << csvNum(r.err.steadyL1) << '\n';
+        for (const Row& r : m.rows) {
+            const auto cols = rowColumns(r);
+            for (size_t i = 0; i < cols.size(); ++i) {
+                const json& v = cols[i].second;
+                os << (i ? "," : "");
+                if (v.is_string()) os << v.get<std::string>();
+                else if (v.is_number_integer()) os << v.get<int64_t>();
+                else if (v.is_number()) os << csvNum(v.get<double>());
+            }
+            os << '\n';
+        }
     writeTextFile(path, os.str());
+}
+
+json rowsJson(const std::vector<MethodResult>& results) {
+    json rows = json::array();
+    for (const MethodResult& m : results)
+        for (const Row& r : m.rows) {
+            json o = json::object();
+            for (auto& [name, v] : rowColumns(r)) o[name] = v;
+            rows.push_back(o);
+        }
+    return rows;
 }
 
 void writePerFrameCsv(const std::string& path, const std::vector<MethodResult>& results, const TimeBins& tb) {
@@ -787,6 +823,7 @@ void runConverge(ConvergeCmd& c) {
         jm[m.method] = e;
     }
     j["methods"] = jm;
+    j["rows"] = rowsJson(results);  // convergence.csv's rows, same names
 
     std::vector<int> stripK;
     if (c.frames > 0) {

@@ -3,7 +3,12 @@
 #include "cli/flags.h"
 #include "cli/interrupt.h"
 #include "cli/commands.h"
+#include "cli/summary.h"
 #include "render/auto_radius.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
 
 #include <cmath>
 #include <cstdio>
@@ -31,69 +36,152 @@ const char* lightName(LightType t) {
     return "?";
 }
 
-void run(const std::string& path, const RenderOverrides& ov) {
-    InterruptScope interrupts;  // the pilot of an automatic range polls Ctrl-C/SIGTERM
-    const PreparedRender p = loadAndBuild(path, ov);
+nlohmann::json vec3(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
+
+// Everything `tpb info` says, as the object `tpb info --json` prints (README "Machine-readable
+// outputs" documents each key); the text form is printed from it.
+nlohmann::json describe(const std::string& path, const PreparedRender& p) {
+    using nlohmann::json;
     const Scene* s = p.scene.get();
     const RenderSettings& ds = p.settings;
     const Camera& cam = s->camera;
-    const double fovYDeg = 2.0 * std::atan(cam.tanHalfFovY) * 180.0 / kPi;
-    std::printf("scene      %s (version %d)\n", path.c_str(), p.source.version);
-    std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam.width, cam.height, fovYDeg,
-                cam.position.x, cam.position.y, cam.position.z);
-    std::printf("bounds     (%.3g, %.3g, %.3g) - (%.3g, %.3g, %.3g), diagonal %.4g m\n", s->bounds.lo.x, s->bounds.lo.y,
-                s->bounds.lo.z, s->bounds.hi.x, s->bounds.hi.y, s->bounds.hi.z, s->bounds.diagonal());
-    std::printf("geometry   %zu triangles, %zu spheres, %zu shapes\n", s->geometry.triangleCount(),
-                s->geometry.sphereCount(), s->shapes.size());
-    for (size_t i = 0; i < s->shapes.size(); ++i) {
-        const ShapeInfo& sh = s->shapes[i];
-        std::printf("  shape %-20s %s%s\n", sh.name.c_str(),
-                    sh.areaLight >= 0 ? "area light surface" : sh.material >= 0 ? materialName(s->materials[sh.material].type) : "no material",
-                    sh.interiorRegion > 0 ? (" -> region " + std::to_string(sh.interiorRegion)).c_str() : "");
-    }
+    json j;
+    j["scene"] = {{"path", path}, {"version", p.source.version}};
+    j["camera"] = {{"width", cam.width}, {"height", cam.height},
+                   {"fov_y_deg", 2.0 * std::atan(cam.tanHalfFovY) * 180.0 / kPi}, {"position", vec3(cam.position)}};
+    j["bounds"] = {{"min", vec3(s->bounds.lo)}, {"max", vec3(s->bounds.hi)}, {"diagonal_m", s->bounds.diagonal()}};
+    j["geometry"] = {{"triangles", s->geometry.triangleCount()}, {"spheres", s->geometry.sphereCount()},
+                     {"shapes", s->shapes.size()}};
+    json shapes = json::array();
+    for (const ShapeInfo& sh : s->shapes)
+        shapes.push_back({{"name", sh.name},
+                          {"kind", sh.areaLight >= 0 ? "area light surface"
+                                   : sh.material >= 0 ? materialName(s->materials[sh.material].type) : "no material"},
+                          {"interior_region", sh.interiorRegion > 0 ? json(sh.interiorRegion) : json(nullptr)}});
+    j["shapes"] = shapes;
+    json regions = json::array();
     for (size_t r = 0; r < s->regions.size(); ++r) {
         const Region& g = s->regions[r];
-        const Medium& m = g.medium;
-        std::printf("region %zu   %s, ior %.3g", r, r == 0 ? "outside" : "inside a shape", g.ior);
+        json m = nullptr;
         if (g.hasMedium)
-            std::printf(", sigma_s (%.3g %.3g %.3g) /m, sigma_a (%.3g %.3g %.3g) /m, g %.3g", m.sigma_s.x, m.sigma_s.y,
-                        m.sigma_s.z, m.sigma_a.x, m.sigma_a.y, m.sigma_a.z, m.phase.g);
-        else
-            std::printf(", no medium");
-        std::printf("\n");
+            m = {{"sigma_s_per_m", vec3(g.medium.sigma_s)}, {"sigma_a_per_m", vec3(g.medium.sigma_a)}, {"g", g.medium.phase.g}};
+        regions.push_back({{"index", r}, {"where", r == 0 ? "outside" : "inside a shape"}, {"ior", g.ior}, {"medium", m}});
     }
+    j["regions"] = regions;
+    json lights = json::array();
     for (const Light& l : s->lights)
-        std::printf("light      %s, power (%.3g %.3g %.3g) W, pulse at %.4g m OPL (%.4g ns)\n", lightName(l.type), l.power.x,
-                    l.power.y, l.power.z, l.emitOpl, l.emitOpl / kC_m_per_ns);
+        lights.push_back({{"type", lightName(l.type)}, {"power_w", vec3(l.power)}, {"pulse_opl_m", l.emitOpl},
+                          {"pulse_ns", l.emitOpl / kC_m_per_ns}});
+    j["lights"] = lights;
     const TimeBins& t = p.time;
-    std::printf("film       %d bins of %.4g m OPL (%.4g ns), from %.4g to %.4g m (%.4g to %.4g ns)%s\n", t.bins, t.binWidth,
-                t.binWidth / kC_m_per_ns, t.startOpl, t.endOpl(), t.startOpl / kC_m_per_ns, t.endOpl() / kC_m_per_ns,
-                p.film.autoRange ? " [auto]" : "");
-    std::printf("memory     transient film (2 time axes, RGB float + steady double): %s\n",
-                humanBytes(filmBytes(cam.width, cam.height, t.bins)).c_str());
-    std::printf("           per worker thread: pixel accumulator %s\n",
-                humanBytes(static_cast<uint64_t>(t.bins) * 2 * 3 * sizeof(double)).c_str());
-    const uint64_t beamBytes = static_cast<uint64_t>(ds.photonsPerPass) * 4 * (sizeof(double) * 12 + 16);
-    std::printf("           photon map per pass (rough, ~4 segments per photon): %s\n", humanBytes(beamBytes).c_str());
-    std::printf("render     %lld photons/pass, beam radius %.4g m, surface radius %.4g m, alpha %.3g, %lld passes%s\n",
-                static_cast<long long>(ds.photonsPerPass), ds.beamRadius0, ds.surfaceRadius0, ds.alpha,
-                static_cast<long long>(ds.passes), ds.timeBudgetSec > 0 ? (", budget " + std::to_string(ds.timeBudgetSec) + " s").c_str() : "");
+    j["film"] = filmJson(t);
+    j["film"]["end_opl_m"] = t.endOpl();
+    j["film"]["end_ns"] = t.endOpl() / kC_m_per_ns;
+    j["film"]["auto_range"] = p.film.autoRange;
+    j["memory"] = {{"film_bytes", filmBytes(cam.width, cam.height, t.bins)},
+                   {"pixel_accumulator_bytes_per_thread", static_cast<uint64_t>(t.bins) * 2 * 3 * sizeof(double)},
+                   {"photon_map_bytes_per_pass_rough",
+                    static_cast<uint64_t>(ds.photonsPerPass) * 4 * (sizeof(double) * 12 + 16)}};
+    j["render"] = {{"method", methodName(ds.method)},   {"photons_per_pass", ds.photonsPerPass},
+                   {"beam_radius0_m", ds.beamRadius0}, {"surface_radius0_m", ds.surfaceRadius0},
+                   {"alpha", ds.alpha},                {"passes", ds.passes},
+                   {"time_budget_s", ds.timeBudgetSec}};
+    j["density"] = nullptr;
     // The photon density of a pilot pass, and the radius "auto" picks from it (render/auto_radius.h).
     if (s->stages.beams && ds.method == Method::Beams) {
         // Measured once: prepareRender's when the radius is "auto", else here.
         const RadiusPilot rp = p.radiusPilot.measured ? p.radiusPilot : pilotRadius(*s, ds, &interruptFlag());
         throwIfInterrupted("while measuring the photon density (radius pilot)");
-        if (rp.measured)
-            std::printf("density    pilot pass of %lld photons (x%.3g for the pass): %s; the radius %.4g m gathers ~%.3g per ray%s\n",
-                        static_cast<long long>(rp.photons), rp.scale, rp.why.c_str(), ds.beamRadius0, rp.gathered(ds.beamRadius0),
-                        p.radiusPilot.measured ? " (chosen: \"radius\": \"auto\")" : "");
-        else
-            std::printf("density    %s\n", rp.why.c_str());
+        j["density"] = {{"measured", rp.measured}, {"why", rp.why}};
+        if (rp.measured) {
+            j["density"]["pilot_photons"] = rp.photons;
+            j["density"]["scale_to_pass"] = rp.scale;
+            j["density"]["gathered_per_ray"] = rp.gathered(ds.beamRadius0);
+            j["density"]["radius_chosen_automatically"] = p.radiusPilot.measured;
+        }
     }
-    std::printf("estimators volume %s, surface %s, time kernel %s\n", ds.volumeEstimator.c_str(), ds.surfaceEstimator.c_str(),
-                timeKernelName(ds.timeKernel).c_str());
+    j["estimators"] = {{"volume", ds.volumeEstimator}, {"surface", ds.surfaceEstimator},
+                       {"time_kernel", timeKernelName(ds.timeKernel)}};
+    j["stages"] = s->stages.reasons;
+    return j;
+}
+
+void printText(const nlohmann::json& j) {
+    const auto v3 = [](const nlohmann::json& a) { return std::array<double, 3>{a[0].get<double>(), a[1].get<double>(), a[2].get<double>()}; };
+    const auto& cam = j["camera"];
+    const auto pos = v3(cam["position"]);
+    std::printf("scene      %s (version %d)\n", j["scene"]["path"].get<std::string>().c_str(), j["scene"]["version"].get<int>());
+    std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam["width"].get<int>(), cam["height"].get<int>(),
+                cam["fov_y_deg"].get<double>(), pos[0], pos[1], pos[2]);
+    const auto lo = v3(j["bounds"]["min"]), hi = v3(j["bounds"]["max"]);
+    std::printf("bounds     (%.3g, %.3g, %.3g) - (%.3g, %.3g, %.3g), diagonal %.4g m\n", lo[0], lo[1], lo[2], hi[0], hi[1],
+                hi[2], j["bounds"]["diagonal_m"].get<double>());
+    std::printf("geometry   %zu triangles, %zu spheres, %zu shapes\n", j["geometry"]["triangles"].get<size_t>(),
+                j["geometry"]["spheres"].get<size_t>(), j["geometry"]["shapes"].get<size_t>());
+    for (const auto& sh : j["shapes"])
+        std::printf("  shape %-20s %s%s\n", sh["name"].get<std::string>().c_str(), sh["kind"].get<std::string>().c_str(),
+                    sh["interior_region"].is_null() ? "" : (" -> region " + std::to_string(sh["interior_region"].get<int>())).c_str());
+    for (const auto& g : j["regions"]) {
+        std::printf("region %zu   %s, ior %.3g", g["index"].get<size_t>(), g["where"].get<std::string>().c_str(), g["ior"].get<double>());
+        if (!g["medium"].is_null()) {
+            const auto ss = v3(g["medium"]["sigma_s_per_m"]), sa = v3(g["medium"]["sigma_a_per_m"]);
+            std::printf(", sigma_s (%.3g %.3g %.3g) /m, sigma_a (%.3g %.3g %.3g) /m, g %.3g", ss[0], ss[1], ss[2], sa[0], sa[1],
+                        sa[2], g["medium"]["g"].get<double>());
+        } else {
+            std::printf(", no medium");
+        }
+        std::printf("\n");
+    }
+    for (const auto& l : j["lights"]) {
+        const auto pw = v3(l["power_w"]);
+        std::printf("light      %s, power (%.3g %.3g %.3g) W, pulse at %.4g m OPL (%.4g ns)\n", l["type"].get<std::string>().c_str(),
+                    pw[0], pw[1], pw[2], l["pulse_opl_m"].get<double>(), l["pulse_ns"].get<double>());
+    }
+    const auto& f = j["film"];
+    std::printf("film       %d bins of %.4g m OPL (%.4g ns), from %.4g to %.4g m (%.4g to %.4g ns)%s\n", f["bins"].get<int>(),
+                f["bin_width_opl_m"].get<double>(), f["bin_width_ns"].get<double>(), f["start_opl_m"].get<double>(),
+                f["end_opl_m"].get<double>(), f["start_ns"].get<double>(), f["end_ns"].get<double>(),
+                f["auto_range"].get<bool>() ? " [auto]" : "");
+    const auto& m = j["memory"];
+    std::printf("memory     transient film (2 time axes, RGB float + steady double): %s\n",
+                humanBytes(m["film_bytes"].get<uint64_t>()).c_str());
+    std::printf("           per worker thread: pixel accumulator %s\n",
+                humanBytes(m["pixel_accumulator_bytes_per_thread"].get<uint64_t>()).c_str());
+    std::printf("           photon map per pass (rough, ~4 segments per photon): %s\n",
+                humanBytes(m["photon_map_bytes_per_pass_rough"].get<uint64_t>()).c_str());
+    const auto& r = j["render"];
+    const double budget = r["time_budget_s"].get<double>();
+    std::printf("render     %lld photons/pass, beam radius %.4g m, surface radius %.4g m, alpha %.3g, %lld passes%s\n",
+                r["photons_per_pass"].get<long long>(), r["beam_radius0_m"].get<double>(), r["surface_radius0_m"].get<double>(),
+                r["alpha"].get<double>(), r["passes"].get<long long>(),
+                budget > 0 ? (", budget " + std::to_string(budget) + " s").c_str() : "");
+    const auto& d = j["density"];
+    if (!d.is_null()) {
+        if (d["measured"].get<bool>())
+            std::printf("density    pilot pass of %lld photons (x%.3g for the pass): %s; the radius %.4g m gathers ~%.3g per ray%s\n",
+                        d["pilot_photons"].get<long long>(), d["scale_to_pass"].get<double>(), d["why"].get<std::string>().c_str(),
+                        r["beam_radius0_m"].get<double>(), d["gathered_per_ray"].get<double>(),
+                        d["radius_chosen_automatically"].get<bool>() ? " (chosen: \"radius\": \"auto\")" : "");
+        else
+            std::printf("density    %s\n", d["why"].get<std::string>().c_str());
+    }
+    const auto& e = j["estimators"];
+    std::printf("estimators volume %s, surface %s, time kernel %s\n", e["volume"].get<std::string>().c_str(),
+                e["surface"].get<std::string>().c_str(), e["time_kernel"].get<std::string>().c_str());
     std::printf("stages\n");
-    for (const std::string& r : s->stages.reasons) std::printf("  - %s\n", r.c_str());
+    for (const auto& st : j["stages"]) std::printf("  - %s\n", st.get<std::string>().c_str());
+}
+
+void run(const std::string& path, const RenderOverrides& ov, bool asJson) {
+    InterruptScope interrupts;  // the pilot of an automatic range polls Ctrl-C/SIGTERM
+    const PreparedRender p = loadAndBuild(path, ov, LoadOptions{asJson});
+    nlohmann::json j = describe(path, p);
+    if (asJson) {
+        replaceNonFiniteNumbers(j);
+        std::printf("%s\n", j.dump(2).c_str());
+    } else {
+        printText(j);
+    }
 }
 
 }  // namespace
@@ -101,10 +189,13 @@ void run(const std::string& path, const RenderOverrides& ov) {
 void registerInfo(CLI::App& app) {
     auto path = std::make_shared<std::string>();
     auto ov = std::make_shared<RenderOverrides>();
+    auto asJson = std::make_shared<bool>(false);
     CLI::App* cmd = app.add_subcommand("info", "Print what a scene contains, the stages that will run and the memory needed");
     cmd->add_option("scene", *path, "Scene file (JSON)")->required();
     ov->add(cmd);
-    cmd->callback([path, ov] { run(*path, *ov); });
+    cmd->add_flag("--json", *asJson,
+                  "Print everything as one JSON object on stdout (README \"Machine-readable outputs\"; warnings stay on stderr)");
+    cmd->callback([path, ov, asJson] { run(*path, *ov, *asJson); });
 }
 
 }  // namespace tpb::app

@@ -61,14 +61,15 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
                      {"beam_length", s.beamLength == BeamLength::Short ? "short" : "long"},
                      {"accel", s.accel == AccelBackend::Embree ? "embree" : "brute-force"},
                      {"volume_estimator", s.volumeEstimator}, {"surface_estimator", s.surfaceEstimator},
-                     {"time_kernel", timeKernelName(s.timeKernel)}};
+                     {"time_kernel", timeKernelName(s.timeKernel)}, {"max_depth", s.maxDepth},
+                     {"warmup_passes", s.warmupPasses}, {"pass_limit", s.passes}, {"time_budget_s", s.timeBudgetSec}};
     json per = json::array();
     int64_t beams = 0, estimates = 0, photonEst = 0;
     double passSec = 0.0;
     Color emittedFlux(0.0), cutFlux(0.0);
     int64_t regionOverflows = 0;
     for (const PassStats& p : hist) {
-        per.push_back({{"pass", p.pass}, {"beam_radius_m", p.beamRadius}, {"surface_radius_m", p.surfaceRadius},
+        per.push_back({{"pass", p.pass}, {"photons", p.photons}, {"beam_radius_m", p.beamRadius}, {"surface_radius_m", p.surfaceRadius},
                        {"beams", p.beams}, {"points", p.points}, {"beam_pieces", p.beamPieces}, {"surface_photons", p.surfacePhotons},
                        {"beam_estimates", p.camera.beamEstimates}, {"photon_estimates", p.camera.photonEstimates},
                        {"photon_s", p.photonSec}, {"build_s", p.buildSec}, {"camera_s", p.cameraSec},

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -163,7 +164,7 @@ TEST_F(CliOutputs, CtrlCDuringEncodingLeavesNoHalfWrittenMp4) {
     const fs::path out = dir_ / "out";
     const std::string script =
         "PATH=" + bin.string() + ":/usr/bin:/bin " + q(TPB_BINARY) + " render " + q(scene_) + " -o " + q(out) +
-        " --width 256 --height 256 --passes 1 --no-frames --strip 0 --npy --mp4 -q >" + q(dir_ / "stdout.txt") + " 2>" +
+        " --width 128 --height 128 --passes 1 --no-frames --strip 0 --npy --mp4 -q >" + q(dir_ / "stdout.txt") + " 2>" +
         q(dir_ / "stderr.txt") + " & pid=$!; i=0; while [ ! -e " + q(marker) +
         " ] && [ $i -lt 1500 ]; do sleep 0.02; i=$((i+1)); done; sleep 0.3; kill -INT $pid; wait $pid; echo $? > " +
         q(dir_ / "rc.txt");
@@ -178,4 +179,84 @@ TEST_F(CliOutputs, CtrlCDuringEncodingLeavesNoHalfWrittenMp4) {
     EXPECT_NE(summary["outputs"]["error"].get<std::string>().find("while writing transient.mp4"), std::string::npos)
         << summary["outputs"].dump();
     EXPECT_NE(slurp(dir_ / "stderr.txt").find("kept in"), std::string::npos);
+}
+
+// `tpb info --json`: one JSON object on stdout (nothing else there), with every key the README's
+// "Machine-readable outputs" table lists, and the values the text form prints.
+TEST_F(CliOutputs, InfoJsonParsesAndHasTheDocumentedKeys) {
+    const Proc p = runTpb("info " + q(scene_) + " --json", dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    const json j = json::parse(p.out);  // throws (fails the test) on anything but one JSON value
+    ASSERT_TRUE(j.is_object());
+    const std::vector<std::string> keys = {
+        "scene.path", "scene.version", "camera.width", "camera.height", "camera.fov_y_deg", "camera.position",
+        "bounds.min", "bounds.max", "bounds.diagonal_m", "geometry.triangles", "geometry.spheres", "geometry.shapes",
+        "shapes", "regions", "lights", "film.bins", "film.start_opl_m", "film.bin_width_opl_m", "film.end_opl_m",
+        "film.start_ns", "film.bin_width_ns", "film.end_ns", "film.auto_range", "memory.film_bytes",
+        "memory.pixel_accumulator_bytes_per_thread", "memory.photon_map_bytes_per_pass_rough", "render.method",
+        "render.photons_per_pass", "render.beam_radius0_m", "render.surface_radius0_m", "render.alpha", "render.passes",
+        "render.time_budget_s", "density.measured", "density.why", "density.pilot_photons", "density.scale_to_pass",
+        "density.gathered_per_ray", "density.radius_chosen_automatically", "estimators.volume", "estimators.surface",
+        "estimators.time_kernel", "stages"};
+    for (const std::string& k : keys) {
+        std::string pointer = "/" + k;
+        std::replace(pointer.begin(), pointer.end(), '.', '/');
+        EXPECT_TRUE(j.contains(json::json_pointer(pointer))) << k;
+    }
+    EXPECT_EQ(j["camera"]["width"], 21);
+    EXPECT_EQ(j["camera"]["height"], 14);
+    EXPECT_EQ(j["film"]["bins"], 12);
+    EXPECT_EQ(j["render"]["photons_per_pass"], 2000);
+    EXPECT_EQ(j["render"]["passes"], 2);
+    EXPECT_EQ(j["scene"]["path"], scene_.string());
+    ASSERT_EQ(j["shapes"].size(), 1u);
+    EXPECT_EQ(j["shapes"][0]["kind"], "diffuse");
+    ASSERT_EQ(j["regions"].size(), 1u);
+    EXPECT_EQ(j["regions"][0]["medium"]["sigma_s_per_m"], json({0.5, 0.5, 0.5}));
+    ASSERT_EQ(j["lights"].size(), 1u);
+    EXPECT_EQ(j["lights"][0]["type"], "point");
+    EXPECT_EQ(j["lights"][0]["power_w"], json({5.0, 5.0, 5.0}));
+    EXPECT_FALSE(j["stages"].empty());
+    EXPECT_TRUE(j["density"]["measured"].get<bool>());
+    // The text form says the same.
+    const Proc t = runTpb("info " + q(scene_), dir_);
+    ASSERT_EQ(t.code, 0) << t.err;
+    EXPECT_NE(t.out.find("camera     21x14"), std::string::npos) << t.out;
+    EXPECT_NE(t.out.find("film       12 bins"), std::string::npos) << t.out;
+}
+
+// convergence.json's "rows" is convergence.csv as JSON: the same columns as keys, the same rows.
+TEST_F(CliOutputs, ConvergenceJsonRowsAreTheCsvRows) {
+    const fs::path ref = dir_ / "ref.tpbref";
+    const Proc r = runTpb("reference " + q(scene_) + " -o " + q(ref) + " --time 1.5 --threads 2 -q", dir_);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const fs::path out = dir_ / "conv";
+    const Proc c = runTpb("converge " + q(scene_) + " --reference " + q(ref) + " -o " + q(out) +
+                              " --time 1.5 --no-plot --threads 2 --method both", dir_);
+    ASSERT_EQ(c.code, 0) << c.err;
+    std::istringstream csv(slurp(out / "convergence.csv"));
+    std::string line;
+    std::getline(csv, line);
+    std::vector<std::string> header;
+    for (std::istringstream h(line); std::getline(h, line, ',');) header.push_back(line);
+    EXPECT_EQ(header.size(), 15u);
+    const json rows = json::parse(slurp(out / "convergence.json"))["rows"];
+    size_t n = 0;
+    for (; std::getline(csv, line); ++n) {
+        ASSERT_LT(n, rows.size());
+        const json& row = rows[n];
+        EXPECT_EQ(row.size(), header.size());
+        std::istringstream cells(line + ",");
+        std::string cell;
+        for (size_t i = 0; i < header.size() && std::getline(cells, cell, ','); ++i) {
+            SCOPED_TRACE(header[i] + " row " + std::to_string(n));
+            ASSERT_TRUE(row.contains(header[i]));
+            const json& v = row[header[i]];
+            if (cell.empty()) EXPECT_TRUE(v.is_null());
+            else if (v.is_string()) EXPECT_EQ(v.get<std::string>(), cell);
+            else EXPECT_NEAR(v.get<double>(), std::stod(cell), 1e-5 * std::abs(std::stod(cell)) + 1e-300);
+        }
+    }
+    EXPECT_GE(n, 2u) << "both methods measured";
+    EXPECT_EQ(n, rows.size());
 }
