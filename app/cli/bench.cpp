@@ -137,7 +137,7 @@ void run(BenchCmd& c) {
 void registerBench(CLI::App& app) {
     auto c = std::make_shared<BenchCmd>();
     CLI::App* cmd = app.add_subcommand("bench", "Measure time per pass, beams/s, estimates/s and memory for several bin counts");
-    cmd->add_option("scene", c->scene, "Scene file (default: scenes/cornell_medium.json)");
+    cmd->add_option("scene", c->scene, "Scene file, JSON or Mitsuba 3 XML (default: scenes/cornell_medium.json)");
     cmd->add_option("--bins-list", c->binsList, "Bin counts to measure (the first is the ratio's base)")
         ->delimiter(',')
         ->transform(flags::integer(1, INT_MAX, "each a number of time bins, e.g. 1,256,1024"));

@@ -940,7 +940,7 @@ void registerConverge(CLI::App& app) {
         CLI::App* cmd = app.add_subcommand(
             "reference", "Render a reference transient volume (path tracer by default, or the single-scattering "
                          "quadrature) into a .tpbref file; reused when it exists with the same settings");
-        cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
+        cmd->add_option("scene", c->scene, "Scene file (JSON or Mitsuba 3 XML)")->required();
         cmd->add_option("-o,--out", c->out, "Reference file (default: ref/<scene>-<method>-<W>x<H>x<bins>-d<depth>.tpbref)");
         cmd->add_option("--method", c->method, "Renderer: pt (unbiased path tracer) | beams")
             ->check(CLI::IsMember({"pt", "beams"}));
@@ -959,7 +959,7 @@ void registerConverge(CLI::App& app) {
         CLI::App* cmd = app.add_subcommand(
             "converge", "Error against a reference as a function of render time: convergence.csv, a log-log plot, "
                         "the fitted slope, an equal-time strip");
-        cmd->add_option("scene", c->scene, "Scene file (JSON)")->required();
+        cmd->add_option("scene", c->scene, "Scene file (JSON or Mitsuba 3 XML)")->required();
         cmd->add_option("--reference", c->reference, "Reference file made by `tpb reference` (--width, --height, "
                                                       "--bins and --max-depth default to its values)")
             ->required();

@@ -191,7 +191,7 @@ void registerInfo(CLI::App& app) {
     auto ov = std::make_shared<RenderOverrides>();
     auto asJson = std::make_shared<bool>(false);
     CLI::App* cmd = app.add_subcommand("info", "Print what a scene contains, the stages that will run and the memory needed");
-    cmd->add_option("scene", *path, "Scene file (JSON)")->required();
+    cmd->add_option("scene", *path, "Scene file (JSON or Mitsuba 3 XML)")->required();
     ov->add(cmd);
     cmd->add_flag("--json", *asJson,
                   "Print everything as one JSON object on stdout (README \"Machine-readable outputs\"; warnings stay on stderr)");

@@ -310,7 +310,7 @@ void registerRender(CLI::App& app) {
     auto c = std::make_shared<RenderCmd>();
     CLI::App* cmd = app.add_subcommand("render", "Render a scene headless: preview.exr, EXR frames per time bin, "
                                                  "steady.exr and summary.json");
-    cmd->add_option("scene", c->scene, "Scene file (with --resume: the checkpoint's scene unless given)");
+    cmd->add_option("scene", c->scene, "Scene file, JSON or Mitsuba 3 XML (with --resume: the checkpoint's scene unless given)");
     CLI::Option* out = cmd->add_option("-o,--out", c->out, "Output folder (created if needed; locked while rendering; the outputs of "
                                         "an earlier render in it are replaced, other files are kept)");
     c->ov.add(cmd);

@@ -58,7 +58,7 @@ void registerView(CLI::App& app) {
     ViewOptions* o = &c->view;
     CLI::App* cmd = app.add_subcommand(
         "view", "Interactive viewer: the render refines in the background while you scrub through time");
-    cmd->add_option("scene", c->scene, "Scene file (with --resume: the checkpoint's scene unless given)");
+    cmd->add_option("scene", c->scene, "Scene file, JSON or Mitsuba 3 XML (with --resume: the checkpoint's scene unless given)");
     cmd->add_option("--resume", c->resume,
                     "Go on refining the checkpoint in this folder (or this .tpbck file): same scene and settings; "
                     "\"Save checkpoint\" writes it back there")

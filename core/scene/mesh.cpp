@@ -8,12 +8,14 @@
 #pragma GCC diagnostic ignored "-Wrestrict"
 #endif
 #include "scene/mesh.h"
+#include "scene/ply.h"
 #include "base/error.h"
 #include "scene/scene_desc.h"
 
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
+#include <cctype>
 #include <array>
 #include <cerrno>
 #include <cstdio>
@@ -165,6 +167,12 @@ void checkVertexLines(const std::string& path, const std::string& text) {
 }
 
 }  // namespace
+
+TriangleMesh loadMeshFile(const std::string& path, size_t* droppedDegenerate) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext == ".ply" ? loadPly(path, droppedDegenerate) : loadObj(path, droppedDegenerate);
+}
 
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
     namespace fs = std::filesystem;

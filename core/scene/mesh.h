@@ -23,6 +23,8 @@ struct TriangleMesh {
 // beyond +-kMaxSceneCoordinateM, with its line), or a mesh without triangles. Degenerate (zero-area)
 // triangles are dropped and counted in `droppedDegenerate` if non-null.
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate = nullptr);
+// A mesh file by its extension: ".ply" (any case) through loadPly (scene/ply.h), anything else as OBJ.
+TriangleMesh loadMeshFile(const std::string& path, size_t* droppedDegenerate = nullptr);
 
 // corner + s*edgeU + t*edgeV; two triangles, normal along cross(edgeU, edgeV).
 TriangleMesh makeQuad(const Vec3& corner, const Vec3& edgeU, const Vec3& edgeV);

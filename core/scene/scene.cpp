@@ -171,8 +171,11 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d) {
         switch (sd.type) {
             case ShapeType::Mesh: {
                 TriangleMesh m;
-                try {
-                    m = loadObj(sd.meshPath);
+                if (sd.meshPath.empty()) {
+                    m.positions = sd.inlinePositions;
+                    m.triangles = sd.inlineTriangles;
+                } else try {
+                    m = loadMeshFile(sd.meshPath);
                 } catch (const UserError& e) {  // name the scene's key too: "scene.json:8: shapes[0].file: x.obj:4: ..."
                     throw UserError(d.where(key + ".file") + key + ".file: " + e.what());
                 }

@@ -73,8 +73,12 @@ struct ShapeDesc {
     int material = -1;        // index into SceneDesc::materials
     int interiorMedium = -1;  // index into SceneDesc::media, -1 = none (vacuum / glass interior)
     // Mesh
-    std::string meshPath;  // resolved path of the OBJ file
+    std::string meshPath;  // resolved path of the mesh file (OBJ, or PLY by its extension)
     Mat4 transform{1.0};   // object to world
+    // A mesh given by its triangles instead of a file (meshPath empty): the Mitsuba importer's
+    // tessellated disks. Object space, then `transform`.
+    std::vector<Vec3> inlinePositions;
+    std::vector<glm::uvec3> inlineTriangles;
     // Sphere
     Vec3 center{0.0};
     double radius = 1.0;

@@ -96,6 +96,7 @@
 // undefined names are errors. "global_medium" and "interior_medium" may also be null (none).
 // ==================================================================================================
 #include "scene/scene_loader.h"
+#include "scene/mitsuba_loader.h"
 
 #include "render/render_settings.h"
 
@@ -962,6 +963,10 @@ int maxUsefulThreads() {
 }
 
 SceneDesc loadScene(const std::string& path) {
+    // Mitsuba 3 XML (scene/mitsuba_loader.h) by its extension; anything else is a JSON scene.
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".xml") return loadMitsubaScene(path);
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec))
         throw UserError(path, 0, "", "cannot open scene file (it is a directory)");

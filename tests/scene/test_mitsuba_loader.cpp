@@ -1,0 +1,457 @@
+// Mitsuba 3 XML import (core/scene/mitsuba_loader.h): the shipped XML twins render the films of
+// their JSON scenes, transforms against hand-computed matrices, fov_axis conversions, unit
+// conversions, <default>/$param/<include>/<ref>, the PLY reader, and every error path naming
+// file:line.
+#include "base/error.h"
+#include "render/driver.h"
+#include "scene/light.h"
+#include "scene/mitsuba_loader.h"
+#include "scene/ply.h"
+#include "scene/scene.h"
+#include "scene/scene_loader.h"
+#include "support/temp_dir.h"
+#include "support/test_scene.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+using namespace tpb;
+using ::testing::HasSubstr;
+
+namespace {
+
+const std::string kScenes = std::string(TPB_SOURCE_DIR) + "/scenes/";
+
+// A scene around `body`: a sensor, then body.
+std::string scene(const std::string& body, const std::string& sensor = "") {
+    return "<scene version=\"3.0.0\">\n" + sensor + body + "\n</scene>\n";
+}
+
+SceneDesc load(const std::string& xml, const MitsubaOptions& o = {}) { return loadMitsubaSceneFromString(xml, "t.xml", o); }
+
+// Expects a UserError at t.xml:`line` whose message contains `fragment`.
+void expectError(const std::string& xml, int line, const std::string& fragment) {
+    SCOPED_TRACE(xml);
+    try {
+        load(xml);
+        ADD_FAILURE() << "no error; expected: " << fragment;
+    } catch (const UserError& e) {
+        EXPECT_EQ(e.file(), "t.xml") << e.what();
+        EXPECT_EQ(e.line(), line) << e.what();
+        EXPECT_EQ(std::string(e.what()).rfind("t.xml:" + std::to_string(line) + ": ", 0), 0u) << e.what();
+        EXPECT_THAT(e.what(), HasSubstr(fragment));
+    }
+}
+
+void expectNear(const Vec3& a, const Vec3& b, double tol = 1e-12) {
+    EXPECT_NEAR(a.x, b.x, tol);
+    EXPECT_NEAR(a.y, b.y, tol);
+    EXPECT_NEAR(a.z, b.z, tol);
+}
+
+// The film of `d` rendered small: 32x32, 16 bins, 1500 photons, 2 passes, seed 7, 2 threads, the
+// time range from the scene's bounds (no pilot).
+std::vector<float> renderSmall(SceneDesc d) {
+    d.camera.width = d.camera.height = 32;
+    d.film.bins = 16;
+    d.render.photonsPerPass = 1500;
+    d.render.seed = 7;
+    test::TestScene ts = test::prepareTestScene(std::move(d));
+    RenderSettings s = ts.settings;
+    s.threads = 2;
+    Driver drv(*ts, s, ts.time);
+    for (int p = 1; p <= 2; ++p) EXPECT_TRUE(drv.runPass(p));
+    std::vector<float> all, img;
+    for (TimeAxis axis : {TimeAxis::Real, TimeAxis::Unwarped})
+        for (int k = 0; k < drv.film().bins(); ++k) {
+            drv.film().frame(k, axis, EmissionMode::Delta, img);
+            all.insert(all.end(), img.begin(), img.end());
+        }
+    drv.film().steadyImage(img);
+    all.insert(all.end(), img.begin(), img.end());
+    return all;
+}
+
+// The world corners of a box shape.
+std::vector<Vec3> boxCorners(const ShapeDesc& s) {
+    std::vector<Vec3> c;
+    for (int i = 0; i < 8; ++i) {
+        const Vec3 p(i & 1 ? s.boxMax.x : s.boxMin.x, i & 2 ? s.boxMax.y : s.boxMin.y, i & 4 ? s.boxMax.z : s.boxMin.z);
+        c.push_back(Vec3(s.transform * glm::dvec4(p, 1.0)));
+    }
+    return c;
+}
+
+// Field by field: the XML twin describes the JSON scene.
+void expectSameScene(const SceneDesc& j, const SceneDesc& x) {
+    const Camera cj = Camera::fromDesc(j.camera), cx = Camera::fromDesc(x.camera);
+    expectNear(cj.position, cx.position);
+    expectNear(cj.forward, cx.forward);
+    expectNear(cj.up, cx.up);
+    EXPECT_NEAR(j.camera.fovYDeg, x.camera.fovYDeg, 1e-12);
+    EXPECT_EQ(j.camera.width, x.camera.width);
+    EXPECT_EQ(j.camera.height, x.camera.height);
+    EXPECT_EQ(j.film.bins, x.film.bins);
+    EXPECT_EQ(j.film.autoRange, x.film.autoRange);
+    ASSERT_EQ(j.media.size(), x.media.size());
+    for (size_t i = 0; i < j.media.size(); ++i) {
+        expectNear(j.media[i].sigma_s, x.media[i].sigma_s, 1e-15);
+        expectNear(j.media[i].sigma_a, x.media[i].sigma_a, 1e-15);
+        EXPECT_EQ(j.media[i].g, x.media[i].g);
+    }
+    EXPECT_EQ(j.globalMedium, x.globalMedium);
+    ASSERT_EQ(j.shapes.size(), x.shapes.size());
+    for (size_t i = 0; i < j.shapes.size(); ++i) {
+        SCOPED_TRACE(j.shapes[i].name);
+        const ShapeDesc &a = j.shapes[i], &b = x.shapes[i];
+        EXPECT_EQ(a.name, b.name);
+        EXPECT_EQ(a.type, b.type);
+        EXPECT_EQ(a.flipNormals, b.flipNormals);
+        const MaterialDesc &ma = j.materials[a.material], &mb = x.materials[b.material];
+        EXPECT_EQ(ma.type, mb.type);
+        expectNear(ma.albedo, mb.albedo, 0.0);
+        expectNear(ma.specular, mb.specular, 0.0);
+        if (ma.type == MaterialType::Dielectric) EXPECT_EQ(ma.ior, mb.ior);
+        if (a.type == ShapeType::Quad) {  // exact: the matrices map [-1,1]^2 onto the quads
+            expectNear(a.corner, b.corner, 0.0);
+            expectNear(a.edgeU, b.edgeU, 0.0);
+            expectNear(a.edgeV, b.edgeV, 0.0);
+        } else if (a.type == ShapeType::Box) {
+            const std::vector<Vec3> ca = boxCorners(a), cb = boxCorners(b);
+            for (int k = 0; k < 8; ++k) expectNear(ca[k], cb[k], 1e-15);
+        } else if (a.type == ShapeType::Sphere) {
+            expectNear(a.center, b.center, 1e-15);
+            EXPECT_NEAR(a.radius, b.radius, 1e-15);
+        }
+    }
+    ASSERT_EQ(j.lights.size(), x.lights.size());
+    for (size_t i = 0; i < j.lights.size(); ++i) {
+        EXPECT_EQ(j.lights[i].type, x.lights[i].type);
+        expectNear(j.lights[i].position, x.lights[i].position, 0.0);
+        expectNear(j.lights[i].power, x.lights[i].power, 1e-13);
+    }
+    const RenderDesc &rj = j.render, &rx = x.render;
+    EXPECT_EQ(rj.photonsPerPass, rx.photonsPerPass);
+    EXPECT_EQ(rj.radius, rx.radius);
+    EXPECT_EQ(rj.radiusRelative, rx.radiusRelative);
+    EXPECT_EQ(rj.radiusAuto, rx.radiusAuto);
+    EXPECT_EQ(rj.surfaceRadius, rx.surfaceRadius);
+    EXPECT_EQ(rj.alpha, rx.alpha);
+    EXPECT_EQ(rj.passes, rx.passes);
+    EXPECT_EQ(rj.maxDepth, rx.maxDepth);
+    EXPECT_EQ(rj.volumeEstimator, rx.volumeEstimator);
+}
+
+// The films are bit for bit the same (the same seed, the same description up to the last bit of
+// the blocks' corners, which do not turn any path here).
+void expectSameFilm(const std::vector<float>& a, const std::vector<float>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    size_t differ = 0;
+    double total = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) {
+        differ += std::memcmp(&a[i], &b[i], sizeof(float)) != 0;
+        total += a[i];
+    }
+    EXPECT_GT(total, 0.0);
+    EXPECT_EQ(differ, 0u) << "of " << a.size() << " film values";
+}
+
+}  // namespace
+
+// ---- the shipped twins ---------------------------------------------------------------------------
+
+TEST(MitsubaLoader, CornellMediumTwinRendersTheJsonFilm) {
+    const SceneDesc j = loadScene(kScenes + "cornell_medium.json"), x = loadScene(kScenes + "mitsuba/cornell_medium.xml");
+    expectSameScene(j, x);
+    expectSameFilm(renderSmall(j), renderSmall(x));
+}
+
+TEST(MitsubaLoader, CornellSpheresTwinRendersTheJsonFilm) {
+    const SceneDesc j = loadScene(kScenes + "cornell_spheres.json"), x = loadScene(kScenes + "mitsuba/cornell_spheres.xml");
+    expectSameScene(j, x);
+    // The conductor is announced as a mirror, with the file and line of its <bsdf>.
+    bool warned = false;
+    for (const std::string& w : x.warnings)
+        warned |= w.find("cornell_spheres.xml:43: <bsdf type=\"conductor\" id=\"chrome\">: imported as a perfect mirror") !=
+                  std::string::npos;
+    EXPECT_TRUE(warned);
+    expectSameFilm(renderSmall(j), renderSmall(x));
+}
+
+TEST(MitsubaLoader, AFilmComparisonCanFail) {
+    // The twin with its light 1% brighter is told apart.
+    SceneDesc x = loadScene(kScenes + "mitsuba/cornell_medium.xml"), y = x;
+    y.lights[0].power *= 1.01;
+    const std::vector<float> a = renderSmall(x), b = renderSmall(y);
+    double diff = 0.0, total = 0.0;
+    for (size_t i = 0; i < a.size(); ++i) { diff += std::fabs(double(a[i]) - b[i]); total += a[i]; }
+    EXPECT_GT(diff / total, 1e-3);
+}
+
+// ---- transforms, sensor ----------------------------------------------------------------------------
+
+TEST(MitsubaLoader, TransformsComposeInMitsubasOrder) {
+    // scale, then rotate 90 deg about z, then translate: each later element pre-multiplies.
+    const SceneDesc d = load(scene(R"(<shape type="cube"><transform name="to_world">
+        <scale x="2" y="3" z="4"/><rotate z="1" angle="90"/><translate value="1, 2, 3"/></transform></shape>)"));
+    const Mat4 want = glm::translate(Mat4(1.0), Vec3(1, 2, 3)) * glm::rotate(Mat4(1.0), kPi / 2, Vec3(0, 0, 1)) *
+                      glm::scale(Mat4(1.0), Vec3(2, 3, 4));
+    ASSERT_EQ(d.shapes.size(), 1u);
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) EXPECT_NEAR(d.shapes[0].transform[c][r], want[c][r], 1e-12);
+    // By hand: the corner (1, 1, 1) -> scale (2, 3, 4) -> rotate (-3, 2, 4) -> translate (-2, 4, 7).
+    expectNear(Vec3(d.shapes[0].transform * glm::dvec4(1, 1, 1, 1)), Vec3(-2, 4, 7));
+}
+
+TEST(MitsubaLoader, RectangleMatrixLookatAndFlip) {
+    // A rectangle is [-1,1]^2 at z = 0 with normal +z; a row-major matrix.
+    SceneDesc d = load(scene(R"(<shape type="rectangle"><transform name="to_world">
+        <matrix value="2 0 0 1, 0 3 0 0, 0 0 1 5, 0 0 0 1"/></transform></shape>
+        <shape type="rectangle"><boolean name="flip_normals" value="true"/></shape>
+        <shape type="rectangle"><transform name="to_world"><lookat origin="0, 0, 0" target="0, -1, 0" up="0, 0, 1"/></transform></shape>)"));
+    ASSERT_EQ(d.shapes.size(), 3u);
+    expectNear(d.shapes[0].corner, Vec3(-1, -3, 5));
+    expectNear(d.shapes[0].edgeU, Vec3(4, 0, 0));
+    expectNear(d.shapes[0].edgeV, Vec3(0, 6, 0));
+    EXPECT_FALSE(d.shapes[0].flipNormals);
+    EXPECT_TRUE(d.shapes[1].flipNormals);
+    // lookat: +z goes to the direction (0, -1, 0); the quad's normal cross(edgeU, edgeV) too.
+    const Vec3 n = glm::normalize(glm::cross(d.shapes[2].edgeU, d.shapes[2].edgeV));
+    expectNear(n, Vec3(0, -1, 0));
+}
+
+TEST(MitsubaLoader, SphereToWorldAndDisk) {
+    const SceneDesc d = load(scene(R"(<shape type="sphere"><float name="radius" value="2"/><transform name="to_world">
+        <rotate x="1" angle="30"/><scale value="0.5"/><translate x="1"/></transform></shape>
+        <shape type="disk"><transform name="to_world"><scale value="2"/></transform></shape>)"));
+    expectNear(d.shapes[0].center, Vec3(1, 0, 0));
+    EXPECT_NEAR(d.shapes[0].radius, 1.0, 1e-12);
+    // The disk: a fan of 128 triangles whose area is 128/2 sin(2 pi / 128) of pi r^2 (0.9996).
+    const ShapeDesc& disk = d.shapes[1];
+    ASSERT_EQ(disk.inlineTriangles.size(), 128u);
+    double area = 0.0;
+    for (const glm::uvec3& t : disk.inlineTriangles) {
+        const Vec3 a(disk.transform * glm::dvec4(disk.inlinePositions[t.x], 1)),
+            b(disk.transform * glm::dvec4(disk.inlinePositions[t.y], 1)), c(disk.transform * glm::dvec4(disk.inlinePositions[t.z], 1));
+        const Vec3 n = glm::cross(b - a, c - a);
+        EXPECT_GT(n.z, 0.0);  // normal +z
+        area += 0.5 * glm::length(n);
+    }
+    EXPECT_NEAR(area, 4.0 * kPi * 64.0 / kPi * std::sin(2.0 * kPi / 128.0), 1e-9);
+    EXPECT_NEAR(area / (4.0 * kPi), 1.0, 5e-4);
+    expectError(scene(R"(<shape type="sphere"><transform name="to_world"><scale x="1" y="2" z="1"/></transform></shape>)"),
+                2, "rotation, a uniform scale and a translation");
+}
+
+TEST(MitsubaLoader, FovAxisConversions) {
+    const auto fovY = [](const std::string& axis, int w, int h) {
+        const std::string s = "<sensor type=\"perspective\"><float name=\"fov\" value=\"60\"/><string name=\"fov_axis\" value=\"" +
+                              axis + "\"/><film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(w) +
+                              "\"/><integer name=\"height\" value=\"" + std::to_string(h) + "\"/></film></sensor>";
+        return load(scene("", s)).camera.fovYDeg;
+    };
+    const double t = std::tan(kPi / 6), deg = 180.0 / kPi;
+    EXPECT_NEAR(fovY("y", 200, 100), 60.0, 1e-12);
+    EXPECT_NEAR(fovY("x", 200, 100), 2 * std::atan(t / 2) * deg, 1e-12);
+    EXPECT_NEAR(fovY("diagonal", 200, 100), 2 * std::atan(t / std::sqrt(5.0)) * deg, 1e-12);
+    EXPECT_NEAR(fovY("smaller", 200, 100), 60.0, 1e-12);                          // the height
+    EXPECT_NEAR(fovY("larger", 200, 100), 2 * std::atan(t / 2) * deg, 1e-12);     // the width
+    EXPECT_NEAR(fovY("smaller", 100, 200), 2 * std::atan(t * 2) * deg, 1e-12);    // the width
+    // No fov: Mitsuba's 50 mm focal length on the 35 mm diagonal.
+    const SceneDesc d = load(scene("", "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"36\"/>"
+                                       "<integer name=\"height\" value=\"24\"/></film></sensor>"));
+    EXPECT_NEAR(std::tan(d.camera.fovYDeg / 2 / deg), 12.0 / 50.0, 1e-12);
+    expectError(scene("", "<sensor type=\"perspective\">\n<string name=\"fov_axis\" value=\"z\"/><float name=\"fov\" value=\"30\"/></sensor>"),
+                3, "unknown fov_axis");
+}
+
+TEST(MitsubaLoader, SensorLookatFilmAndMedium) {
+    const SceneDesc d = load(scene(R"(<medium type="homogeneous" id="m"><float name="sigma_t" value="2"/>
+        <rgb name="albedo" value="0.5, 0.25, 1"/><float name="scale" value="3"/></medium>)",
+                                   R"(<sensor type="perspective"><transform name="to_world"><lookat origin="1, 2, 3" target="1, 2, 0" up="0, 1, 0"/></transform>
+        <ref id="m"/><film type="transient_hdr_film"><integer name="width" value="40"/><integer name="height" value="30"/>
+        <integer name="temporal_bins" value="50"/><float name="bin_width_opl" value="0.02"/><float name="start_opl" value="1.5"/></film></sensor>)"));
+    expectNear(d.camera.position, Vec3(1, 2, 3));
+    expectNear(glm::normalize(d.camera.lookAt - d.camera.position), Vec3(0, 0, -1));
+    EXPECT_EQ(d.camera.width, 40);
+    EXPECT_EQ(d.camera.height, 30);
+    EXPECT_EQ(d.film.bins, 50);
+    EXPECT_FALSE(d.film.autoRange);
+    EXPECT_EQ(d.film.binWidthOpl, 0.02);
+    EXPECT_EQ(d.film.startOpl, 1.5);
+    ASSERT_EQ(d.globalMedium, 0);
+    expectNear(d.media[0].sigma_s, Vec3(3, 1.5, 6));  // albedo sigma_t scale
+    expectNear(d.media[0].sigma_a, Vec3(3, 4.5, 0));
+    EXPECT_EQ(d.media[0].g, 0.0);  // no phase: isotropic
+    // hdrfilm: the time axis is automatic.
+    const SceneDesc h = load(scene("", R"(<sensor type="perspective"><film type="hdrfilm"/></sensor>)"));
+    EXPECT_TRUE(h.film.autoRange);
+    EXPECT_EQ(h.camera.width, 768);
+    EXPECT_EQ(h.camera.height, 576);
+}
+
+// ---- unit conversions, materials -------------------------------------------------------------------
+
+TEST(MitsubaLoader, EmitterUnitConversions) {
+    const SceneDesc d = load(scene(R"(<emitter type="point"><rgb name="intensity" value="1, 2, 3"/></emitter>
+        <shape type="rectangle"><transform name="to_world"><scale x="2" y="3"/></transform>
+          <emitter type="area"><float name="radiance" value="5"/></emitter></shape>
+        <emitter type="spot"><float name="intensity" value="2"/><float name="cutoff_angle" value="30"/>
+          <float name="beam_width" value="30"/></emitter>
+        <emitter type="spot"/>)"));
+    ASSERT_EQ(d.lights.size(), 4u);
+    expectNear(d.lights[0].power, 4 * kPi * Vec3(1, 2, 3));            // flux = 4 pi I
+    EXPECT_EQ(d.lights[1].type, LightType::AreaQuad);
+    EXPECT_TRUE(d.shapes.empty());                                     // tpb draws the light's quad itself
+    expectNear(d.lights[1].power, Vec3(kPi * 5 * 24));                 // flux = pi L A, A = 4 x 6 m^2
+    expectNear(glm::normalize(glm::cross(d.lights[1].edgeU, d.lights[1].edgeV)), Vec3(0, 0, 1));  // emits along +z
+    // A hard-edged spot: flux = I * 2 pi (1 - cos 30 deg), to the midpoint rule's accuracy.
+    EXPECT_NEAR(d.lights[2].power.x, 2 * 2 * kPi * (1 - std::cos(kPi / 6)), 1e-6);
+    expectNear(d.lights[2].direction, Vec3(0, 0, 1));
+    // Mitsuba's defaults: cutoff 20 deg, beam_width 3/4 of it.
+    EXPECT_EQ(d.lights[3].spotCutoffDeg, 20.0);
+    EXPECT_EQ(d.lights[3].spotFalloffDeg, 15.0);
+    EXPECT_NEAR(d.lights[3].power.x, Light::fromDesc(d.lights[3]).spotIntegral, 1e-12);  // I = 1
+}
+
+TEST(MitsubaLoader, BsdfsAndDefaults) {
+    const SceneDesc d = load(scene(R"(<bsdf type="twosided" id="w"><bsdf type="diffuse"><spectrum name="reflectance" value="0.3"/></bsdf></bsdf>
+        <shape type="cube"><ref id="w"/></shape>
+        <shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="water"/></bsdf></shape>
+        <shape type="cube"/>
+        <shape type="cube"><medium type="homogeneous" name="interior"><phase type="hg"/></medium></shape>
+        <shape type="cube"><bsdf type="roughconductor"/></shape>
+        <shape type="cube"><bsdf type="thindielectric"/></shape>)"));
+    ASSERT_EQ(d.shapes.size(), 6u);
+    const auto mat = [&](int i) { return d.materials[d.shapes[i].material]; };
+    EXPECT_EQ(mat(0).type, MaterialType::Diffuse);
+    expectNear(mat(0).albedo, Vec3(0.3));
+    EXPECT_EQ(mat(1).type, MaterialType::Dielectric);
+    EXPECT_EQ(mat(1).ior, 1.3330);
+    EXPECT_EQ(mat(2).type, MaterialType::Diffuse);  // Mitsuba's default bsdf
+    expectNear(mat(2).albedo, Vec3(0.5));
+    EXPECT_EQ(mat(3).type, MaterialType::Null);     // a medium boundary without a bsdf
+    EXPECT_EQ(d.media[d.shapes[3].interiorMedium].g, 0.8);  // hg's default
+    EXPECT_EQ(mat(4).type, MaterialType::Mirror);
+    EXPECT_EQ(mat(5).type, MaterialType::Null);
+    int mirrorWarnings = 0, thinWarnings = 0;
+    for (const std::string& w : d.warnings) {
+        mirrorWarnings += w.rfind("t.xml:7: <bsdf type=\"roughconductor\">: imported as a perfect mirror", 0) == 0;
+        thinWarnings += w.rfind("t.xml:8: <bsdf type=\"thindielectric\">: tpb has no thin dielectric", 0) == 0;
+    }
+    EXPECT_EQ(mirrorWarnings, 1);
+    EXPECT_EQ(thinWarnings, 1);
+    double ior = 0;
+    for (const char* n : {"vacuum", "air", "water", "bk7", "diamond", "acrylic glass"}) EXPECT_TRUE(mitsubaNamedIor(n, ior)) << n;
+    EXPECT_FALSE(mitsubaNamedIor("unobtainium", ior));
+}
+
+// ---- defaults, $param, include, ref, integrator ----------------------------------------------------
+
+TEST(MitsubaLoader, DefaultsParametersIncludesAndRefs) {
+    test::TempDir tmp("test_mitsuba_loader");
+    std::filesystem::create_directories(tmp.path() / "sub");
+    tmp.write("sub/walls.xml", R"(<scene version="3.0.0"><bsdf type="diffuse" id="grey"><float name="reflectance" value="$refl"/></bsdf>
+        <shape type="cube" id="inc"><ref id="grey"/></shape></scene>)");
+    tmp.write("main.xml", R"(<scene version="3.0.0">
+    <default name="refl" value="0.25"/>
+    <default name="r" value="2"/>
+    <include filename="sub/walls.xml"/>
+    <shape type="sphere"><float name="radius" value="$r"/><ref id="grey"/></shape>
+    <integrator type="transient_path"><integer name="max_depth" value="5"/><integer name="tpb_passes" value="3"/>
+        <string name="tpb_volume_estimator" value="beam1d"/><float name="tpb_radius" value="0.05"/></integrator>
+</scene>)");
+    const SceneDesc d = loadScene((tmp.path() / "main.xml").string());
+    ASSERT_EQ(d.shapes.size(), 2u);
+    EXPECT_EQ(d.shapes[0].material, d.shapes[1].material);  // one material for the two refs
+    expectNear(d.materials[d.shapes[0].material].albedo, Vec3(0.25));
+    EXPECT_EQ(d.shapes[1].radius, 2.0);
+    EXPECT_EQ(d.render.maxDepth, 4);  // Mitsuba counts segments
+    EXPECT_EQ(d.render.passes, 3);
+    EXPECT_EQ(d.render.volumeEstimator, "beam1d");
+    EXPECT_FALSE(d.render.radiusRelative);
+    EXPECT_EQ(d.render.radius, 0.05);
+    // The included file's elements carry their own file and line.
+    EXPECT_EQ(d.locs.at("shapes[0]").file, (tmp.path() / "sub/walls.xml").lexically_normal().string());
+    EXPECT_EQ(d.locs.at("shapes[1]").line, 5);
+    EXPECT_EQ(d.locs.at("render.passes").line, 6);
+    // -D name=value wins over <default>.
+    MitsubaOptions o;
+    o.params["r"] = "3";
+    EXPECT_EQ(loadMitsubaScene((tmp.path() / "main.xml").string(), o).shapes[1].radius, 3.0);
+    // A bad render setting is reported at its XML line by the render settings' own check.
+    tmp.write("bad.xml", "<scene version=\"3.0.0\">\n<integrator type=\"path\">\n<float name=\"tpb_alpha\" value=\"7\"/></integrator></scene>");
+    try {
+        loadScene((tmp.path() / "bad.xml").string());
+        ADD_FAILURE() << "no error";
+    } catch (const UserError& e) {
+        EXPECT_THAT(e.what(), HasSubstr("bad.xml:3: render.alpha"));
+    }
+}
+
+// ---- PLY ---------------------------------------------------------------------------------------------
+
+TEST(MitsubaLoader, PlyAsciiAndBinary) {
+    const std::string header = "ply\nformat ascii 1.0\ncomment a quad and a triangle\nelement vertex 5\nproperty float x\n"
+                               "property float y\nproperty float z\nproperty uchar red\nelement face 2\n"
+                               "property list uchar int vertex_indices\nend_header\n";
+    const TriangleMesh a = parsePly(header + "0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n0 0 1 5\n4 0 1 2 3\n3 0 1 4\n", "a.ply");
+    EXPECT_EQ(a.positions.size(), 5u);
+    ASSERT_EQ(a.triangles.size(), 3u);
+    EXPECT_EQ(a.triangles[1], glm::uvec3(0, 2, 3));
+    // The same as binary_little_endian, with double coordinates and uint indices.
+    std::string b = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+                    "property double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+    for (double v : {0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 3.0, 0.0}) b.append(reinterpret_cast<const char*>(&v), 8);
+    b.push_back(3);
+    for (uint32_t i : {0u, 1u, 2u}) b.append(reinterpret_cast<const char*>(&i), 4);
+    const TriangleMesh m = parsePly(b, "b.ply");
+    ASSERT_EQ(m.triangles.size(), 1u);
+    expectNear(m.positions[2], Vec3(0, 3, 0));
+    EXPECT_THROW(parsePly(b.substr(0, b.size() - 2), "b.ply"), UserError);  // truncated
+    try {
+        parsePly(header + "0 0 0 1\n1 0 0 2\n1 x 0 3\n", "a.ply");
+        ADD_FAILURE();
+    } catch (const UserError& e) {
+        EXPECT_THAT(e.what(), HasSubstr("a.ply:14: \"x\" is not a number"));
+    }
+    // Through an XML scene, with its transform, to a built scene.
+    test::TempDir tmp("test_mitsuba_ply");
+    tmp.write("m.ply", b);
+    tmp.write("s.xml", R"(<scene version="3.0.0"><shape type="ply"><string name="filename" value="m.ply"/>
+        <transform name="to_world"><translate x="1"/></transform></shape><emitter type="point"><point name="position" value="0,0,1"/></emitter></scene>)");
+    const test::TestScene ts = test::prepareTestScene(loadScene((tmp.path() / "s.xml").string()));
+    EXPECT_NEAR(ts->geometry.bounds().hi.x, 3.0, 1e-12);
+}
+
+// ---- errors: file:line: element: problem ----------------------------------------------------------
+
+TEST(MitsubaLoader, ErrorsNameFileAndLine) {
+    expectError("<scene version=\"3.0.0\">\n<shape type=\"sphere\">\n</scene>", 3, "XML parse error");
+    expectError(scene("<shape type=\"cylinder\"/>"), 2, "unsupported shape type \"cylinder\"");
+    expectError(scene("<shape type=\"cube\">\n<ref id=\"nope\"/></shape>"), 3, "no object has the id \"nope\"");
+    expectError(scene("<shape type=\"sphere\">\n<float name=\"radius\" value=\"1.5x\"/></shape>"), 3, "\"1.5x\" is not a finite number");
+    expectError(scene("<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"/></bsdf>"), 3, "textures are not supported");
+    expectError(scene("<bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"400:0.1, 700:0.9\"/></bsdf>"), 3,
+                "wavelength-dependent spectrum");
+    expectError(scene("<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>"), 2, "undefined parameter $nope");
+    expectError(scene("\n<emitter type=\"directional\"/>"), 3, "directional emitters are not supported");
+    expectError(scene("<bsdf type=\"plastic\"/>"), 2, "unsupported bsdf type \"plastic\"");
+    expectError(scene("<medium type=\"heterogeneous\"/>"), 2, "unsupported medium type");
+    expectError(scene("<shape type=\"obj\"><string name=\"filename\" value=\"missing.obj\"/></shape>"), 2, "mesh file not found");
+    expectError(scene("<integrator type=\"path\"><integer name=\"max_depth\" value=\"1\"/></integrator>"), 2, "max_depth must be >= 2");
+    expectError(scene("<shape type=\"rectangle\"><medium type=\"homogeneous\" name=\"interior\"/></shape>"), 2, "open");
+    expectError(scene("<shape type=\"cube\" id=\"a\"/>\n<shape type=\"cube\" id=\"a\"/>"), 3, "already used");
+    expectError("<scene version=\"3.0.0\">\n<include filename=\"nowhere.xml\"/></scene>", 2, "cannot open the included file");
+}
+
+TEST(MitsubaLoader, UnknownParametersAreWarnedAbout) {
+    const SceneDesc d = load(scene("<shape type=\"sphere\">\n<float name=\"radious\" value=\"2\"/></shape>"));
+    ASSERT_FALSE(d.warnings.empty());
+    EXPECT_THAT(d.warnings[0], HasSubstr("t.xml:3: <float name=\"radious\">: unknown or unsupported parameter \"radious\""));
+}
