@@ -1203,3 +1203,22 @@ TEST_F(CliErrors, ResumeRefusesAChangedSceneOrSettingAndNamesWhatChanged) {
     EXPECT_EQ(p.code, 0) << p.err;
     EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["passes"].get<int>(), 3);
 }
+
+// Issue 16: a Mitsuba 3 XML scene goes through every command like a JSON one; its mistakes are user
+// errors (exit 2) naming the XML file, the line and the element, a broken include its own file.
+TEST_F(CliErrors, MitsubaXmlScenesAreCheckedLikeJson) {
+    const fs::path good = write("ok.xml", "<scene version=\"3.0.0\">\n<shape type=\"cube\"/>\n"
+                                          "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n"
+                                          "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,5\" "
+                                          "target=\"0,0,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
+                                          "value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor></scene>\n");
+    const Proc ok = runTpb({"info", good.string()}, dir_);
+    EXPECT_EQ(ok.code, 0) << ok.err;
+    EXPECT_NE(ok.out.find("8x8"), std::string::npos) << ok.out;
+    const fs::path bad = write("bad.xml", "<scene version=\"3.0.0\">\n\n<shape type=\"torus\"/>\n</scene>\n");
+    expectUserError(render(bad), bad.string() + ":3", "<shape type=\"torus\">", "unsupported shape type \"torus\"");
+    const fs::path broken = write("broken.xml", "<scene version=\"3.0.0\">\n<shape type=\"cube\">\n</scene>\n");
+    expectUserError(runTpb({"info", broken.string()}, dir_), broken.string() + ":3", "", "XML parse error");
+    const fs::path inc = write("inc.xml", "<scene version=\"3.0.0\">\n<include filename=\"broken.xml\"/>\n</scene>\n");
+    expectUserError(runTpb({"info", inc.string()}, dir_), broken.string() + ":3", "", "XML parse error");
+}
