@@ -107,6 +107,24 @@ CLI::Validator seed() {
         "an integer in [0, 2^64 - 1]");
 }
 
+CLI::Validator pulse() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            return parsePulse(s) ? std::string()
+                                 : "must be delta, gaussian:FWHM_NS or square:WIDTH_NS (a width in ns, > 0); got " + s;
+        },
+        "delta|gaussian:NS|square:NS");
+}
+
+CLI::Validator sensor() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            return parseSensor(s) ? std::string()
+                                  : "must be ideal, gaussian:FWHM_NS or exp:TAU_NS (a width in ns, > 0); got " + s;
+        },
+        "ideal|gaussian:NS|exp:NS");
+}
+
 CLI::Validator threads() {
     return CLI::Validator(
         [](std::string& s) -> std::string {
@@ -272,6 +290,9 @@ nlohmann::json summaryHeader(const PreparedRender& p, const char* method, size_t
     j["film"]["bytes"] = film.bytes();
     j["frames"] = {{"axis", opt.axis == TimeAxis::Real ? "real" : "unwarped"},
                    {"emission", opt.mode == EmissionMode::Delta ? "delta" : "continuous"},
+                   {"pulse", pulseName(opt.response)},
+                   {"sensor", sensorName(opt.response)},
+                   {"time_response", describe(opt.response)},
                    {"step", opt.step}};
     const FilmStats& fs = film.stats;
     nlohmann::json energy = {{"rejected_samples", fs.rejectedSamples.load()},

@@ -23,6 +23,10 @@ CLI::Validator number(double lo, double hi, bool loOpen, const std::string& mean
 CLI::Validator seed();
 // Worker threads: an integer >= 0; more than maxUsefulThreads() is capped with a warning.
 CLI::Validator threads();
+// --pulse delta | gaussian:FWHM_NS | square:WIDTH_NS and --sensor ideal | gaussian:FWHM_NS | exp:TAU_NS
+// (film/time_response.h).
+CLI::Validator pulse();
+CLI::Validator sensor();
 }  // namespace flags
 
 

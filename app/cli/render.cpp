@@ -36,6 +36,7 @@ struct RenderCmd {
     std::string method = "beams";
     int spp = 1;
     // Checkpoints (render/checkpoint.h, cli/resume.h).
+    std::string pulse = "delta", sensor = "ideal";  // --pulse, --sensor (film/time_response.h)
     std::string resume;            // --resume DIR
     bool outGiven = false;         // -o given (a resume writes into the checkpoint's folder otherwise)
     bool checkpoint = false;       // --checkpoint: one when the render ends
@@ -148,6 +149,7 @@ void run(RenderCmd& c) {
     opt.mode = (ds.emission == EmissionMode::Continuous || c.continuous) && !c.delta
                    ? EmissionMode::Continuous : EmissionMode::Delta;
     opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
+    opt.response = *parseSensor(c.sensor, *parsePulse(c.pulse));  // (checked when parsed)
     opt.step = c.frameStep;
     PathTracedRenderRequest outputs;
     outputs.out = c.out;
@@ -318,6 +320,13 @@ void registerRender(CLI::App& app) {
     cmd->add_flag("--real-time", c->realTime, "Frames in real time (camera path included; the default)");
     cmd->add_flag("--continuous", c->continuous, "Frames for continuous emission (running integral of the pulse response)");
     cmd->add_flag("--delta", c->delta, "Frames for a delta pulse (the default)");
+    cmd->add_option("--pulse", c->pulse,
+                    "Pulse shape the outputs are seen with: delta | gaussian:FWHM_NS | square:WIDTH_NS (a convolution "
+                    "along time of the delta response: no re-render)")
+        ->check(flags::pulse());
+    cmd->add_option("--sensor", c->sensor,
+                    "Sensor time response: ideal | gaussian:FWHM_NS (jitter) | exp:TAU_NS (decay)")
+        ->check(flags::sensor());
     cmd->add_flag("--half", c->half, "Write half-float EXR frames");
     cmd->add_option("--frame-step", c->frameStep, "Write every K-th frame")
         ->transform(flags::integer(1, INT_MAX, "1 = every frame"));

@@ -103,6 +103,10 @@ void registerView(CLI::App& app) {
     // The exposure slider's range; leaving the flag out means automatic exposure.
     cmd->add_option("--exposure", o->exposure, "Exposure in EV (default: automatic)")
         ->check(flags::number(-kMaxExposureEv, kMaxExposureEv, false, "EV; leave it out for automatic exposure"));
+    cmd->add_option("--pulse", o->pulse, "Start with this pulse shape: delta | gaussian:FWHM_NS | square:WIDTH_NS")
+        ->check(flags::pulse());
+    cmd->add_option("--sensor", o->sensor, "Start with this sensor response: ideal | gaussian:FWHM_NS | exp:TAU_NS")
+        ->check(flags::sensor());
     cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
     cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
     cmd->add_flag("--steady", o->steady, "Start on the steady-state image");

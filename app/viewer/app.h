@@ -43,6 +43,7 @@ struct ViewOptions {
     // The flags the render runs with, stored in the checkpoints "Save checkpoint" writes (to
     // <export folder>/checkpoint.tpbck: render/checkpoint.h) so `--resume` can reproduce it.
     SettingsOverrides flags;
+    std::string pulse = "delta", sensor = "ideal";  // --pulse, --sensor (film/time_response.h; checked)
 };
 
 // What the user looks at (changed by the UI, never by other threads).
@@ -50,6 +51,10 @@ struct ViewState {
     int bin = 0;
     TimeAxis axis = TimeAxis::Real;
     EmissionMode mode = EmissionMode::Delta;
+    // The pulse shape and sensor response the film is seen with, applied when reading (no re-render),
+    // and the widths the View section's inputs hold (ns) while a shape is off.
+    TimeResponse response;
+    double pulseNs = 0.0, sensorNs = 0.0;
     bool showSteady = false;
     DisplayParams display;
     float evFrame = 0.0f, evSteady = 0.0f;  // exposure per view (frame and streak share evFrame)
@@ -73,6 +78,7 @@ struct FetchKey {
     int bin = -1, x = -1, y = -1;
     TimeAxis axis = TimeAxis::Real;
     EmissionMode mode = EmissionMode::Delta;
+    TimeResponse response;  // pulse shape and sensor response (film/time_response.h)
     bool steady = false;
     bool operator==(const FetchKey&) const = default;
 };
@@ -121,6 +127,9 @@ private:
     void updateBinEnergy();
     void fitPendingExposure(const FetchKey& key);
     void pollExport();
+    void drawTimeResponse();   // View section: pulse shape and sensor response
+    std::string responseNote() const;  // " (gaussian pulse, FWHM 1 ns; ideal sensor)" or ""
+
     void requestCheckpoint();  // "Save checkpoint": pauses, then writes once the pass in progress ends
     void pollCheckpoint();
     void startExport(const ExportRequest& req);

@@ -117,6 +117,7 @@ FetchKey Viewer::frameKey() const {
         k.bin = st_.bin;
         k.axis = st_.axis;
         k.mode = st_.mode;
+        k.response = st_.response;
     }
     return k;
 }
@@ -129,6 +130,7 @@ FetchKey Viewer::profileKey() const {
     k.y = st_.selY;
     k.axis = st_.axis;
     k.mode = st_.mode;
+    k.response = st_.response;
     return k;
 }
 
@@ -153,7 +155,7 @@ void Viewer::updateFrame() {
     const double gap = std::max(frameComplete_ ? 0.25 : 1.0 / 30.0, 10.0 * fetchSec_);
     if (changed || ((!frameComplete_ || rendering) && now - lastFetch_ >= gap)) {
         const std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
-        frameRgb_ = key.steady ? steadyImage(*snap) : frameImage(*snap, key.bin, key.axis, key.mode);
+        frameRgb_ = key.steady ? steadyImage(*snap) : frameImage(*snap, key.bin, key.axis, key.mode, key.response);
         frameComplete_ = snap->minPasses() == snap->maxPasses();
         frameKey_ = key;
         lastFetch_ = now;
@@ -256,8 +258,8 @@ void Viewer::updateProfile() {
             r.key = key;
             r.width = snap->width();
             r.bins = snap->bins();
-            r.profile = pixelProfile(*snap, key.x, key.y, key.axis, key.mode);
-            r.streak = streakImage(*snap, key.y, key.axis, key.mode);
+            r.profile = pixelProfile(*snap, key.x, key.y, key.axis, key.mode, key.response);
+            r.streak = streakImage(*snap, key.y, key.axis, key.mode, key.response);
             return r;
         });
     }

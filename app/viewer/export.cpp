@@ -5,37 +5,51 @@
 #include "film/volume_export.h"
 #include "render/provenance.h"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace tpb::app {
 
-std::string axisModeTag(TimeAxis axis, EmissionMode mode) {
-    return std::string(axis == TimeAxis::Real ? "real" : "unwarped") + "_" +
-           (mode == EmissionMode::Delta ? "delta" : "continuous");
+std::string axisModeTag(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
+    std::string tag = std::string(axis == TimeAxis::Real ? "real" : "unwarped") + "_" +
+                      (mode == EmissionMode::Delta ? "delta" : "continuous");
+    const auto plain = [](std::string n) {  // "gaussian:0.5" -> "gaussian0.5"
+        n.erase(std::remove(n.begin(), n.end(), ':'), n.end());
+        return n;
+    };
+    if (r.pulse != PulseShape::Delta) tag += "_pulse-" + plain(pulseName(r));
+    if (r.sensor != SensorShape::Ideal) tag += "_sensor-" + plain(sensorName(r));
+    return tag;
 }
 
-std::string exportFrameName(int bin, TimeAxis axis, EmissionMode mode) {
+std::string exportFrameName(int bin, TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "frame_%05d_", bin);
-    return buf + axisModeTag(axis, mode) + ".exr";
+    return buf + axisModeTag(axis, mode, r) + ".exr";
 }
 
-std::string exportFramesDir(TimeAxis axis, EmissionMode mode) { return "frames_" + axisModeTag(axis, mode); }
+std::string exportFramesDir(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
+    return "frames_" + axisModeTag(axis, mode, r);
+}
 
-std::string exportStreakName(int row, TimeAxis axis, EmissionMode mode) {
+std::string exportStreakName(int row, TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "streak_row%04d_", row);
-    return buf + axisModeTag(axis, mode) + ".exr";
+    return buf + axisModeTag(axis, mode, r) + ".exr";
 }
 
-std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode) {
-    return "profile_x" + std::to_string(x) + "_y" + std::to_string(y) + "_" + axisModeTag(axis, mode) + ".csv";
+std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
+    return "profile_x" + std::to_string(x) + "_y" + std::to_string(y) + "_" + axisModeTag(axis, mode, r) + ".csv";
 }
 
-std::string exportVolumeDir(TimeAxis axis, EmissionMode mode) { return "volume_" + axisModeTag(axis, mode); }
-std::string exportMp4Name(TimeAxis axis, EmissionMode mode) { return "transient_" + axisModeTag(axis, mode) + ".mp4"; }
-std::string exportContactSheetName(TimeAxis axis, EmissionMode mode) {
-    return "contact_sheet_" + axisModeTag(axis, mode) + ".png";
+std::string exportVolumeDir(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
+    return "volume_" + axisModeTag(axis, mode, r);
+}
+std::string exportMp4Name(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
+    return "transient_" + axisModeTag(axis, mode, r) + ".mp4";
+}
+std::string exportContactSheetName(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
+    return "contact_sheet_" + axisModeTag(axis, mode, r) + ".png";
 }
 
 bool ExportJob::start(std::shared_ptr<const Driver> driver, const ExportRequest& req) {
@@ -62,6 +76,7 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
     ExportOptions opt;
     opt.axis = req.axis;
     opt.mode = req.mode;
+    opt.response = req.response;
     const int frames = req.allFrames ? film.bins() : 0;
     // Progress units: a file, a frame, a row of the volume, a frame of the video.
     total_ = (req.frame ? 1 : 0) + frames + (req.steady ? 1 : 0) + (req.streak ? 1 : 0) + (req.profile ? 1 : 0) +
@@ -78,7 +93,7 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
         ensureWritableDir(req.dir);
         if (req.frame && !cancel_) {
             step("current frame");
-            const std::string path = req.dir + "/" + exportFrameName(req.bin, req.axis, req.mode);
+            const std::string path = req.dir + "/" + exportFrameName(req.bin, req.axis, req.mode, req.response);
             exportFrame(film, req.bin, path, opt);
             wrote(path);
             ++done_;
@@ -92,28 +107,28 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
         }
         if (req.streak && !cancel_) {
             step("streak image");
-            const std::string path = req.dir + "/" + exportStreakName(req.row, req.axis, req.mode);
+            const std::string path = req.dir + "/" + exportStreakName(req.row, req.axis, req.mode, req.response);
             exportStreak(film, req.row, path, opt);
             wrote(path);
             ++done_;
         }
         if (req.profile && !cancel_) {
             step("pixel profile");
-            const std::string path = req.dir + "/" + exportProfileName(req.x, req.y, req.axis, req.mode);
+            const std::string path = req.dir + "/" + exportProfileName(req.x, req.y, req.axis, req.mode, req.response);
             exportProfileCsv(film, req.x, req.y, path, opt);
             wrote(path);
             ++done_;
         }
         if (frames > 0 && !cancel_) {
             step("all frames");
-            const std::string dir = req.dir + "/" + exportFramesDir(req.axis, req.mode);
+            const std::string dir = req.dir + "/" + exportFramesDir(req.axis, req.mode, req.response);
             const int base = done_.load();
             const int n = exportFrames(film, dir, opt, [&](int d, int) { done_ = base + d; }, &cancel_);
             wrote(dir + "/ (" + std::to_string(n) + " frames)");
         }
         if (req.volume && !cancel_) {
             step("volume (.npy rows)");
-            const std::string dir = req.dir + "/" + exportVolumeDir(req.axis, req.mode);
+            const std::string dir = req.dir + "/" + exportVolumeDir(req.axis, req.mode, req.response);
             const int base = done_.load();
             const std::vector<std::string> names = exportVolumeNpy(
                 film, dir, opt, provenanceOf(*driver, req.scenePath), [&](int d, int) { done_ = base + d; }, &cancel_);
@@ -121,14 +136,14 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
         }
         if (req.contactSheet && !cancel_) {
             step("contact sheet");
-            const std::string path = req.dir + "/" + exportContactSheetName(req.axis, req.mode);
+            const std::string path = req.dir + "/" + exportContactSheetName(req.axis, req.mode, req.response);
             exportContactSheet(film, path, req.sheetFrames, opt, req.tone);
             wrote(path);
             ++done_;
         }
         if (req.mp4 && !cancel_) {
             step("MP4");
-            const std::string path = req.dir + "/" + exportMp4Name(req.axis, req.mode);
+            const std::string path = req.dir + "/" + exportMp4Name(req.axis, req.mode, req.response);
             const int base = done_.load();
             if (exportMp4(film, path, opt, req.tone, req.fps, [&](int d, int) { done_ = base + d; }, &cancel_) > 0)
                 wrote(path);

@@ -202,6 +202,7 @@ void Viewer::drawControls() {
         }
         track("Continuous emission");
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("Light on from the pulse instant (running sum of the delta response)");
+        drawTimeResponse();
     }
 
     if (section("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -390,6 +391,59 @@ void Viewer::drawProgressSection() {
                           "go on later with tpb render --resume FOLDER or tpb view --resume FOLDER");
 }
 
+// Pulse shape and sensor response (film/time_response.h): a convolution along time applied when
+// the film is read, so a change shows at once, with no re-render. Widths in ns.
+std::string Viewer::responseNote() const {
+    return st_.response.identity() ? std::string() : " (" + describe(st_.response) + ")";
+}
+
+void Viewer::drawTimeResponse() {
+    TimeResponse r = st_.response;
+    const double defaultNs = 4.0 * time_.binWidth / kC_m_per_ns;  // four bins, when a shape is first picked
+    if (st_.pulseNs <= 0.0) st_.pulseNs = defaultNs;
+    if (st_.sensorNs <= 0.0) st_.sensorNs = defaultNs;
+    const char* pulses[] = {"delta", "gaussian", "square"};
+    int p = static_cast<int>(r.pulse);
+    ImGui::SetNextItemWidth(100);
+    if (ImGui::Combo("pulse", &p, pulses, 3)) r.pulse = static_cast<PulseShape>(p);
+    track("pulse");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("the source's pulse: gaussian (FWHM, centred on the emission instant) or square (on for\n"
+                          "WIDTH from the emission instant); the delta response convolved along time, no re-render");
+    if (r.pulse != PulseShape::Delta) {
+        ImGui::SameLine();
+        ImGui::SetNextItemWidth(110);
+        ImGui::InputDouble("ns##pulse", &st_.pulseNs, 0.0, 0.0, "%.4g");
+        track("ns##pulse");
+        st_.pulseNs = std::clamp(st_.pulseNs, 1e-6, 1e6);
+    }
+    const char* sensors[] = {"ideal", "gaussian jitter", "exponential"};
+    int q = static_cast<int>(r.sensor);
+    ImGui::SetNextItemWidth(100);
+    if (ImGui::Combo("sensor", &q, sensors, 3)) r.sensor = static_cast<SensorShape>(q);
+    track("sensor");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("the detector's time response: gaussian timing jitter (FWHM) or exponential decay (TAU)");
+    if (r.sensor != SensorShape::Ideal) {
+        ImGui::SameLine();
+        ImGui::SetNextItemWidth(110);
+        ImGui::InputDouble("ns##sensor", &st_.sensorNs, 0.0, 0.0, "%.4g");
+        track("ns##sensor");
+        st_.sensorNs = std::clamp(st_.sensorNs, 1e-6, 1e6);
+    }
+    r.pulseWidth = r.pulse == PulseShape::Delta ? 0.0 : st_.pulseNs * kC_m_per_ns;
+    r.sensorWidth = r.sensor == SensorShape::Ideal ? 0.0 : st_.sensorNs * kC_m_per_ns;
+    // Wider than kMaxResponseBins bins is not a kernel (binKernel refuses it): keep the last one.
+    if ((r.pulseWidth + r.sensorWidth) * 50.0 > kMaxResponseBins * time_.binWidth) {
+        status_ = "pulse/sensor width too large for this film's bins: not applied";
+        return;
+    }
+    if (!(r == st_.response)) {
+        st_.response = r;
+        st_.autoFrame = true;  // a blurred pulse is dimmer at its peak: fit the exposure again
+    }
+}
+
 // The photon-beams estimators (estimators/estimator_names.h) and the progressive time kernel: a
 // change restarts the accumulation (an average over passes of different estimators means nothing)
 // and says so. Returns true when it restarted.
@@ -554,6 +608,7 @@ void Viewer::drawExportSection() {
     r.tone.exposureEv = st_.evFrame;
     r.sheetFrames = st_.sheetFrames;
     r.scenePath = scenePath_;
+    r.response = st_.response;
     const bool busy = export_.busy();
     ImGui::BeginDisabled(busy);
     bool go = false;
@@ -621,8 +676,8 @@ void Viewer::drawImagePanel() {
         ImGui::TextWrapped("Steady state (all time), %llu passes", static_cast<unsigned long long>(frameKey_.passes));
     } else {
         const double opl = binCentreOpl(st_.bin);
-        ImGui::TextWrapped("bin %d: t = %.4f ns (%.4f m), %s, %s", st_.bin, opl / kC_m_per_ns, opl,
-                           axisName(st_.axis), modeName(st_.mode));
+        ImGui::TextWrapped("bin %d: t = %.4f ns (%.4f m), %s, %s%s", st_.bin, opl / kC_m_per_ns, opl,
+                           axisName(st_.axis), modeName(st_.mode), responseNote().c_str());
     }
     const ImVec2 avail = ImGui::GetContentRegionAvail();
     float zoom = std::min(avail.x / w, avail.y / h);
@@ -663,8 +718,8 @@ void Viewer::drawImagePanel() {
 
 void Viewer::drawTimePanel() {
     const int w = scene_.camera.width, bins = time_.bins;
-    ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s", st_.selY, axisName(st_.axis),
-                       modeName(st_.mode));
+    ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s%s", st_.selY, axisName(st_.axis),
+                       modeName(st_.mode), responseNote().c_str());
     const ImVec2 avail = ImGui::GetContentRegionAvail();
     const float lineH = ImGui::GetTextLineHeightWithSpacing();
     const float plotH = std::max(60.0f, std::min(140.0f, avail.y * 0.4f));

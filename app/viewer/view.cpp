@@ -129,6 +129,9 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
         st_.evFrame = st_.evSteady = static_cast<float>(*opt.exposure);
         st_.autoFrame = st_.autoSteady = false;
     }
+    st_.response = *parseSensor(opt.sensor, *parsePulse(opt.pulse));  // (checked when parsed)
+    if (st_.response.pulse != PulseShape::Delta) st_.pulseNs = st_.response.pulseWidth / kC_m_per_ns;
+    if (st_.response.sensor != SensorShape::Ideal) st_.sensorNs = st_.response.sensorWidth / kC_m_per_ns;
     st_.display.falseColor = opt.falseColor;
     st_.display.srgb = !opt.noSrgb;
     st_.showSteady = opt.steady;
@@ -277,7 +280,7 @@ void Viewer::endFrameChecks() {
     // picture is taken by the caller.
     if (!exportError_.empty()) exitCode() = kExitUserError;
     if (!opt_.exportDir.empty()) {
-        const std::string frame = st_.outDir + "/" + exportFrameName(st_.bin, st_.axis, st_.mode);
+        const std::string frame = st_.outDir + "/" + exportFrameName(st_.bin, st_.axis, st_.mode, st_.response);
         for (const std::string& want : {frame, st_.outDir + "/steady.exr"})
             if (std::find(exported_.begin(), exported_.end(), want) == exported_.end()) {
                 std::fprintf(stderr, "error: --export: the Export buttons did not write %s\n", want.c_str());

@@ -17,7 +17,7 @@ std::string frameFileName(int bin) {
 }
 
 void exportFrame(const FilmSnapshot& film, int bin, const std::string& path, const ExportOptions& opt) {
-    writeExr(path, film.width(), film.height(), frameImage(film, bin, opt.axis, opt.mode), opt.pixel);
+    writeExr(path, film.width(), film.height(), frameImage(film, bin, opt.axis, opt.mode, opt.response), opt.pixel);
 }
 
 namespace {
@@ -50,11 +50,11 @@ void exportSteady(const FilmSnapshot& film, const std::string& path, ExrPixel pi
 }
 
 void exportStreak(const FilmSnapshot& film, int row, const std::string& path, const ExportOptions& opt) {
-    writeExr(path, film.width(), film.bins(), streakImage(film, row, opt.axis, opt.mode), opt.pixel);
+    writeExr(path, film.width(), film.bins(), streakImage(film, row, opt.axis, opt.mode, opt.response), opt.pixel);
 }
 
 void exportProfileCsv(const FilmSnapshot& film, int x, int y, const std::string& path, const ExportOptions& opt) {
-    const std::vector<float> prof = pixelProfile(film, x, y, opt.axis, opt.mode);
+    const std::vector<float> prof = pixelProfile(film, x, y, opt.axis, opt.mode, opt.response);
     std::ostringstream os;
     os << "bin,t_opl_m,t_ns,r,g,b\n";
     const TimeBins& tb = film.time();
@@ -97,7 +97,7 @@ std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& pat
     std::vector<float> strip(static_cast<size_t>(W) * count * H * 3, 0.0f), img;
     std::vector<float> lum;
     for (int i = 0; i < count; ++i) {
-        img = frameImage(film, binsUsed[i], opt.axis, opt.mode);
+        img = frameImage(film, binsUsed[i], opt.axis, opt.mode, opt.response);
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x)
                 for (int c = 0; c < 3; ++c)

@@ -5,6 +5,7 @@
 // goes on (the snapshot keeps the blocks it shows alive until the export returns).
 #pragma once
 #include "film/film_snapshot.h"
+#include "film/time_response.h"
 #include "scene/scene_desc.h"
 #include "io/image_io.h"
 
@@ -17,6 +18,7 @@ namespace tpb {
 struct ExportOptions {
     TimeAxis axis = TimeAxis::Real;
     EmissionMode mode = EmissionMode::Delta;
+    TimeResponse response;  // pulse shape and sensor response (time_response.h); default: delta, ideal
     ExrPixel pixel = ExrPixel::Float;
     int firstBin = 0, lastBin = -1, step = 1;  // lastBin -1 = last bin of the film
 };

@@ -50,10 +50,40 @@ std::vector<float> perPixelImage(const FilmSnapshot& s, PerPixel which, TimeAxis
 
 }  // namespace
 
-std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, EmissionMode mode) {
+std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, EmissionMode mode,
+                              const TimeResponse& response) {
     std::vector<float> out(static_cast<size_t>(s.width()) * s.height() * 3);
     bin = std::clamp(bin, 0, s.bins() - 1);
     const int a = static_cast<int>(axis);
+    const BinKernel kernel = binKernel(response, s.time().binWidth);
+    if (!kernel.identity()) {
+        // Y_bin = sum_i w_i S(bin - lo - i), S the delta sums or the running sums (time_response.h).
+        const bool cont = mode == EmissionMode::Continuous;
+        const int bins = s.bins();
+        for (int t = 0; t < s.tileCount(); ++t) {
+            const TileBlock& b = s.block(t);
+            const TileSums& sums = b.sums;
+            const double* src = cont ? b.cumulative(axis).data() : sums.bins[a].data();
+            const double inv = inversePasses(sums);
+            const TileRect& r = s.tileRect(t);
+            for (int py = 0; py < r.h; ++py)
+                for (int px = 0; px < r.w; ++px) {
+                    const size_t pixel = static_cast<size_t>(py) * r.w + px;
+                    const double zero[3] = {0.0, 0.0, 0.0};
+                    const double* left = cont ? &sums.before[a][pixel * 3] : zero;
+                    const double* right = cont ? src + sums.binIndex(pixel, bins - 1) : zero;
+                    double acc[3] = {0.0, 0.0, 0.0};
+                    for (size_t i = 0; i < kernel.w.size(); ++i) {
+                        const int k = bin - (kernel.lo + static_cast<int>(i));
+                        const double* v = k < 0 ? left : k >= bins ? right : src + sums.binIndex(pixel, k);
+                        for (int c = 0; c < 3; ++c) acc[c] += kernel.w[i] * v[c];
+                    }
+                    float* dst = &out[((static_cast<size_t>(r.y0 + py) * s.width()) + r.x0 + px) * 3];
+                    for (int c = 0; c < 3; ++c) dst[c] = static_cast<float>(acc[c] * inv);
+                }
+        }
+        return out;
+    }
     for (int t = 0; t < s.tileCount(); ++t) {
         const TileBlock& b = s.block(t);
         if (mode == EmissionMode::Continuous) putTileBin(s, t, b.sums, b.cumulative(axis).data(), bin, inversePasses(b.sums), out);
@@ -70,7 +100,7 @@ namespace {
 
 // Calls put(k, rgb) for every bin of pixel (x, y) with the average, delta or running sum.
 template <class Put>
-void forEachBin(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode, Put&& put) {
+void forEachBinRaw(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode, Put&& put) {
     const int tile = s.tileOf(x, y);
     const TileSums& t = s.block(tile).sums;
     const TileRect& r = s.tileRect(tile);
@@ -90,35 +120,64 @@ void forEachBin(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode
     }
 }
 
+// The same through a pulse shape and sensor response: the pixel's series (delta or running sum),
+// then the kernel along it (time_response.h); the identity reads it as forEachBinRaw does.
+template <class Put>
+void forEachBin(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode, const BinKernel& kernel,
+                Put&& put) {
+    if (kernel.identity()) return forEachBinRaw(s, x, y, axis, mode, put);
+    const int bins = s.bins();
+    std::vector<double> series(static_cast<size_t>(bins) * 3), out(series.size());
+    forEachBinRaw(s, x, y, axis, mode, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, &series[static_cast<size_t>(k) * 3]); });
+    double left[3] = {0.0, 0.0, 0.0}, right[3] = {0.0, 0.0, 0.0};
+    if (mode == EmissionMode::Continuous) {
+        const int tile = s.tileOf(x, y);
+        const TileSums& t = s.block(tile).sums;
+        const TileRect& r = s.tileRect(tile);
+        const size_t pixel = static_cast<size_t>(y - r.y0) * r.w + (x - r.x0);
+        const double inv = inversePasses(t);
+        for (int c = 0; c < 3; ++c) {
+            left[c] = t.before[static_cast<int>(axis)][pixel * 3 + c] * inv;
+            right[c] = series[static_cast<size_t>(bins - 1) * 3 + c];
+        }
+    }
+    applyKernel(kernel, series.data(), bins, left, right, out.data());
+    for (int k = 0; k < bins; ++k) put(k, &out[static_cast<size_t>(k) * 3]);
+}
+
 }  // namespace
 
-std::vector<float> pixelProfile(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode) {
+std::vector<float> pixelProfile(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode,
+                                const TimeResponse& response) {
     std::vector<float> out(static_cast<size_t>(s.bins()) * 3, 0.0f);
     if (x < 0 || y < 0 || x >= s.width() || y >= s.height()) return out;
-    forEachBin(s, x, y, axis, mode, [&](int k, const double* rgb) {
+    forEachBin(s, x, y, axis, mode, binKernel(response, s.time().binWidth), [&](int k, const double* rgb) {
         for (int c = 0; c < 3; ++c) out[static_cast<size_t>(k) * 3 + c] = static_cast<float>(rgb[c]);
     });
     return out;
 }
 
-std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, EmissionMode mode) {
+std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, EmissionMode mode,
+                               const TimeResponse& response) {
     const int W = s.width();
     std::vector<float> out(static_cast<size_t>(s.bins()) * W * 3, 0.0f);
     if (row < 0 || row >= s.height()) return out;
+    const BinKernel kernel = binKernel(response, s.time().binWidth);
     for (int x = 0; x < W; ++x)
-        forEachBin(s, x, row, axis, mode, [&](int k, const double* rgb) {
+        forEachBin(s, x, row, axis, mode, kernel, [&](int k, const double* rgb) {
             for (int c = 0; c < 3; ++c) out[(static_cast<size_t>(k) * W + x) * 3 + c] = static_cast<float>(rgb[c]);
         });
     return out;
 }
 
-std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mode) {
+std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mode, const TimeResponse& response) {
     const size_t bins = static_cast<size_t>(s.bins());
+    const BinKernel kernel = binKernel(response, s.time().binWidth);
     std::vector<double> out(static_cast<size_t>(s.width()) * s.height() * bins * 3, 0.0);
     for (int y = 0; y < s.height(); ++y)
         for (int x = 0; x < s.width(); ++x) {
             double* dst = &out[(static_cast<size_t>(y) * s.width() + x) * bins * 3];
-            forEachBin(s, x, y, axis, mode, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, dst + k * 3); });
+            forEachBin(s, x, y, axis, mode, kernel, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, dst + k * 3); });
         }
     return out;
 }

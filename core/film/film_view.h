@@ -10,23 +10,30 @@
 // and keep a running sum (the same additions in the same order, so the same values).
 #pragma once
 #include "film/film_snapshot.h"
+#include "film/time_response.h"
 #include "scene/scene_desc.h"
 
 #include <vector>
 
 namespace tpb {
 
+// `response` (time_response.h): the pulse shape and sensor response the film is seen with; the
+// default (delta pulse, ideal sensor) reads the sums as they are, bit for bit as before.
+//
 // W*H*3, row-major. `bin` is clamped to the film.
-std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, EmissionMode mode);
+std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, EmissionMode mode,
+                              const TimeResponse& response = {});
 std::vector<float> steadyImage(const FilmSnapshot& s);
 std::vector<float> beforeImage(const FilmSnapshot& s, TimeAxis axis);
 std::vector<float> afterImage(const FilmSnapshot& s, TimeAxis axis);
 // bins*3; zeros for a pixel outside the film.
-std::vector<float> pixelProfile(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode);
+std::vector<float> pixelProfile(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode mode,
+                                const TimeResponse& response = {});
 // Streak image of image row `row`: bins rows x W columns x 3; zeros for a row outside the film.
-std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, EmissionMode mode);
+std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, EmissionMode mode,
+                               const TimeResponse& response = {});
 // Whole volume (W*H*bins*3, pixel-major: ((y*W + x)*bins + k)*3), in double.
-std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mode);
+std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mode, const TimeResponse& response = {});
 // Luminance (base/math.h) summed over the image, per bin of the delta frames (bins values).
 std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis);
 

@@ -69,7 +69,7 @@ ToneMap autoExposedToneMap(const FilmSnapshot& film, const ExportOptions& opt, T
         const std::vector<double> e = binEnergy(film, opt.axis);
         bin = static_cast<int>(std::max_element(e.begin(), e.end()) - e.begin());
     }
-    const ExposureFit fit = fitExposure(frameImage(film, bin, opt.axis, opt.mode));
+    const ExposureFit fit = fitExposure(frameImage(film, bin, opt.axis, opt.mode, opt.response));
     if (fit.found) base.exposureEv += fit.ev;
     return base;
 }
@@ -86,7 +86,7 @@ int exportMp4(const FilmSnapshot& film, const std::string& path, const ExportOpt
             enc.abort();
             return 0;
         }
-        enc.addFrame(toneMapImage(frameImage(film, k, opt.axis, opt.mode), tone).data());
+        enc.addFrame(toneMapImage(frameImage(film, k, opt.axis, opt.mode, opt.response), tone).data());
         ++done;
         if (progress) progress(done, total);
     }
@@ -118,7 +118,7 @@ ContactSheet makeContactSheet(const FilmSnapshot& film, int count, const ExportO
         const int fx = cx + (s.cellWidth - W) / 2;
         s.frameX.push_back(fx);
         s.frameY.push_back(cy);
-        const std::vector<unsigned char> px = toneMapImage(frameImage(film, s.bins[i], opt.axis, opt.mode), tone);
+        const std::vector<unsigned char> px = toneMapImage(frameImage(film, s.bins[i], opt.axis, opt.mode, opt.response), tone);
         for (int y = 0; y < H; ++y)
             std::copy_n(&px[static_cast<size_t>(y) * W * 3], static_cast<size_t>(W) * 3,
                         &s.rgb[(static_cast<size_t>(cy + y) * s.width + fx) * 3]);

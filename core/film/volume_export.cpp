@@ -48,6 +48,9 @@ std::string volumeSideJson(const FilmSnapshot& film, const ExportOptions& opt, c
     j["index"] = "volume[y, x, k, c]: row y from the top, column x, time bin k, colour c (r, g, b)";
     j["time"] = {{"axis", axisName(opt.axis)},
                  {"emission", emissionName(opt.mode)},
+                 {"pulse", pulseName(opt.response)},    // film/time_response.h: widths in ns
+                 {"sensor", sensorName(opt.response)},
+                 {"time_response", describe(opt.response)},
                  {"bins", t.bins},
                  {"start_opl_m", t.startOpl},
                  {"bin_width_opl_m", t.binWidth},
@@ -104,7 +107,7 @@ std::vector<std::string> exportVolumeNpy(const FilmSnapshot& film, const std::st
     std::vector<float> row(static_cast<size_t>(W) * B * 3);
     for (int y = 0; y < H; ++y) {
         if (cancel && cancel->load()) return written;  // vol's destructor removes its temporary file
-        const std::vector<float> streak = streakImage(film, y, opt.axis, opt.mode);
+        const std::vector<float> streak = streakImage(film, y, opt.axis, opt.mode, opt.response);
         for (int k = 0; k < B; ++k)
             for (int x = 0; x < W; ++x)
                 for (int c = 0; c < 3; ++c)

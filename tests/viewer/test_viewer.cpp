@@ -6,6 +6,7 @@
 #include "io/image_io.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cstring>
 
@@ -846,5 +847,35 @@ TEST_F(ViewerTest, ExportButtonsWriteTheVolumeTheMp4AndTheContactSheet) {
         int frames = 0;
         p >> frames;
         EXPECT_EQ(frames, kBins);
+    }
+}
+
+// Issue 16: the View section's pulse shape and sensor response (--pulse / --sensor set them at
+// start) change what is read from the film, not the film: the exported frame equals `tpb render`'s
+// with the same flags (a convolution of the same sums), in delta and continuous emission, and it
+// differs from the delta-pulse frame.
+TEST_F(ViewerTest, PulseShapeAndSensorResponseAreAppliedToTheShownAndExportedFrames) {
+    for (const Mode& m : {kModes[0], kModes[2]}) {
+        SCOPED_TRACE(m.name);
+        const std::string resp = " --pulse gaussian:0.4 --sensor exp:0.3";
+        const fs::path out = dir_ / ("pulse_" + m.name);
+        const Proc r = viewRun("pulse_" + m.name, kRenderArgs + m.flags + resp + " --bin " + std::to_string(bin()) +
+                                                      " --after-passes 2 --export " + q(out));
+        ASSERT_EQ(r.code, 0) << r.out << r.err;
+        const fs::path frame = out / viewerFrameName(bin(), m.tag + "_pulse-gaussian0.4_sensor-exp0.3");
+        ASSERT_TRUE(fs::exists(frame)) << r.out;
+        const fs::path ref = dir_ / ("pulse_ref_" + m.name);
+        const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs + m.flags +
+                                    resp + " --warmup 3 --strip 0 -q -o " + q(ref),
+                                ref);
+        ASSERT_EQ(w.code, 0) << w.err;
+        const Exr got = readExrFile(frame), want = readExrFile(ref / "frames" / frameName(bin()));
+        ASSERT_EQ(got.rgb.size(), want.rgb.size());
+        EXPECT_LE(maxRelDiff(got, want), 1e-6);
+        const Exr sharp = readExrFile(reference(m) / "frames" / frameName(bin()));
+        EXPECT_GT(maxRelDiff(got, sharp), 0.05) << "the pulse shape changed nothing";
+        const nlohmann::json summary = nlohmann::json::parse(slurp(ref / "summary.json"));
+        EXPECT_EQ(summary["frames"]["time_response"],
+                  "gaussian pulse, FWHM 0.4 ns; exponential sensor decay, 0.3 ns");
     }
 }
