@@ -128,7 +128,8 @@ private:
     void fitPendingExposure(const FetchKey& key);
     void pollExport();
     void drawTimeResponse();   // View section: pulse shape and sensor response
-    std::string responseNote() const;  // " (gaussian pulse, FWHM 1 ns; ideal sensor)" or ""
+    std::string responseNote() const;
+    const char* emissionLabel() const;  // "delta pulse", "pulse response" or "continuous emission"  // " (gaussian pulse, FWHM 1 ns; ideal sensor)" or ""
 
     void requestCheckpoint();  // "Save checkpoint": pauses, then writes once the pass in progress ends
     void pollCheckpoint();

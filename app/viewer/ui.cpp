@@ -194,6 +194,7 @@ void Viewer::drawControls() {
         if (ImGui::Checkbox("Camera unwarping", &unwarp)) st_.axis = unwarp ? TimeAxis::Unwarped : TimeAxis::Real;
         track("Camera unwarping");
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("Time since emission without the path to the camera");
+        ImGui::SameLine();  // one row for both (the Export buttons stay in view in an 800-pixel window)
         bool cont = st_.mode == EmissionMode::Continuous;
         if (ImGui::Checkbox("Continuous emission", &cont)) {
             st_.mode = cont ? EmissionMode::Continuous : EmissionMode::Delta;
@@ -393,6 +394,11 @@ void Viewer::drawProgressSection() {
 
 // Pulse shape and sensor response (film/time_response.h): a convolution along time applied when
 // the film is read, so a change shows at once, with no re-render. Widths in ns.
+const char* Viewer::emissionLabel() const {
+    if (st_.mode == EmissionMode::Continuous) return "continuous emission";
+    return st_.response.pulse == PulseShape::Delta ? "delta pulse" : "pulse response";
+}
+
 std::string Viewer::responseNote() const {
     return st_.response.identity() ? std::string() : " (" + describe(st_.response) + ")";
 }
@@ -402,33 +408,37 @@ void Viewer::drawTimeResponse() {
     const double defaultNs = 4.0 * time_.binWidth / kC_m_per_ns;  // four bins, when a shape is first picked
     if (st_.pulseNs <= 0.0) st_.pulseNs = defaultNs;
     if (st_.sensorNs <= 0.0) st_.sensorNs = defaultNs;
-    const char* pulses[] = {"delta", "gaussian", "square"};
+    // One row: [pulse][width] [sensor][width], the widths (ns) only for a shape that has one.
+    const char* pulses[] = {"delta pulse", "gauss pulse", "square pulse"};
     int p = static_cast<int>(r.pulse);
-    ImGui::SetNextItemWidth(100);
-    if (ImGui::Combo("pulse", &p, pulses, 3)) r.pulse = static_cast<PulseShape>(p);
+    ImGui::SetNextItemWidth(104);
+    if (ImGui::Combo("##pulse", &p, pulses, 3)) r.pulse = static_cast<PulseShape>(p);
     track("pulse");
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("the source's pulse: gaussian (FWHM, centred on the emission instant) or square (on for\n"
-                          "WIDTH from the emission instant); the delta response convolved along time, no re-render");
+        ImGui::SetTooltip("the source's pulse: gaussian (FWHM in ns, centred on the emission instant) or square (on\n"
+                          "for WIDTH ns from the emission instant); the delta response convolved along time, no re-render");
     if (r.pulse != PulseShape::Delta) {
-        ImGui::SameLine();
-        ImGui::SetNextItemWidth(110);
-        ImGui::InputDouble("ns##pulse", &st_.pulseNs, 0.0, 0.0, "%.4g");
-        track("ns##pulse");
+        ImGui::SameLine(0, 2);
+        ImGui::SetNextItemWidth(56);
+        ImGui::InputDouble("##pulsens", &st_.pulseNs, 0.0, 0.0, "%.3g");
+        track("pulse ns");
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("pulse width, ns (gaussian: FWHM)");
         st_.pulseNs = std::clamp(st_.pulseNs, 1e-6, 1e6);
     }
-    const char* sensors[] = {"ideal", "gaussian jitter", "exponential"};
+    const char* sensors[] = {"ideal sensor", "gauss jitter", "exp decay"};
     int q = static_cast<int>(r.sensor);
-    ImGui::SetNextItemWidth(100);
-    if (ImGui::Combo("sensor", &q, sensors, 3)) r.sensor = static_cast<SensorShape>(q);
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(104);
+    if (ImGui::Combo("##sensor", &q, sensors, 3)) r.sensor = static_cast<SensorShape>(q);
     track("sensor");
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("the detector's time response: gaussian timing jitter (FWHM) or exponential decay (TAU)");
+        ImGui::SetTooltip("the detector's time response: gaussian timing jitter (FWHM in ns) or exponential decay (TAU in ns)");
     if (r.sensor != SensorShape::Ideal) {
-        ImGui::SameLine();
-        ImGui::SetNextItemWidth(110);
-        ImGui::InputDouble("ns##sensor", &st_.sensorNs, 0.0, 0.0, "%.4g");
-        track("ns##sensor");
+        ImGui::SameLine(0, 2);
+        ImGui::SetNextItemWidth(56);
+        ImGui::InputDouble("##sensorns", &st_.sensorNs, 0.0, 0.0, "%.3g");
+        track("sensor ns");
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("sensor width, ns (gaussian: FWHM; exponential: decay time)");
         st_.sensorNs = std::clamp(st_.sensorNs, 1e-6, 1e6);
     }
     r.pulseWidth = r.pulse == PulseShape::Delta ? 0.0 : st_.pulseNs * kC_m_per_ns;
@@ -677,7 +687,7 @@ void Viewer::drawImagePanel() {
     } else {
         const double opl = binCentreOpl(st_.bin);
         ImGui::TextWrapped("bin %d: t = %.4f ns (%.4f m), %s, %s%s", st_.bin, opl / kC_m_per_ns, opl,
-                           axisName(st_.axis), modeName(st_.mode), responseNote().c_str());
+                           axisName(st_.axis), emissionLabel(), responseNote().c_str());
     }
     const ImVec2 avail = ImGui::GetContentRegionAvail();
     float zoom = std::min(avail.x / w, avail.y / h);
@@ -719,7 +729,7 @@ void Viewer::drawImagePanel() {
 void Viewer::drawTimePanel() {
     const int w = scene_.camera.width, bins = time_.bins;
     ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s%s", st_.selY, axisName(st_.axis),
-                       modeName(st_.mode), responseNote().c_str());
+                       emissionLabel(), responseNote().c_str());
     const ImVec2 avail = ImGui::GetContentRegionAvail();
     const float lineH = ImGui::GetTextLineHeightWithSpacing();
     const float plotH = std::max(60.0f, std::min(140.0f, avail.y * 0.4f));
