@@ -603,8 +603,8 @@ void Viewer::drawExportSection() {
     // file names carry them): a tooltip, so that every Export button stays in view in an 800-pixel
     // window with the volume/MP4/contact sheet row.
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("exports are in %s time, %s (as shown)", st_.axis == TimeAxis::Real ? "real" : "unwarped",
-                          st_.mode == EmissionMode::Delta ? "delta pulse" : "continuous emission");
+        ImGui::SetTooltip("exports are in %s time, %s%s (as shown)", st_.axis == TimeAxis::Real ? "real" : "unwarped",
+                          emissionLabel(), responseNote().c_str());
     track("folder");
     ExportRequest r;
     r.dir = st_.outDir.empty() ? "." : st_.outDir;
