@@ -18,12 +18,20 @@ std::string num(int64_t v) { return std::to_string(v); }
 std::string num(int v) { return std::to_string(v); }
 std::string num(uint64_t v) { return std::to_string(v); }
 std::string num(bool v) { return v ? "true" : "false"; }
-std::string num(const Vec3& v) { return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")"; }
+std::string num(const Vec3& v) {
+    char b[96];
+    std::snprintf(b, sizeof b, "(%.17g, %.17g, %.17g)", v.x, v.y, v.z);
+    return b;
+}
 std::string num(const Mat4& m) {
     std::string s = "[";
     for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) s += (c || r ? ", " : "") + num(m[c][r]);
-    return s + "]";
+        for (int r = 0; r < 4; ++r) {
+            if (c || r) s.append(", ");
+            s.append(num(m[c][r]));
+        }
+    s.push_back(']');
+    return s;
 }
 
 struct Writer {
