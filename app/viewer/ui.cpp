@@ -50,7 +50,6 @@ std::string visibleLabel(const char* label) {
 }
 
 const char* axisName(TimeAxis a) { return a == TimeAxis::Real ? "real time" : "camera-unwarped time"; }
-const char* modeName(EmissionMode m) { return m == EmissionMode::Delta ? "delta pulse" : "continuous emission"; }
 
 }  // namespace
 
