@@ -42,7 +42,7 @@ PreparedRender prepareResume(const ResumeSource& src, const std::string& scene, 
 }
 
 uint64_t restoreCheckpoint(const ResumeSource& src, const PreparedRender& p, Driver& drv) {
-    Checkpoint c = readCheckpoint(src.path);
+    Checkpoint c = readCheckpoint(src.path, &drv.film());  // into the driver's film: one film in memory
     // The file may have been replaced since its header was read (a render still writing into the
     // folder cannot: the folder is locked): check again.
     const std::vector<std::string> changes = fingerprintChanges(c.info.fingerprint, renderFingerprint(p));
@@ -51,7 +51,7 @@ uint64_t restoreCheckpoint(const ResumeSource& src, const PreparedRender& p, Dri
         throw UserError(src.path + ": not a usable tpb checkpoint: " + std::to_string(c.history.size()) +
                         " passes in its history, " + std::to_string(c.info.passes) + " in its film");
     const uint64_t passes = c.info.passes;
-    drv.restore(std::move(c.film), std::move(c.history));
+    drv.restore(nullptr, std::move(c.history));
     return passes;
 }
 

@@ -35,11 +35,8 @@ void run(const ViewCmd& c) {
         const ResumeSource src = findCheckpoint(c.resume);
         view.flags = resumeOverrides(src.info.overrides, c.ov.settings());
         PreparedRender prepared = prepareResume(src, c.scene, c.ov.settings());
-        auto checkpoint = std::make_unique<Checkpoint>(readCheckpoint(src.path));
-        if (fingerprintChanges(checkpoint->info.fingerprint, renderFingerprint(prepared)).size() > 0)
-            throw UserError(src.path + ": changed while being resumed");
         if (view.exportFolder.empty()) view.exportFolder = std::filesystem::path(src.path).parent_path().string();
-        runViewer(prepared, view, std::move(checkpoint));
+        runViewer(prepared, view, src.path);
         return;
     }
     PreparedRender prepared = loadAndBuild(c.scene, c.ov);

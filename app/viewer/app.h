@@ -113,9 +113,10 @@ struct ControlRect {
 
 class Viewer {
 public:
-    // `resume`: a checkpoint of this render to go on from (tpb view --resume), or null.
+    // `resumePath`: a checkpoint of this render to go on from (tpb view --resume, checked by
+    // prepareResume), read into the first driver's film; "" = none.
     Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt, GLFWwindow* window,
-           std::unique_ptr<Checkpoint> resume = nullptr);
+           const std::string& resumePath = "");
     ~Viewer();  // stops the driver and joins the helper threads (GL objects go with the members)
     void run();
 
@@ -198,7 +199,7 @@ private:
 
     // Checkpoints: the one to resume from at the first start, and the one being written (the
     // driver stays paused until it is on disk).
-    std::unique_ptr<Checkpoint> resume_;
+    std::string resumePath_;
     enum class CheckpointStage { Idle, WaitingForPassEnd, Writing } checkpointStage_ = CheckpointStage::Idle;
     bool checkpointWasPaused_ = false;
     std::future<std::string> checkpointJob_;  // "" or the error
@@ -243,6 +244,6 @@ private:
 
 // Opens the window and runs the viewer on a prepared render until it is closed (or, with
 // --screenshot, until the picture is taken).
-void runViewer(const PreparedRender& prepared, const ViewOptions& options, std::unique_ptr<Checkpoint> resume = nullptr);
+void runViewer(const PreparedRender& prepared, const ViewOptions& options, const std::string& resumePath = "");
 
 }  // namespace tpb::app

@@ -40,10 +40,11 @@ void Viewer::restart(const RenderSettings& s, const std::string& why) {
     checkpointStage_ = CheckpointStage::Idle;
     if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
     driver_ = std::make_shared<Driver>(scene_, s, time_);
-    if (resume_) {  // the first start of `tpb view --resume`: go on from the checkpoint's passes
-        const uint64_t n = resume_->info.passes;
-        driver_->restore(std::move(resume_->film), std::move(resume_->history));
-        resume_.reset();
+    if (!resumePath_.empty()) {  // the first start of `tpb view --resume`: go on from the checkpoint's passes
+        Checkpoint c = readCheckpoint(resumePath_, &driver_->film());  // into the driver's film: one film in memory
+        const uint64_t n = c.info.passes;
+        driver_->restore(nullptr, std::move(c.history));
+        resumePath_.clear();
         std::printf("resumed %llu passes from the checkpoint\n", static_cast<unsigned long long>(n));
     }
     ++generation_;

@@ -105,7 +105,7 @@ public:
 }  // namespace
 
 Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt,
-               GLFWwindow* window, std::unique_ptr<Checkpoint> resume)
+               GLFWwindow* window, const std::string& resumePath)
     : prepared_(prepared), scene_(*prepared.scene), time_(prepared.time), scenePath_(prepared.source.path), opt_(opt), window_(window) {
     const Scene& scene = scene_;
     program_.load(TPB_SHADER_DIR);
@@ -151,7 +151,7 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     }
     frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
     image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
-    resume_ = std::move(resume);
+    resumePath_ = resumePath;
     restart(settings, "");
 }
 
@@ -391,12 +391,12 @@ void checkShownTime(const ViewOptions& o, const TimeBins& tb) {
 
 }  // namespace
 
-void runViewer(const PreparedRender& prepared, const ViewOptions& o, std::unique_ptr<Checkpoint> resume) {
+void runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::string& resumePath) {
     const Scene* scene = prepared.scene.get();
     RenderSettings ds = prepared.settings;
     const bool shot = !o.screenshot.empty();
     if (shot) {  // run exactly N passes (beyond a resumed checkpoint's), then take the picture
-        ds.passes = o.afterPasses + (resume ? static_cast<int64_t>(resume->info.passes) : 0);
+        ds.passes = o.afterPasses + (resumePath.empty() ? 0 : static_cast<int64_t>(readCheckpointInfo(resumePath).passes));
         ds.timeBudgetSec = 0.0;
     }
     if (o.windowSize.size() != 2 || o.windowSize[0] < 64 || o.windowSize[1] < 64)
@@ -413,7 +413,7 @@ void runViewer(const PreparedRender& prepared, const ViewOptions& o, std::unique
     gInterrupted = false;
     std::signal(SIGINT, onSigint);  // Ctrl-C closes the window like the close button
     try {
-        Viewer viewer(prepared, ds, o, window.get(), std::move(resume));
+        Viewer viewer(prepared, ds, o, window.get(), resumePath);
         std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n", prepared.source.path.c_str());
         std::fflush(stdout);
         viewer.run();

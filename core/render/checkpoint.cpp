@@ -355,17 +355,22 @@ CheckpointInfo readCheckpointInfo(const std::string& path) {
     return infoFrom(path, o.header);
 }
 
-Checkpoint readCheckpoint(const std::string& path) {
+Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
     Opened o = openCheckpoint(path);
     Checkpoint c;
     c.info = infoFrom(path, o.header);
+    if (into && (into->width() != c.info.width || into->height() != c.info.height || into->bins() != c.info.time.bins ||
+                 into->time().startOpl != c.info.time.startOpl || into->time().binWidth != c.info.time.binWidth))
+        throw UserError(path + ": the checkpoint's film (" + std::to_string(c.info.width) + "x" +
+                        std::to_string(c.info.height) + "x" + std::to_string(c.info.time.bins) +
+                        ") differs from this render's: render anew without --resume");
     try {
         for (const json& p : o.header.at("history")) c.history.push_back(passFrom(p));
     } catch (const std::exception& e) {
         bad(path, std::string("history of the passes unreadable (") + e.what() + ")");
     }
-    c.film = std::make_unique<TransientFilm>(c.info.width, c.info.height, c.info.time);
-    TransientFilm& film = *c.film;
+    if (!into) c.film = std::make_unique<TransientFilm>(c.info.width, c.info.height, c.info.time);
+    TransientFilm& film = into ? *into : *c.film;
     WordHash hash;
     auto get = [&](void* data, size_t bytes) {
         if (!o.in.read(static_cast<char*>(data), static_cast<std::streamsize>(bytes))) bad(path, "truncated film");

@@ -59,8 +59,10 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
 // The header alone (cheap: the film is not read). UserError naming the file for anything that is
 // not a complete version-1 checkpoint (wrong magic, truncated, bad header).
 CheckpointInfo readCheckpointInfo(const std::string& path);
-// Everything; also checks the payload's hash.
-Checkpoint readCheckpoint(const std::string& path);
+// Everything; also checks the payload's hash. With `into` (a film of the checkpoint's size and time
+// axis, else UserError), the sums and counters go into that film tile by tile and Checkpoint::film
+// stays null: a resume then holds one film plus a tile, not two films (a 12 GiB film on 24 GB).
+Checkpoint readCheckpoint(const std::string& path, TransientFilm* into = nullptr);
 
 // The overrides of a resumed run: the checkpoint's, with the resuming command's own on top where
 // they may differ (passes, time budget, threads); any other flag the resuming command gives must

@@ -67,11 +67,13 @@ bool Driver::runPass(uint64_t pass) {
 
 void Driver::restore(std::unique_ptr<TransientFilm> film, std::vector<PassStats> history) {
     if (running_) throw std::logic_error("Driver::restore while passes run");
-    const TimeBins &a = film->time(), &b = film_->time();
-    if (film->width() != film_->width() || film->height() != film_->height() || a.bins != b.bins ||
-        a.startOpl != b.startOpl || a.binWidth != b.binWidth)
-        throw std::invalid_argument("Driver::restore: the film differs in size or time axis from this render's");
-    film_ = std::move(film);
+    if (film) {
+        const TimeBins &a = film->time(), &b = film_->time();
+        if (film->width() != film_->width() || film->height() != film_->height() || a.bins != b.bins ||
+            a.startOpl != b.startOpl || a.binWidth != b.binWidth)
+            throw std::invalid_argument("Driver::restore: the film differs in size or time axis from this render's");
+        film_ = std::move(film);
+    }
     std::lock_guard<std::mutex> g(mutex_);
     history_ = std::move(history);
     completed_ = history_.size();

@@ -42,6 +42,7 @@ public:
     // as this driver's, else std::invalid_argument) replaces this driver's, its finished passes and
     // their statistics become this driver's history, and the next pass start() runs is
     // history.size() + 1. Only before start() (or after the run ended).
+    // A null film keeps this driver's (filled in place: readCheckpoint(path, &film())).
     void restore(std::unique_ptr<TransientFilm> film, std::vector<PassStats> history);
 
     void start(std::function<void(const PassStats&)> onPass = {});

@@ -139,6 +139,28 @@ TEST_F(CheckpointTest, ResumedRenderIsBitIdenticalToOneUninterruptedRun) {
     EXPECT_EQ(resumed.history()[2].beamRadius, whole.history()[2].beamRadius);
 }
 
+// Read into the driver's own film (a resume holds one film, not two): the same sums; a film of
+// another shape is refused.
+TEST_F(CheckpointTest, ReadIntoAnExistingFilmFillsItInPlace) {
+    const test::TestScene ts = test::testSceneFrom(kScene);
+    RenderSettings s = ts.settings;
+    Driver d(*ts, s, ts.time);
+    ASSERT_TRUE(d.runPass(1));
+    ASSERT_TRUE(d.runPass(2));
+    writeCheckpoint(path(), infoOf(ts, s, 2), d.film(), d.history());
+    Driver resumed(*ts, s, ts.time);
+    Checkpoint c = readCheckpoint(path(), &resumed.film());
+    EXPECT_EQ(c.film, nullptr);
+    resumed.restore(nullptr, std::move(c.history));
+    EXPECT_EQ(resumed.completedPasses(), 2u);
+    expectSameFilm(d.film(), resumed.film());
+    EXPECT_EQ(resumed.film().stats.inside[0].load(), d.film().stats.inside[0].load());
+    TimeBins other = ts.time;
+    other.bins += 1;
+    TransientFilm wrong(ts->camera.width, ts->camera.height, other);
+    EXPECT_THROW(readCheckpoint(path(), &wrong), UserError);
+}
+
 TEST_F(CheckpointTest, CorruptTruncatedAndForeignFilesAreRefusedByName) {
     const test::TestScene ts = test::testSceneFrom(kScene);
     RenderSettings s = ts.settings;
