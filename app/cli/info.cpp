@@ -18,22 +18,7 @@ namespace tpb::app {
 namespace {
 
 const char* materialName(MaterialType t) {
-    switch (t) {
-        case MaterialType::Diffuse: return "diffuse";
-        case MaterialType::Mirror: return "mirror";
-        case MaterialType::Dielectric: return "dielectric";
-        case MaterialType::Null: return "null (index-matched boundary)";
-    }
-    return "?";
-}
-const char* lightName(LightType t) {
-    switch (t) {
-        case LightType::Point: return "point";
-        case LightType::Spot: return "spot";
-        case LightType::AreaQuad: return "area";
-        case LightType::Laser: return "laser";
-    }
-    return "?";
+    return t == MaterialType::Null ? "null (index-matched boundary)" : materialTypeName(t);
 }
 
 nlohmann::json vec3(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
@@ -70,7 +55,7 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
     j["regions"] = regions;
     json lights = json::array();
     for (const Light& l : s->lights)
-        lights.push_back({{"type", lightName(l.type)}, {"power_w", vec3(l.power)}, {"pulse_opl_m", l.emitOpl},
+        lights.push_back({{"type", lightTypeName(l.type)}, {"power_w", vec3(l.power)}, {"pulse_opl_m", l.emitOpl},
                           {"pulse_ns", l.emitOpl / kC_m_per_ns}});
     j["lights"] = lights;
     const TimeBins& t = p.time;

@@ -41,34 +41,6 @@ struct Writer {
     void text(const std::string& key, const std::string& v) { fp.emplace_back(key, v); }
 };
 
-const char* shapeName(ShapeType t) {
-    switch (t) {
-        case ShapeType::Mesh: return "mesh";
-        case ShapeType::Sphere: return "sphere";
-        case ShapeType::Quad: return "quad";
-        case ShapeType::Box: return "box";
-    }
-    return "?";
-}
-const char* materialName(MaterialType t) {
-    switch (t) {
-        case MaterialType::Diffuse: return "diffuse";
-        case MaterialType::Mirror: return "mirror";
-        case MaterialType::Dielectric: return "dielectric";
-        case MaterialType::Null: return "null";
-    }
-    return "?";
-}
-const char* lightName(LightType t) {
-    switch (t) {
-        case LightType::Point: return "point";
-        case LightType::Spot: return "spot";
-        case LightType::AreaQuad: return "area";
-        case LightType::Laser: return "laser";
-    }
-    return "?";
-}
-
 }  // namespace
 
 std::string fileFingerprint(const std::string& path) {
@@ -117,7 +89,7 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
         const MaterialDesc& m = d.materials[i];
         const std::string k = "materials[" + std::to_string(i) + "].";
         w.text(k + "name", m.name);
-        w.text(k + "type", materialName(m.type));
+        w.text(k + "type", materialTypeName(m.type));
         w(k + "albedo", m.albedo);
         w(k + "specular", m.specular);
         w(k + "ior", m.ior);
@@ -126,7 +98,7 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
         const ShapeDesc& s = d.shapes[i];
         const std::string k = "shapes[" + std::to_string(i) + "].";
         w.text(k + "name", s.name);
-        w.text(k + "type", shapeName(s.type));
+        w.text(k + "type", shapeTypeName(s.type));
         w(k + "material", s.material);
         w(k + "interior_medium", s.interiorMedium);
         w(k + "flip_normals", s.flipNormals);
@@ -157,7 +129,7 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
         const LightDesc& l = d.lights[i];
         const std::string k = "lights[" + std::to_string(i) + "].";
         w.text(k + "name", l.name);
-        w.text(k + "type", lightName(l.type));
+        w.text(k + "type", lightTypeName(l.type));
         w(k + "power", l.power);
         w(k + "emit_opl", l.emitOpl);
         switch (l.type) {

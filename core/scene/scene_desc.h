@@ -144,6 +144,11 @@ struct RenderDesc {
     TimeKernelSettings timeKernel;
 };
 
+// The kinds' names as the scene file writes them ("mesh", "diffuse", "area"...).
+const char* shapeTypeName(ShapeType t);
+const char* materialTypeName(MaterialType t);
+const char* lightTypeName(LightType t);
+
 struct SceneDesc {
     int version = 1;
     std::string path;  // the scene file

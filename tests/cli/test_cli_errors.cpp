@@ -8,6 +8,8 @@
 #include "render/time_range.h"
 #include "support/temp_dir.h"
 
+#include "support/checkpoint_payload.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -1126,15 +1128,7 @@ TEST_F(CliErrors, ConvergeMeasuresEstimatorVariantsAndRefusesBadOnes) {
 // Issue 16, checkpoint and resume (render/checkpoint.h): SIGTERM mid-render writes a checkpoint;
 // `tpb render --resume DIR` goes on to the pass limit the render had, and its film (the
 // checkpoint's payload: every sum, bit for bit) and steady.exr equal those of one uninterrupted run.
-namespace {
-std::string checkpointPayload(const fs::path& p) {
-    const std::string b = slurp(p);
-    if (b.size() < 16) return {};
-    uint64_t n = 0;
-    std::memcpy(&n, b.data() + 8, 8);
-    return 16 + n <= b.size() ? b.substr(16 + n) : std::string();
-}
-}  // namespace
+using tpb::test::checkpointPayload;
 
 TEST_F(CliErrors, SigtermWritesACheckpointAndTheResumeEqualsAnUninterruptedRun) {
     const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 10000, "

@@ -5,6 +5,8 @@
 // toggles. Skipped only when xvfb-run is missing or cannot start an X server.
 #include "io/image_io.h"
 
+#include "support/checkpoint_payload.h"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -755,15 +757,7 @@ TEST_F(ViewerTest, TimelineReportsFirstLightAndTheWarmup) {
     EXPECT_EQ(warmup, 0) << off.out;
 }
 
-namespace {
-std::string checkpointPayload(const fs::path& p) {
-    const std::string b = slurp(p);
-    if (b.size() < 16) return {};
-    uint64_t n = 0;
-    std::memcpy(&n, b.data() + 8, 8);
-    return 16 + n <= b.size() ? b.substr(16 + n) : std::string();
-}
-}  // namespace
+using tpb::test::checkpointPayload;
 
 // Issue 16: "Save checkpoint" writes the viewer's film between passes; `tpb render --resume` goes on
 // from it to a film bit-identical to one `tpb render` of all the passes (with the viewer's warm-up),
