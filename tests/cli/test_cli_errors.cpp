@@ -787,6 +787,31 @@ TEST_F(CliErrors, BenchJsonRecordsTheCommandAndThePerUnitCosts) {
               j["configs"][0]["per_pass"]["bins_splatted"].get<double>());
 }
 
+// `bench --threads-list 1,2` (issue 15: 2 threads against 1 in one run): a configuration per (bins,
+// threads) in the JSON and a speed-up line per bin count; --threads with it is refused.
+TEST_F(CliErrors, BenchThreadsListMeasuresEachThreadCountAndReportsTheSpeedUp) {
+    const fs::path scene = write("scene.json", insideScene());
+    const std::string json = (dir_ / "bench.json").string();
+    const Proc p = runTpb({"bench", scene.string(), "--bins-list", "1,8", "--threads-list", "1,2", "--bench-passes", "1",
+                           "--width", "8", "--height", "8", "--json", json}, dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    std::ifstream in(json);
+    ASSERT_TRUE(in) << json;
+    const nlohmann::json j = nlohmann::json::parse(in);
+    ASSERT_EQ(j.at("configs").size(), 4u);
+    const int expected[4][2] = {{1, 1}, {1, 2}, {8, 1}, {8, 2}};
+    for (int i = 0; i < 4; ++i) {
+        EXPECT_EQ(j["configs"][i]["bins"].get<int>(), expected[i][0]) << i;
+        EXPECT_EQ(j["configs"][i]["threads"].get<int>(), expected[i][1]) << i;
+    }
+    EXPECT_NE(p.out.find("speed-up 2 threads over 1 at 1 bins = "), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("speed-up 2 threads over 1 at 8 bins = "), std::string::npos) << p.out;
+    const Proc q = runTpb({"bench", scene.string(), "--threads-list", "1,2", "--threads", "2"}, dir_);
+    EXPECT_EQ(q.code, 2) << q.err;
+    EXPECT_NE(q.err.find("--threads-list and --threads both set the thread count"), std::string::npos) << q.err;
+    EXPECT_EQ(q.out.find("ratio"), std::string::npos) << q.out;
+}
+
 // Item 12: a 1024x1024x512 film gave no hint of the 17 minutes its frames take to write. Before the
 // render: the number of frames, their size and the write time estimated from preview.exr.
 TEST_F(CliErrors, ExportSizeAndTimeAreEstimatedBeforeRendering) {
