@@ -28,6 +28,27 @@ void Beam1DEstimator::prepare(const Scene& scene, const PhotonMap& map, const Es
     prepareOver(scene, map, pass, map.beams);
 }
 
+namespace {
+// The accelerator's candidate test (accel/beam_accel.h): a superset of the pieces gather() turns
+// into an estimate, decided from the piece alone (its beam's length is not at hand: a piece's
+// s_b <= sbHi <= L_b bounds it). Accepted: exactly parallel lines; sin(theta) below the (1D-6)
+// threshold of min(sMax, sbHi) >= the gather's min(sMax, L_b), so every pair the gather hands to
+// beam2d; and a closest approach within r, on the segment and on the closed range [sbLo, sbHi] (the
+// gather's half-open rule is stricter). Rejected pieces give no estimate, the accepted ones come in
+// the same (beam, piece) order: the same estimates, the same sums, the same films.
+struct ClosestApproachTest {
+    const Ray& ray;
+    double sMax, radius;
+    static bool accept(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
+        const auto& t = *static_cast<const ClosestApproachTest*>(context);
+        const std::optional<ClosestApproach> ca = closestApproach(t.ray.o, t.ray.d, origin, dir);
+        if (!ca || ca->sinTheta < parallelSinThreshold(t.radius, t.sMax, piece.sbHi)) return true;
+        return std::abs(ca->distance) < t.radius && ca->sr >= 0.0 && ca->sr <= t.sMax && ca->sb >= piece.sbLo &&
+               ca->sb <= piece.sbHi;
+    }
+};
+}  // namespace
+
 // The radiance the pass's beams scatter along x_r + s w_r, s in [0, sMax] ((1D-4) - (1D-6)).
 int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                                 EstimatorScratch& scratch) const {
@@ -39,7 +60,8 @@ int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const SegmentGather g{*scene_, ray, seg.sMax, m, region.ior, r, beamAttenuation(m, pass_.beamLength), pass_.profile,
                           path};
     scratch.pieces.clear();
-    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces);
+    const ClosestApproachTest test{ray, seg.sMax, r};
+    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&ClosestApproachTest::accept, &test});
     NearShapes near(*scene_, ray, seg.sMax, r, scratch.shapes);
     const double kernel = 1.0 / (2.0 * r);  // K1(d), |d| < r
     int64_t estimates = 0;
