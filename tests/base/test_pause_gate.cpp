@@ -42,7 +42,9 @@ TEST(PauseGate, ResumeBetweenCheckAndSleepIsNotLost) {
     waiter.join();
     resumer.join();
     EXPECT_TRUE(inTime) << "resume() was lost: the waiter slept on with the gate open";
-    if (inTime) EXPECT_TRUE(woke.get());
+    if (inTime) {
+        EXPECT_TRUE(woke.get());
+    }
     EXPECT_FALSE(gate.paused());
 }
 

@@ -116,7 +116,9 @@ void expectSameScene(const SceneDesc& j, const SceneDesc& x) {
         EXPECT_EQ(ma.type, mb.type);
         expectNear(ma.albedo, mb.albedo, 0.0);
         expectNear(ma.specular, mb.specular, 0.0);
-        if (ma.type == MaterialType::Dielectric) EXPECT_EQ(ma.ior, mb.ior);
+        if (ma.type == MaterialType::Dielectric) {
+            EXPECT_EQ(ma.ior, mb.ior);
+        }
         if (a.type == ShapeType::Quad) {  // exact: the matrices map [-1,1]^2 onto the quads
             expectNear(a.corner, b.corner, 0.0);
             expectNear(a.edgeU, b.edgeU, 0.0);

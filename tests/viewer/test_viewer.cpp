@@ -82,7 +82,12 @@ std::string slurp(const fs::path& p) {
     return ss.str();
 }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path& p) {
+    std::string s = "'";  // appended, not "'" + string: GCC 12's -Wrestrict misfires on that insert
+    s += p.string();
+    s += '\'';
+    return s;
+}
 
 Proc runShell(const std::string& cmd, const fs::path& logBase) {
     const fs::path out = logBase.string() + ".out", err = logBase.string() + ".err";
