@@ -45,6 +45,7 @@ struct RenderCmd {
     bool npy = false, mp4 = false, falseColour = false, noSrgb = false;
     double fps = 24.0, videoEv = 0.0;
     int contactSheet = 0;
+    bool fpsGiven = false, videoEvGiven = false;  // on the command line (a flag without its output is refused)
 };
 
 nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const ExportOptions& opt, double wallSec) {
@@ -117,6 +118,13 @@ void checkFlagConflicts(const RenderCmd& c) {
     if (c.scene.empty() && c.resume.empty())
         throw UserError("tpb render: give a scene file (tpb render SCENE), or --resume DIR to continue a render from "
                         "its checkpoint");
+    // A video flag without the output it shapes would be silently ignored: say which flag is missing.
+    if (c.fpsGiven && !c.mp4)
+        throw UserError("--fps sets the frame rate of transient.mp4, which only --mp4 writes: add --mp4, or drop --fps");
+    const char* look = c.videoEvGiven ? "--video-ev" : c.falseColour ? "--false-colour" : c.noSrgb ? "--no-srgb" : nullptr;
+    if (look && !c.mp4 && c.contactSheet == 0)
+        throw UserError(std::string(look) + " shapes transient.mp4 and contact_sheet.png, and neither is written: add "
+                        "--mp4 or --contact-sheet N, or drop " + look);
     if (c.continuous && c.delta)
         throw UserError("--continuous and --delta contradict each other: give one of them (frames are for a delta "
                         "pulse unless --continuous or the scene's render.emission asks for continuous emission)");
@@ -367,8 +375,10 @@ void registerRender(CLI::App& app) {
         ->type_name("MIN");
     cmd->add_flag("--no-checkpoint", c->noCheckpoint,
                   "Write no checkpoint when Ctrl-C or SIGTERM stops the render (written by default then)");
-    cmd->callback([c, out] {
+    cmd->callback([c, out, cmd] {
         c->outGiven = out->count() > 0;
+        c->fpsGiven = cmd->get_option("--fps")->count() > 0;
+        c->videoEvGiven = cmd->get_option("--video-ev")->count() > 0;
         run(*c);
     });
 }

@@ -714,6 +714,28 @@ TEST_F(CliErrors, ContradictoryFlagsAreRefused) {
     EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
+// The video flags were silently ignored without the output they shape (--fps 60 without --mp4).
+TEST_F(CliErrors, VideoFlagsWithoutTheirOutputAreRefused) {
+    const fs::path scene = write("scene.json", insideScene());
+    Proc p = render(scene, {"--fps", "60"});
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(p.err.rfind("error: --fps sets the frame rate of transient.mp4, which only --mp4 writes: add --mp4, or "
+                          "drop --fps", 0), 0u) << p.err;
+    for (const std::vector<std::string>& flag :
+         {std::vector<std::string>{"--video-ev", "1"}, {"--false-colour"}, {"--no-srgb"}}) {
+        std::vector<std::string> args = flag;
+        p = render(scene, args);
+        EXPECT_EQ(p.code, 2) << flag[0] << ": " << p.err;
+        EXPECT_EQ(p.err.rfind("error: " + flag[0] + " shapes transient.mp4 and contact_sheet.png, and neither is "
+                              "written: add --mp4 or --contact-sheet N, or drop " + flag[0], 0), 0u) << p.err;
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "out"));
+    // With the output they shape, they are taken.
+    p = render(scene, {"-q", "--contact-sheet", "2", "--false-colour", "--video-ev", "1"});
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_TRUE(fs::exists(dir_ / "out" / "contact_sheet.png"));
+}
+
 // Item 12: --threads 1000 ran a thread per tile on 2 cores. Capped at 4 x the cores, with a warning.
 TEST_F(CliErrors, ThreadsFarAboveTheCoresAreCapped) {
     const fs::path scene = write("scene.json", insideScene());
