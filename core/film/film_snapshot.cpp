@@ -8,6 +8,7 @@ namespace tpb {
 
 void TileSums::zero(size_t pixels, int bins_) {
     passes = 0;
+    weight = 0.0;
     binCount = bins_;
     absBound = 0.0;
     steady.assign(pixels * 3, 0.0);

@@ -49,6 +49,10 @@ using FilmSums = std::vector<FilmSum, LargeBufferAllocator<FilmSum>>;
 // The sums of one tile over the passes it has completed (not averaged).
 struct TileSums {
     int64_t passes = 0;
+    // The sum of the passes' weights (RenderSettings::passWeight: 1 for a full pass, the share of
+    // the photons for a warm-up pass): the film's average divides the sums by it. Equal to `passes`
+    // when every pass was a full one.
+    double weight = 0.0;
     // Per axis: [pixel in tile][bin][rgb] (binIndex), so a pass adds each pixel's time series to one
     // contiguous run (issue 15: the [bin][pixel] layout made every bin of the add a cache miss, a
     // fifth of a 1024-bin pass); a frame reads one value per pixel with a stride of bins x 3.

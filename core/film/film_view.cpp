@@ -8,7 +8,8 @@ namespace tpb {
 
 namespace {
 
-double inversePasses(const TileSums& t) { return t.passes > 0 ? 1.0 / static_cast<double>(t.passes) : 0.0; }
+// The average divides by the passes' summed weight (TileSums::weight; = passes without a warm-up).
+double inversePasses(const TileSums& t) { return t.passes > 0 && t.weight > 0.0 ? 1.0 / t.weight : 0.0; }
 
 // Writes a tile's [pixel][rgb] block of values (times `inv`) into the W*H*3 image.
 template <class T>

@@ -207,6 +207,7 @@ void TransientFilm::merge(const TransientFilm& other) {
         TileSums sum = current(t)->sums;
         const TileSums& add = theirs->block(t).sums;
         sum.passes += add.passes;
+        sum.weight += add.weight;
         sum.absBound += add.absBound;
         const auto addAll = [](auto& dst, const auto& src) {
             for (size_t i = 0; i < dst.size(); ++i) dst[i] += src[i];
@@ -228,8 +229,8 @@ void TransientFilm::merge(const TransientFilm& other) {
     }
 }
 
-TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile, TileStaging* staging)
-    : film_(film), tile_(tile), lock_(film.tiles_[tile].writer), staging_(staging) {
+TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile, TileStaging* staging, double passWeight)
+    : film_(film), tile_(tile), lock_(film.tiles_[tile].writer), staging_(staging), passWeight_(passWeight) {
     if (!staging_) {
         next_ = std::make_shared<TileBlock>(film.current(tile)->sums);
         return;
@@ -248,6 +249,7 @@ TransientFilm::TileWriter::~TileWriter() {
         return;
     }
     ++next_->sums.passes;
+    next_->sums.weight += passWeight_;
     next_->sums.absBound += passMax_;
     film_.publish(tile_, std::move(next_));
 }
@@ -258,6 +260,7 @@ void TransientFilm::TileWriter::commitStaged() {
         double passMax = 0.0;
         for (uint32_t p : staged_) passMax = std::max(passMax, addTo(sums, p, staging_->pixels[p]));
         ++sums.passes;
+        sums.weight += passWeight_;
         sums.absBound += passMax;
     };
     {

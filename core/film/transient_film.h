@@ -141,7 +141,8 @@ public:
     // copy as they come (`acc` is left as it was; the caller clears it).
     class TileWriter {
     public:
-        TileWriter(TransientFilm& film, int tile, TileStaging* staging = nullptr);
+        // passWeight: the pass's weight in the average (RenderSettings::passWeight).
+        TileWriter(TransientFilm& film, int tile, TileStaging* staging = nullptr, double passWeight = 1.0);
         ~TileWriter();
         TileWriter(const TileWriter&) = delete;
         TileWriter& operator=(const TileWriter&) = delete;
@@ -158,6 +159,7 @@ public:
         TileStaging* staging_ = nullptr;
         std::vector<uint32_t> staged_;      // pixels in the staging, in the order they came
         double passMax_ = 0.0;              // largest value added (no staging)
+        double passWeight_ = 1.0;
     };
 
     // The tiles' current blocks: cheap (a pointer copy per tile), never waits for a writer.

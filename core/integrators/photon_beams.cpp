@@ -52,7 +52,8 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     PhotonPassParams pt;
     pt.seed = settings_.seed;
     pt.pass = ctx.pass;
-    pt.photons = settings_.photonsForPass(ctx.pass);  // fewer during the warm-up
+    pt.photons = settings_.photonsForPass(ctx.pass);  // fewer during the warm-up,
+    pt.powerPhotons = settings_.photonsPerPass;       // each with a full pass's power (passWeight)
     pt.maxDepth = settings_.maxDepth;
     // Only what the volume estimator reads (beams, points at scattering events, or both).
     const VolumeEstimator::Needs needs = volume_->needs();

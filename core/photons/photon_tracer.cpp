@@ -52,7 +52,7 @@ void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
     if (li < 0 || lightPdf <= 0.0) return;
     const Light& light = scene.lights[li];
     EmissionSample em = light.sampleEmission(rng, scene.rayEps);
-    Color power = em.power / (lightPdf * static_cast<double>(s.photons));
+    Color power = em.power / (lightPdf * static_cast<double>(s.powerPhotons > 0 ? s.powerPhotons : s.photons));
     const double power0 = maxComponent(power);
     if (!(power0 > 0.0)) return;
     out.emittedFlux += power;

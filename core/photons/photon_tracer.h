@@ -81,6 +81,10 @@ struct PhotonPassParams {
     uint64_t seed = 1;
     uint64_t pass = 0;
     int64_t photons = 1000;
+    // The count the photons' power is divided by (0: `photons`). A warm-up pass traces fewer
+    // photons with a full pass's power each (render_settings.h, passWeight): its estimate is
+    // photons / powerPhotons of a full pass's.
+    int64_t powerPhotons = 0;
     int maxDepth = 16;
     bool storeBeams = true;
     bool storeSurfacePhotons = true;

@@ -304,6 +304,10 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
     h["scene"] = info.scene;
     h["created"] = info.created.empty() ? utcNow() : info.created;
     h["passes"] = info.passes;
+    // The passes' summed weight (TileSums::weight; below `passes` after a warm-up), the same in
+    // every tile. Written since the photon-weighted average; a checkpoint without it weighs every
+    // pass 1, as the renders that wrote such files did.
+    h["weight"] = film.tileCount() > 0 ? snap->block(0).sums.weight : static_cast<double>(info.passes);
     h["width"] = film.width();
     h["height"] = film.height();
     h["time"] = {{"bins", film.time().bins}, {"start_opl_m", film.time().startOpl}, {"bin_width_opl_m", film.time().binWidth}};
@@ -376,6 +380,16 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
         if (!o.in.read(static_cast<char*>(data), static_cast<std::streamsize>(bytes))) bad(path, "truncated film");
         hash.add(data, bytes);
     };
+    // Each pass weighs at most 1 (render_settings.h passWeight), a pass at least 1 photon's share.
+    double weight = static_cast<double>(c.info.passes);
+    try {
+        weight = o.header.value("weight", weight);
+    } catch (const std::exception&) {
+        bad(path, "header field \"weight\" is not a number");
+    }
+    if (!(weight >= 0.0) || weight > static_cast<double>(c.info.passes) * (1.0 + 1e-12) || (c.info.passes > 0 && !(weight > 0.0)))
+        bad(path, "header weight " + std::to_string(weight) + " is out of range for " + std::to_string(c.info.passes) +
+                      " passes");
     for (int t = 0; t < film.tileCount(); ++t) {
         TileSums s;
         s.zero(static_cast<size_t>(film.tileRect(t).w) * film.tileRect(t).h, film.bins());
@@ -391,6 +405,7 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
         if (s.passes != static_cast<int64_t>(c.info.passes))
             bad(path, "tile " + std::to_string(t) + " holds " + std::to_string(s.passes) + " passes, the header " +
                           std::to_string(c.info.passes));
+        s.weight = weight;
         film.restoreTile(t, std::move(s));
     }
     uint64_t stored = 0;

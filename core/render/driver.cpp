@@ -44,9 +44,10 @@ bool Driver::runPass(uint64_t pass) {
     // 2. Whole tiles per thread, so a pixel's time series has a single writer; each thread stages
     // its tile's pixels and adds them to the film when the tile is done (in place, transient_film.h).
     if (staging_.size() < static_cast<size_t>(ctx.threads)) staging_.resize(static_cast<size_t>(ctx.threads));
+    const double weight = settings_.passWeight(ctx.pass);  // < 1 for a warm-up pass of the photon beams
     parallelFor(ctx.tiles, ctx.threads, [&](int64_t tile, int t) {
         const int i = static_cast<int>(tile);
-        TransientFilm::TileWriter writer(*film_, i, &staging_[static_cast<size_t>(t)]);
+        TransientFilm::TileWriter writer(*film_, i, &staging_[static_cast<size_t>(t)], weight);
         integrator_->renderTile(ctx, i, film_->tileRect(i), writer, t);
     }, &abort_);
     integrator_->endPass(ctx, ps);

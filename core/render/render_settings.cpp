@@ -53,6 +53,11 @@ int64_t RenderSettings::photonsForPass(uint64_t pass) const {
     return std::max<int64_t>(1, photonsPerPass >> shift);
 }
 
+double RenderSettings::passWeight(uint64_t pass) const {
+    if (method != Method::Beams || photonsPerPass <= 0) return 1.0;
+    return static_cast<double>(photonsForPass(pass)) / static_cast<double>(photonsPerPass);
+}
+
 RenderSettings RenderSettings::fromDesc(const RenderDesc& r, double sceneDiagonal) {
     const double diag = sceneDiagonal > 0.0 ? sceneDiagonal : 1.0;
     RenderSettings s;

@@ -67,7 +67,10 @@ struct SettingsSource {
     double sceneDiagonal = 0.0;
 };
 
-inline constexpr int kViewerWarmupPasses = 3;  // the viewer's default warm-up (pass 1 at 1/8 of the photons)
+// The viewer's default warm-up: pass 1 at 1/8 of the photons. (W = 5 gives beam2d four refinements
+// within 3 s on the default scene instead of three, but its first picture, 1/32 of the photons,
+// leaves most pixels black on a 2000-photon scene: README "Measurements".)
+inline constexpr int kViewerWarmupPasses = 3;
 inline constexpr int kMaxWarmupPasses = 20;
 
 struct RenderSettings {
@@ -85,14 +88,19 @@ struct RenderSettings {
     // Warm-up (issue 15: a first picture fast, refinements often): the first W passes trace fewer
     // photons, photonsPerPass / 2^(W + 1 - i) for pass i <= W (at least 1), so pass 1 costs about
     // 1/2^W of a full one; every later pass is the one a render without warm-up runs (pass i depends
-    // only on (seed, i)). Each pass is still an estimate of the same expected film at its radius
-    // (its photons' powers are divided by its own photon count), so the progressive average of
-    // equally weighted passes stays consistent; the warm-up passes only add variance: after n
-    // passes (2^(W+1) - W - 2) / n relative to the average's own (11/n for W = 3; README).
+    // only on (seed, i)). The film is the photon-weighted average of its passes: a warm-up pass's
+    // photons carry the power of a full pass's (divided by photonsPerPass, not by their own count),
+    // so the pass adds w_i L_i with w_i = passWeight(i), and the film divides by the sum of the
+    // weights (TileSums::weight). A pass with half the photons counts half: the warm-up adds no
+    // variance to the average (an equally weighted average of n passes would carry
+    // (2^(W+1) - W - 2) / n of extra relative variance; README "Progressive average").
     // 0 = off (`tpb render`); `tpb view` uses kViewerWarmupPasses unless the scene or --warmup sets it.
     int warmupPasses = 0;
     // The photons traced in pass `pass` (1-based): photonsPerPass after the warm-up.
     int64_t photonsForPass(uint64_t pass) const;
+    // The weight of pass `pass` in the film's average: photonsForPass / photonsPerPass for the photon
+    // beams (1 after the warm-up), 1 for the path tracer and the preview (no photons).
+    double passWeight(uint64_t pass) const;
     double beamRadius0 = 0.01;     // m, kernel radius of pass 1 (volume)
     double surfaceRadius0 = 0.02;  // m, kernel radius of pass 1 (surface photons)
     double alpha = 0.7;            // progressive shrink, (0, 1]

@@ -348,11 +348,12 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
     EXPECT_GT(litValues, a.volume.size() / 4) << "of " << a.volume.size() << " pixel-bin channels";
 }
 
-// The warm-up (render_settings.h): pass i <= W traces photons/2^(W+1-i) photons and divides their
-// power by that count. Photon k of a pass is drawn from (seed, pass, k) alone, so warm-up pass 1 of
-// a render with 8N photons and W = 3 is exactly pass 1 of a render with N photons: the same film,
-// bit for bit (an estimate that kept dividing by 8N would be 8x too dark). Passes after the
-// warm-up are those of a render without it.
+// The warm-up (render_settings.h): pass i <= W traces photons/2^(W+1-i) photons, each with a full
+// pass's power (divided by photonsPerPass), and counts as that share of a pass in the film's
+// average. Photon k of a pass is drawn from (seed, pass, k) alone, so warm-up pass 1 of a render
+// with 8N photons and W = 3, read alone (its sums / its weight 1/8), is exactly pass 1 of a render
+// with N photons: the same film, bit for bit (the factors are powers of 2). Its emitted flux is 1/8
+// of the light's. Passes after the warm-up are those of a render without it.
 TEST(TransientBeams, WarmupPassesAreFullPassesWithFewerPhotons) {
     auto sc = sceneFrom(kSingleScatter);
     RenderSettings few = sc.settings;
@@ -377,7 +378,8 @@ TEST(TransientBeams, WarmupPassesAreFullPassesWithFewerPhotons) {
     const Rendered w1 = pass(warm, 1, &ws), f1 = pass(few, 1, &fs);
     EXPECT_EQ(ws.photons, 1000);
     EXPECT_EQ(fs.photons, 1000);
-    EXPECT_NEAR(ws.emittedFlux.x, sc->lights[0].power.x, 1e-9 * sc->lights[0].power.x);
+    EXPECT_NEAR(ws.emittedFlux.x, sc->lights[0].power.x / 8.0, 1e-9 * sc->lights[0].power.x);
+    EXPECT_NEAR(fs.emittedFlux.x, sc->lights[0].power.x, 1e-9 * sc->lights[0].power.x);
     ASSERT_EQ(w1.volume.size(), f1.volume.size());
     double total = 0.0;
     for (size_t i = 0; i < w1.volume.size(); ++i) {
@@ -394,6 +396,40 @@ TEST(TransientBeams, WarmupPassesAreFullPassesWithFewerPhotons) {
     EXPECT_EQ(ws.photons, 8000);
     EXPECT_EQ(w4.volume, f4.volume);
     EXPECT_EQ(w4.steady, f4.steady);
+}
+
+// The film is the photon-weighted average of its passes (render_settings.h, passWeight): with
+// W = 1, pass 1 (half the photons) weighs 1/2 and pass 2 weighs 1, so after two passes
+//   F_W(2) = (1/2 F_W(1) + L_2) / (3/2),  L_2 = 2 F_0(2) - F_0(1)
+// (L_2, pass 2 alone, is the same pass in the render without warm-up, F_0). Fails with equally
+// weighted passes, whose prediction (F_W(1) + L_2) / 2 is checked to differ by far more.
+TEST(TransientBeams, WarmupPassesWeighByTheirShareOfThePhotons) {
+    auto sc = sceneFrom(kSingleScatter);
+    RenderSettings plain = sc.settings;
+    plain.threads = 2;
+    plain.maxDepth = 3;
+    plain.photonsPerPass = 2000;
+    RenderSettings warm = plain;
+    warm.warmupPasses = 1;
+    EXPECT_EQ(warm.passWeight(1), 0.5);
+    EXPECT_EQ(warm.passWeight(2), 1.0);
+    const Rendered w1 = render(sc, warm, 1), w2 = render(sc, warm, 2), p1 = render(sc, plain, 1), p2 = render(sc, plain, 2);
+    ASSERT_EQ(w2.volume.size(), p2.volume.size());
+    double scale = 0.0, err = 0.0, errEqual = 0.0;
+    for (size_t i = 0; i < w2.volume.size(); ++i) {
+        const double l2 = 2.0 * p2.volume[i] - p1.volume[i];
+        const double weighted = (0.5 * w1.volume[i] + l2) / 1.5, equal = 0.5 * (w1.volume[i] + l2);
+        scale = std::max(scale, std::abs(w2.volume[i]));
+        err = std::max(err, std::abs(w2.volume[i] - weighted));
+        errEqual = std::max(errEqual, std::abs(w2.volume[i] - equal));
+    }
+    ASSERT_GT(scale, 0.0);
+    EXPECT_LT(err, 1e-9 * scale) << "largest value " << scale;
+    EXPECT_GT(errEqual, 1e-3 * scale) << "the equally weighted average would pass too: the test is vacuous";
+    // The path tracer draws no photons: its passes weigh 1 whatever the warm-up.
+    RenderSettings pt = warm;
+    pt.method = Method::PathTracer;
+    EXPECT_EQ(pt.passWeight(1), 1.0);
 }
 
 TEST(TransientBeams, ExactAndUniformProfilesCarryTheSameEnergy) {

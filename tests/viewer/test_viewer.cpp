@@ -4,6 +4,7 @@
 // `tpb render` of the same scene, seed, passes and threads, and across the time-axis and emission
 // toggles. Skipped only when xvfb-run is missing or cannot start an X server.
 #include "io/image_io.h"
+#include "render/render_settings.h"
 
 #include "support/checkpoint_payload.h"
 
@@ -285,7 +286,7 @@ protected:
         if (!refs_.count(m.name)) {
             // With the viewer's warm-up (render_settings.h kViewerWarmupPasses): the same passes.
             refs_[m.name] = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs +
-                                         m.flags + " --warmup 3 -q -o " + q(out),
+                                         m.flags + " --warmup " + std::to_string(tpb::kViewerWarmupPasses) + " -q -o " + q(out),
                                      out);
         }
         EXPECT_EQ(refs_[m.name].code, 0) << "tpb render failed: " << refs_[m.name].err;
@@ -751,7 +752,7 @@ TEST_F(ViewerTest, TimelineReportsFirstLightAndTheWarmup) {
     std::vector<double> ends;
     const double first = timeline(r.out, warmup, ends);
     EXPECT_GE(first, 0.0) << r.out;  // the film has light: it was shown
-    EXPECT_EQ(warmup, 3);
+    EXPECT_EQ(warmup, tpb::kViewerWarmupPasses);
     ASSERT_EQ(ends.size(), 2u) << r.out;
     EXPECT_GT(ends[0], 0.0);
     EXPECT_GT(ends[1], ends[0]);
@@ -780,7 +781,8 @@ TEST_F(ViewerTest, SavedCheckpointResumesToTheFilmOfOneUninterruptedRender) {
     ASSERT_EQ(resumed.code, 0) << resumed.err;
     const fs::path whole = dir_ / "ckpt_whole";
     const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") +
-                                " --seed 7 --threads 2 --warmup 3 --passes 4 --checkpoint --no-frames --strip 0 -q -o " + q(whole),
+                                " --seed 7 --threads 2 --warmup " + std::to_string(tpb::kViewerWarmupPasses) +
+                                " --passes 4 --checkpoint --no-frames --strip 0 -q -o " + q(whole),
                             whole);
     ASSERT_EQ(w.code, 0) << w.err;
     const std::string a = checkpointPayload(out / "checkpoint.tpbck");
@@ -865,7 +867,7 @@ TEST_F(ViewerTest, PulseShapeAndSensorResponseAreAppliedToTheShownAndExportedFra
         ASSERT_TRUE(fs::exists(frame)) << r.out;
         const fs::path ref = dir_ / ("pulse_ref_" + m.name);
         const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs + m.flags +
-                                    resp + " --warmup 3 --strip 0 -q -o " + q(ref),
+                                    resp + " --warmup " + std::to_string(tpb::kViewerWarmupPasses) + " --strip 0 -q -o " + q(ref),
                                 ref);
         ASSERT_EQ(w.code, 0) << w.err;
         const Exr got = readExrFile(frame), want = readExrFile(ref / "frames" / frameName(bin()));
