@@ -41,6 +41,7 @@ void expectSameFilm(const TransientFilm& a, const TransientFilm& b) {
     for (int t = 0; t < sa->tileCount(); ++t) {
         const TileSums &x = sa->block(t).sums, &y = sb->block(t).sums;
         ASSERT_EQ(x.passes, y.passes) << "tile " << t;
+        ASSERT_EQ(x.weight, y.weight) << "tile " << t << ": the passes' summed weight (the film's divisor)";
         const auto same = [&](const auto& u, const auto& v, const char* what) {
             ASSERT_EQ(u.size(), v.size()) << what;
             EXPECT_EQ(std::memcmp(u.data(), v.data(), u.size() * sizeof(u[0])), 0) << what << " of tile " << t;
@@ -105,10 +106,15 @@ TEST_F(CheckpointTest, WrittenAndReadBackIsTheSameFilm) {
     EXPECT_EQ(fingerprintChanges(c.info.fingerprint, settingsFingerprint(s)), std::vector<std::string>{});
 }
 
+// Also with a warm-up that the checkpoint cuts in two (passes 1-2 of W = 3 weigh about 1/8 + 1/4): the
+// summed weight, the film's divisor, comes back from the file.
 TEST_F(CheckpointTest, ResumedRenderIsBitIdenticalToOneUninterruptedRun) {
+  for (const int warmup : {0, 3}) {
+    SCOPED_TRACE("warm-up " + std::to_string(warmup));
     const test::TestScene ts = test::testSceneFrom(kScene);
     RenderSettings s = ts.settings;  // 6 passes
     s.threads = 2;
+    s.warmupPasses = warmup;
     Driver whole(*ts, s, ts.time);
     whole.start();
     whole.wait();
@@ -137,6 +143,13 @@ TEST_F(CheckpointTest, ResumedRenderIsBitIdenticalToOneUninterruptedRun) {
     EXPECT_EQ(resumed.film().stats.inside[0].load(), whole.film().stats.inside[0].load());
 
     EXPECT_EQ(resumed.history()[2].beamRadius, whole.history()[2].beamRadius);
+    const double weight = resumed.film().snapshot()->block(0).sums.weight;
+    double expected = 0.0;
+    for (uint64_t i = 1; i <= 6; ++i) expected += s.passWeight(i);
+    EXPECT_EQ(weight, expected);
+    if (warmup == 0) EXPECT_EQ(weight, 6.0);
+    else EXPECT_NEAR(weight, 0.125 + 0.25 + 0.5 + 3.0, 3.0 / static_cast<double>(s.photonsPerPass));
+  }
 }
 
 // Read into the driver's own film (a resume holds one film, not two): the same sums; a film of
