@@ -91,9 +91,10 @@ struct RenderSettings {
     // only on (seed, i)). The film is the photon-weighted average of its passes: a warm-up pass's
     // photons carry the power of a full pass's (divided by photonsPerPass, not by their own count),
     // so the pass adds w_i L_i with w_i = passWeight(i), and the film divides by the sum of the
-    // weights (TileSums::weight). A pass with half the photons counts half: the warm-up adds no
-    // variance to the average (an equally weighted average of n passes would carry
-    // (2^(W+1) - W - 2) / n of extra relative variance; README "Progressive average").
+    // weights (TileSums::weight). A pass with half the photons counts half, so after n passes the
+    // film has the noise of n - W + 1 - 2^-W full passes: the warm-up costs the photons it did not
+    // trace and nothing more (equal weights carried (2^(W+1) - W - 2) / n of extra relative
+    // variance; README "Warm-up").
     // 0 = off (`tpb render`); `tpb view` uses kViewerWarmupPasses unless the scene or --warmup sets it.
     int warmupPasses = 0;
     // The photons traced in pass `pass` (1-based): photonsPerPass after the warm-up.
