@@ -9,7 +9,7 @@ namespace tpb {
 namespace {
 
 // The average divides by the passes' summed weight (TileSums::weight; = passes without a warm-up).
-double inversePasses(const TileSums& t) { return t.passes > 0 && t.weight > 0.0 ? 1.0 / t.weight : 0.0; }
+double inversePasses(const TileSums& t) { return t.weight > 0.0 ? 1.0 / t.weight : 0.0; }
 
 // Writes a tile's [pixel][rgb] block of values (times `inv`) into the W*H*3 image.
 template <class T>

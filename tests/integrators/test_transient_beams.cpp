@@ -354,12 +354,20 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
 // with 8N photons and W = 3, read alone (its sums / its weight 1/8), is exactly pass 1 of a render
 // with N photons: the same film, bit for bit (the factors are powers of 2). Its emitted flux is 1/8
 // of the light's. Passes after the warm-up are those of a render without it.
+// The warm-up tests' settings: the single-scattering scene's, 2 threads, 3 bounces, `photons` per pass.
+namespace {
+RenderSettings warmupTestSettings(const test::TestScene& sc, int64_t photons) {
+    RenderSettings s = sc.settings;
+    s.threads = 2;
+    s.maxDepth = 3;
+    s.photonsPerPass = photons;
+    return s;
+}
+}  // namespace
+
 TEST(TransientBeams, WarmupPassesAreFullPassesWithFewerPhotons) {
     auto sc = sceneFrom(kSingleScatter);
-    RenderSettings few = sc.settings;
-    few.threads = 2;
-    few.maxDepth = 3;
-    few.photonsPerPass = 1000;
+    const RenderSettings few = warmupTestSettings(sc, 1000);
     RenderSettings warm = few;
     warm.photonsPerPass = 8000;
     warm.warmupPasses = 3;
@@ -405,10 +413,7 @@ TEST(TransientBeams, WarmupPassesAreFullPassesWithFewerPhotons) {
 // weighted passes, whose prediction (F_W(1) + L_2) / 2 is checked to differ by far more.
 TEST(TransientBeams, WarmupPassesWeighByTheirShareOfThePhotons) {
     auto sc = sceneFrom(kSingleScatter);
-    RenderSettings plain = sc.settings;
-    plain.threads = 2;
-    plain.maxDepth = 3;
-    plain.photonsPerPass = 2000;
+    const RenderSettings plain = warmupTestSettings(sc, 2000);
     RenderSettings warm = plain;
     warm.warmupPasses = 1;
     EXPECT_EQ(warm.passWeight(1), 0.5);
