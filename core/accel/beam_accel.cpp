@@ -58,9 +58,10 @@ BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; 
 
 class BruteForceBeams final : public BeamAccel {
 public:
-    void build(const std::vector<Beam>& beams, double radius, int) override {
-        radius_ = radius;
-        makePieces(beams, radius, pieces_);
+    using BeamAccel::build;
+    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
+        radius_ = support.radius;
+        makePieces(beams, support.pieceRadius, pieces_);
     }
     void build(const std::vector<VolumePhoton>& points, double radius, int) override {
         radius_ = radius;
@@ -84,9 +85,10 @@ class EmbreeBeams final : public BeamAccel {
 public:
     ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
 
-    void build(const std::vector<Beam>& beams, double radius, int) override {
-        radius_ = radius;
-        makePieces(beams, radius, pieces_);
+    using BeamAccel::build;
+    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
+        radius_ = support.radius;
+        makePieces(beams, support.pieceRadius, pieces_);
         buildBvh();
     }
     void build(const std::vector<VolumePhoton>& points, double radius, int) override {

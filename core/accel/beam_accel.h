@@ -60,12 +60,24 @@ struct CandidateTest {
     }
 };
 
+// How far a kernel reaches from a beam's axis (m): `radius` pads the pieces' boxes (every kernel is
+// zero farther away, also a shared query's slack: estimators/segment_bundle.h); `pieceRadius` sets
+// the pieces' length (beamPieceCount): the kernel's own radius, so that padding more for a shared
+// query cuts the beams into the same pieces and the estimates stay the same.
+struct BeamSupport {
+    double radius = 0.0;
+    double pieceRadius = 0.0;
+};
+
 class BeamAccel {
 public:
     virtual ~BeamAccel() = default;
     // `beams` must outlive the accelerator (it is referenced, not copied). supportRadius (m): the
-    // estimator's kernel is zero farther than this from a beam's axis.
-    virtual void build(const std::vector<Beam>& beams, double supportRadius, int threads) = 0;
+    // estimator's kernel is zero farther than this from a beam's axis (BeamSupport).
+    virtual void build(const std::vector<Beam>& beams, const BeamSupport& support, int threads) = 0;
+    void build(const std::vector<Beam>& beams, double supportRadius, int threads) {
+        build(beams, BeamSupport{supportRadius, supportRadius}, threads);
+    }
     // Same over photon points (`points` must outlive it): the kernel is zero farther than
     // supportRadius from a point; candidate k is point k (BeamPiece::beam = k).
     virtual void build(const std::vector<VolumePhoton>& points, double supportRadius, int threads) = 0;

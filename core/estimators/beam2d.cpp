@@ -72,17 +72,22 @@ double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap&
 
 void Beam2DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
     // The kernel is a cylinder of radius r around the beam: nothing beyond r from its axis.
-    prepareOver(scene, map, pass, map.beams);
+    prepareOver(scene, map, pass, map.beams, /*bundles=*/true);
 }
 
 // Eqs. 8, 12-15 for one candidate piece of a beam: the overlap, the wall test, the closed-form
 // transmittance integral and its spread in time.
 bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& piece, NearShapes& near,
                        PixelSink& sink) {
+    RayBeamOverlap o;
+    if (!rayBeamOverlap(g.ray.o, g.ray.d, g.sMax, b.origin, b.dir, piece.sbLo, piece.sbHi, g.radius, o)) return false;
+    return gatherBeam2DOverlap(g, b, o, near, sink);
+}
+
+bool gatherBeam2DOverlap(const SegmentGather& g, const Beam& b, const RayBeamOverlap& o, NearShapes& near,
+                         PixelSink& sink) {
     const Medium& m = g.medium;
     const double r = g.radius;
-    RayBeamOverlap o;
-    if (!rayBeamOverlap(g.ray.o, g.ray.d, g.sMax, b.origin, b.dir, piece.sbLo, piece.sbHi, r, o)) return false;
     const double c = o.cosRB;
     // The kernel blurs the beam by r in every direction, also through a wall: a beam inside a
     // closed box would light the fog just outside it. Keep the estimate only when the beam
@@ -118,7 +123,34 @@ struct CylinderTest {
         return rayBeamOverlap(t.ray.o, t.ray.d, t.sMax, origin, dir, piece.sbLo, piece.sbHi, t.radius, o);
     }
 };
+
+// The fat test of segment_bundle.h: can a segment within `slack` of the axis meet the piece's kernel?
+struct FatCylinderTest {
+    const SegmentBundle& bundle;
+    double length, radius, slack;
+    static bool accept(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
+        const auto& t = *static_cast<const FatCylinderTest*>(context);
+        const BundleHint& h = t.bundle.hint();
+        RayBeamOverlap o;
+        return rayBeamOverlap(h.origin, h.axis, t.length, origin, dir, piece.sbLo - t.slack, piece.sbHi + t.slack,
+                              t.radius + t.slack, o);
+    }
+};
 }  // namespace
+
+// The shared candidates of the block (segment_bundle.h), filled on first use.
+void Beam2DEstimator::buildBundle(SegmentBundle& bundle, std::vector<BeamPiece>& pieces) const {
+    const double slack = pass_.bundleSlack * (1.0 + 1e-6);
+    const double length = bundle.axisLength(pass_.bundleSlack);
+    const FatCylinderTest test{bundle, length, pass_.radius, slack};
+    pieces.clear();
+    accel_->candidates(bundle.hint().origin, bundle.hint().axis, length, bundle.hint().region, pieces,
+                       {&FatCylinderTest::accept, &test});
+    bundle.pieces.clear();
+    bundle.pieces.reserve(pieces.size());
+    for (const BeamPiece& p : pieces) bundle.pieces.push_back({p, map_->beams[p.beam].origin, map_->beams[p.beam].dir});
+    bundle.markBuilt();
+}
 
 // Beam radiance estimate along the camera segment x_r + s w_r, s in [0, sMax] (eqs. 8, 10, 12-15).
 int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
@@ -127,6 +159,22 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const Region& region = scene_->regions[seg.region];
     const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
                           beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
+    SegmentBundle& bundle = scratch.bundle;
+    if (pass_.bundleSlack > 0.0 && bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack)) {
+        // The block's shared candidates, each with the exact test of the query below, in the same
+        // (beam, piece) order: the same estimates in the same order.
+        if (!bundle.built()) buildBundle(bundle, scratch.pieces);
+        NearShapes near(*scene_, seg.ray, seg.sMax, pass_.radius, scratch.shapes);
+        int64_t estimates = 0;
+        for (const BundlePiece& c : bundle.pieces) {
+            RayBeamOverlap o;
+            if (!rayBeamOverlap(seg.ray.o, seg.ray.d, seg.sMax, c.origin, c.dir, c.piece.sbLo, c.piece.sbHi,
+                                pass_.radius, o))
+                continue;
+            if (gatherBeam2DOverlap(g, map_->beams[c.piece.beam], o, near, sink)) ++estimates;
+        }
+        return estimates;
+    }
     scratch.pieces.clear();
     const CylinderTest test{seg.ray, seg.sMax, pass_.radius};
     accel_->candidates(seg.ray.o, seg.ray.d, seg.sMax, seg.region, scratch.pieces, {&CylinderTest::accept, &test});

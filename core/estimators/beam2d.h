@@ -84,6 +84,9 @@ struct SegmentGather {
 // (kernel_visibility.h) passes; returns whether it did.
 bool gatherBeam2DPiece(const SegmentGather& g, const Beam& b, const BeamPiece& piece, NearShapes& near,
                        PixelSink& sink);
+// The same with the overlap already found (rayBeamOverlap of the segment and the piece, true).
+bool gatherBeam2DOverlap(const SegmentGather& g, const Beam& b, const RayBeamOverlap& o, NearShapes& near,
+                         PixelSink& sink);
 
 // The estimator (eqs. 8, 10, 12-15). Kernel dimension 2 (a disc across the beam): the kernel's
 // area pi r^2 shrinks by (i + alpha) / (i + 1) per pass. Homogeneous media only (it reads the
@@ -97,6 +100,9 @@ public:
     void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) override;
     int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                    EstimatorScratch& scratch) const override;
+
+private:
+    void buildBundle(SegmentBundle& bundle, std::vector<BeamPiece>& pieces) const;
 };
 
 }  // namespace tpb

@@ -19,6 +19,7 @@
 #pragma once
 #include "accel/beam_accel.h"
 #include "estimators/estimator_names.h"
+#include "estimators/segment_bundle.h"
 #include "film/transient_film.h"
 #include "photons/photon_tracer.h"
 #include "scene/scene.h"
@@ -73,6 +74,7 @@ struct PixelSink {
 struct EstimatorScratch {
     std::vector<BeamPiece> pieces;  // candidate beam pieces of the current segment
     std::vector<int> shapes;        // shapes near the current segment (visibility tests)
+    SegmentBundle bundle;           // the block of pixels being rendered (segment_bundle.h)
 };
 
 // Per-pass parameters of an estimator.
@@ -83,6 +85,9 @@ struct EstimatorPass {
     AccelBackend accel = AccelBackend::Embree;
     int threads = 1;
     TimeKernel timeKernel;  // this pass's time kernel of the estimator (None: off); the sink applies it
+    // m: how far a camera segment may lie from a block's shared query axis (segment_bundle.h); an
+    // estimator that shares queries builds its accelerator with support radius + this. 0: off.
+    double bundleSlack = 0.0;
 };
 
 class VolumeEstimator {

@@ -9,6 +9,9 @@
 #include "transport/free_flight.h"
 #include "transport/interaction.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace tpb {
 
 
@@ -80,16 +83,69 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
     }
 }
 
+namespace {
+
+double farthestFromCamera(const Scene& scene) {
+    const Bounds3& b = scene.bounds;
+    double far2 = 0.0;
+    for (int i = 0; i < 8; ++i) {
+        const Vec3 c((i & 1) ? b.hi.x : b.lo.x, (i & 2) ? b.hi.y : b.lo.y, (i & 4) ? b.hi.z : b.lo.z);
+        const Vec3 d = c - scene.camera.position;
+        far2 = std::max(far2, glm::dot(d, d));
+    }
+    return std::sqrt(far2);
+}
+
+}  // namespace
+
+BundleHint bundleHint(const Scene& scene, int x0, int y0, int w, int h) {
+    const Camera& cam = scene.camera;
+    BundleHint hint;
+    hint.origin = cam.position;
+    hint.axis = cam.generate(x0 + 0.5 * w, y0 + 0.5 * h).d;
+    double sin2 = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        const Vec3 d = cam.generate(x0 + ((i & 1) ? w : 0), y0 + ((i & 2) ? h : 0)).d;
+        const Vec3 c = glm::cross(hint.axis, d);
+        sin2 = std::max(sin2, glm::dot(c, c));
+    }
+    hint.sinHalfAngle = std::sqrt(sin2);
+    hint.maxLength = farthestFromCamera(scene);
+    hint.region = scene.cameraRegions.top();
+    return hint;
+}
+
+double bundleSlack(const Scene& scene) {
+    const Region& region = scene.regions[scene.cameraRegions.top()];
+    if (!region.hasMedium || !region.medium.scattering) return 0.0;
+    const Camera& cam = scene.camera;
+    const int x0 = std::max(0, cam.width / 2 - kBundleBlock / 2), y0 = std::max(0, cam.height / 2 - kBundleBlock / 2);
+    const BundleHint h = bundleHint(scene, x0, y0, kBundleBlock, kBundleBlock);
+    // 1 % more: the segments that end on the bounds' farthest corner are contained too.
+    return 1.01 * h.sinHalfAngle * h.maxLength;
+}
+
+void renderPixels(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,
+                  const TileRect& r, TransientFilm::TileWriter& writer, CameraPassScratch& scratch,
+                  CameraPassStats& stats) {
+    for (int by = r.y0; by < r.y0 + r.h; by += kBundleBlock)
+        for (int bx = r.x0; bx < r.x0 + r.w; bx += kBundleBlock) {
+            const int bw = std::min(kBundleBlock, r.x0 + r.w - bx), bh = std::min(kBundleBlock, r.y0 + r.h - by);
+            scratch.estimator.bundle.begin(bundleHint(scene, bx, by, bw, bh));
+            for (int y = by; y < by + bh; ++y)
+                for (int x = bx; x < bx + bw; ++x) {
+                    renderPixel(scene, est, s, time, x, y, scratch, stats);
+                    writer.addPixel(x, y, scratch.acc);
+                    scratch.acc.clearTouched();
+                }
+            scratch.estimator.bundle.end();
+        }
+}
+
 void renderTile(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, TransientFilm& film,
                 int tile, CameraPassScratch& scratch, CameraPassStats& stats) {
-    const TileRect r = film.tileRect(tile);
     TransientFilm::TileWriter writer(film, tile);
-    for (int y = r.y0; y < r.y0 + r.h; ++y)
-        for (int x = r.x0; x < r.x0 + r.w; ++x) {
-            renderPixel(scene, est, s, film.time(), x, y, scratch, stats);
-            writer.addPixel(x, y, scratch.acc);
-            scratch.acc.clearTouched();
-        }
+    renderPixels(scene, est, s, film.time(), film.tileRect(tile), writer, scratch, stats);
 }
 
 }  // namespace tpb

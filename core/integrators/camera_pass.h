@@ -46,6 +46,26 @@ struct CameraPassScratch {
 void renderPixel(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,
                  int x, int y, CameraPassScratch& scratch, CameraPassStats& stats);
 
+// Primary camera segments are gathered in blocks of kBundleBlock x kBundleBlock pixels that share one
+// accelerator query (estimators/segment_bundle.h); the pixels and so the films are the same.
+constexpr int kBundleBlock = 4;
+
+// What the camera pass tells the estimators about the block [x0, x0 + w) x [y0, y0 + h) of raster
+// positions: the axis through its centre, the sine of the widest angle to a ray through it (its
+// corners: a cone meets the image plane in an ellipse, convex), the camera's region and the
+// farthest a primary segment can go (the scene's bounds seen from the camera).
+BundleHint bundleHint(const Scene& scene, int x0, int y0, int w, int h);
+
+// The slack (m) an estimator that shares queries builds its accelerator for: the widest block's
+// (the centre's) cone at the far end of the scene, so that every primary segment is contained
+// (segment_bundle.h); 0 when the camera's region does not scatter (no primary segment is gathered).
+double bundleSlack(const Scene& scene);
+
+// Renders the pixels of `r` through `writer`, block by block.
+void renderPixels(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,
+                  const TileRect& r, TransientFilm::TileWriter& writer, CameraPassScratch& scratch,
+                  CameraPassStats& stats);
+
 // Renders the pixels of `tile` into the film (the film's TileWriter locks that tile): for tools and
 // tests; the Driver runs the photon beams integrator (integrators/photon_beams.h) instead.
 void renderTile(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, TransientFilm& film,

@@ -88,6 +88,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     if (scene_.stages.beams && volumeInput) {
         ep.radius = ps.beamRadius;
         ep.timeKernel = volumeKernel;
+        ep.bundleSlack = bundleSlack(scene_);  // primary segments share queries (segment_bundle.h)
         volume_->prepare(scene_, map_, ep);
         if (!volume_->empty()) estimators_.volume = volume_.get();
         ps.beamPieces = static_cast<int64_t>(volume_->accelPrimitives());
@@ -95,6 +96,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     if (scene_.stages.surfacePhotons && !map_.photons.empty()) {
         ep.radius = ps.surfaceRadius;
         ep.timeKernel = surfaceKernel;
+        ep.bundleSlack = 0.0;
         surface_->prepare(scene_, map_, ep);
         if (!surface_->empty()) estimators_.surface = surface_.get();
     }
@@ -116,12 +118,7 @@ void PhotonBeamsIntegrator::renderTile(const PassContext& ctx, int tile, const T
                                        TransientFilm::TileWriter& writer, int thread) {
     CameraPassScratch& scratch = scratch_[static_cast<size_t>(thread)];
     CameraPassStats& stats = tileStats_[static_cast<size_t>(tile)];
-    for (int y = r.y0; y < r.y0 + r.h; ++y)
-        for (int x = r.x0; x < r.x0 + r.w; ++x) {
-            renderPixel(scene_, estimators_, camera_, *ctx.time, x, y, scratch, stats);
-            writer.addPixel(x, y, scratch.acc);
-            scratch.acc.clearTouched();
-        }
+    renderPixels(scene_, estimators_, camera_, *ctx.time, r, writer, scratch, stats);
 }
 
 void PhotonBeamsIntegrator::endPass(const PassContext&, PassStats& ps) {
