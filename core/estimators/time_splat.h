@@ -43,13 +43,23 @@ struct ExpProfile {
         uniform = !(kappa * (b - a) > 1e-12);
         reflect = k < 0.0;
     }
+    double total() const {  // the unnormalised mass of [s0, s1]: cumulative(far end)
+        if (!(total_ >= 0.0)) total_ = uniform ? s1 - s0 : -std::expm1(-kappa * (s1 - s0));
+        return total_;
+    }
     double invTotal() const {
-        if (!(invTotal_ >= 0.0)) invTotal_ = uniform ? 1.0 / (s1 - s0) : 1.0 / -std::expm1(-kappa * (s1 - s0));
+        if (!(invTotal_ >= 0.0)) invTotal_ = 1.0 / total();
         return invTotal_;
     }
-    double cumulative(double s) const {  // unnormalised mass on the decaying side of s
+    // Unnormalised mass on the decaying side of s. At the segment's ends (where splatTime's
+    // clamped bin boundaries land) without a call: 0 at the near end (-expm1(-0) = 0) and the
+    // cached total at the far end (x = s1 - s0, the same expression): the same values, bit for bit.
+    double cumulative(double s) const {
         const double x = reflect ? (s1 - s) : (s - s0);
-        return uniform ? x : -std::expm1(-kappa * x);
+        if (uniform) return x;
+        if (x == 0.0) return 0.0;
+        if (s == (reflect ? s0 : s1)) return total();
+        return -std::expm1(-kappa * x);
     }
     double mass(double u, double v) const {
         const double m = reflect ? cumulative(u) - cumulative(v) : cumulative(v) - cumulative(u);
@@ -58,7 +68,7 @@ struct ExpProfile {
     bool reflect = false;
 
 private:
-    mutable double invTotal_ = -1.0;  // < 0: not computed yet
+    mutable double total_ = -1.0, invTotal_ = -1.0;  // < 0: not computed yet
 };
 
 // Fraction of the mass of exp(-kappa s) on [s0, s1] that lies in [u, v] (s0 <= u <= v <= s1).
