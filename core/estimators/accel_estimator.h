@@ -6,6 +6,8 @@
 #include "estimators/estimator.h"
 
 #include <memory>
+#include <utility>
+#include <vector>
 
 namespace tpb {
 
@@ -13,6 +15,13 @@ class AccelVolumeEstimator : public VolumeEstimator {
 public:
     bool empty() const override { return !ready_; }
     size_t accelPrimitives() const override { return ready_ ? accel_->pieceCount() : 0; }
+
+    // The shared query of a block of camera segments (segment_bundle.h): along the block's axis,
+    // `length` long, every piece whose kernel (radius) a segment within `slack` of it can reach.
+    struct BundleQuery {
+        Vec3 origin, axis;
+        double length, radius, slack;
+    };
 
 protected:
     // Keeps scene, map and pass; builds the accelerator over `items` (map.beams or map.points) with
@@ -34,6 +43,34 @@ protected:
         // (The slack's own rounding margin: segment_bundle.h's fat test uses slack (1 + 1e-6).)
         const double support = pass.radius + (pass_.bundleSlack > 0.0 ? pass_.bundleSlack * (1.0 + 2e-6) : 0.0);
         buildAccel(items, support, pass.radius, pass.threads);
+    }
+
+    // The block's shared candidates if it contains `seg` (null: the segment takes its own query),
+    // listed on first use: `fat` is the estimator's test of a piece against the query (its context
+    // a BundleQuery), `axisOf(piece)` the (origin, dir) the estimator's exact test reads. In the
+    // accelerator's (beam, piece) order, so the estimates come in the order of the own query.
+    template <class AxisOf>
+    const std::vector<BundlePiece>* sharedCandidates(const CameraSegment& seg, EstimatorScratch& scratch,
+                                                     decltype(CandidateTest::accept) fat, AxisOf&& axisOf) const {
+        SegmentBundle& bundle = scratch.bundle;
+        if (!(pass_.bundleSlack > 0.0) || !bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack))
+            return nullptr;
+        if (!bundle.built()) {
+            const BundleHint& h = bundle.hint();
+            // The slack with a margin for rounding (the accelerator pads by slack (1 + 2e-6)).
+            const BundleQuery q{h.origin, h.axis, bundle.axisLength(pass_.bundleSlack), pass_.radius,
+                                pass_.bundleSlack * (1.0 + 1e-6)};
+            scratch.pieces.clear();
+            accel_->candidates(q.origin, q.axis, q.length, h.region, scratch.pieces, {fat, &q});
+            bundle.pieces.clear();
+            bundle.pieces.reserve(scratch.pieces.size());
+            for (const BeamPiece& p : scratch.pieces) {
+                const std::pair<Vec3, Vec3> a = axisOf(p);
+                bundle.pieces.push_back({p, a.first, a.second});
+            }
+            bundle.markBuilt();
+        }
+        return &bundle.pieces;
     }
 
     void buildAccel(const std::vector<Beam>& beams, double support, double radius, int threads) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace tpb {
 
@@ -124,33 +125,15 @@ struct CylinderTest {
     }
 };
 
-// The fat test of segment_bundle.h: can a segment within `slack` of the axis meet the piece's kernel?
-struct FatCylinderTest {
-    const SegmentBundle& bundle;
-    double length, radius, slack;
-    static bool accept(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
-        const auto& t = *static_cast<const FatCylinderTest*>(context);
-        const BundleHint& h = t.bundle.hint();
-        RayBeamOverlap o;
-        return rayBeamOverlap(h.origin, h.axis, t.length, origin, dir, piece.sbLo - t.slack, piece.sbHi + t.slack,
-                              t.radius + t.slack, o);
-    }
-};
-}  // namespace
-
-// The shared candidates of the block (segment_bundle.h), filled on first use.
-void Beam2DEstimator::buildBundle(SegmentBundle& bundle, std::vector<BeamPiece>& pieces) const {
-    const double slack = pass_.bundleSlack * (1.0 + 1e-6);
-    const double length = bundle.axisLength(pass_.bundleSlack);
-    const FatCylinderTest test{bundle, length, pass_.radius, slack};
-    pieces.clear();
-    accel_->candidates(bundle.hint().origin, bundle.hint().axis, length, bundle.hint().region, pieces,
-                       {&FatCylinderTest::accept, &test});
-    bundle.pieces.clear();
-    bundle.pieces.reserve(pieces.size());
-    for (const BeamPiece& p : pieces) bundle.pieces.push_back({p, map_->beams[p.beam].origin, map_->beams[p.beam].dir});
-    bundle.markBuilt();
+// The fat test of segment_bundle.h: can a segment within `slack` of the block's axis meet the
+// piece's kernel? The axis against the cylinder of radius r + slack with caps moved out by slack.
+bool acceptFatCylinder(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
+    const auto& q = *static_cast<const AccelVolumeEstimator::BundleQuery*>(context);
+    RayBeamOverlap o;
+    return rayBeamOverlap(q.origin, q.axis, q.length, origin, dir, piece.sbLo - q.slack, piece.sbHi + q.slack,
+                          q.radius + q.slack, o);
 }
+}  // namespace
 
 // Beam radiance estimate along the camera segment x_r + s w_r, s in [0, sMax] (eqs. 8, 10, 12-15).
 int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
@@ -159,14 +142,16 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const Region& region = scene_->regions[seg.region];
     const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
                           beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
-    SegmentBundle& bundle = scratch.bundle;
-    if (pass_.bundleSlack > 0.0 && bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack)) {
+    const auto axisOf = [&](const BeamPiece& p) {
+        const Beam& b = map_->beams[p.beam];
+        return std::pair<Vec3, Vec3>(b.origin, b.dir);
+    };
+    if (const std::vector<BundlePiece>* shared = sharedCandidates(seg, scratch, &acceptFatCylinder, axisOf)) {
         // The block's shared candidates, each with the exact test of the query below, in the same
         // (beam, piece) order: the same estimates in the same order.
-        if (!bundle.built()) buildBundle(bundle, scratch.pieces);
         NearShapes near(*scene_, seg.ray, seg.sMax, pass_.radius, scratch.shapes);
         int64_t estimates = 0;
-        for (const BundlePiece& c : bundle.pieces) {
+        for (const BundlePiece& c : *shared) {
             RayBeamOverlap o;
             if (!rayBeamOverlap(seg.ray.o, seg.ray.d, seg.sMax, c.origin, c.dir, c.piece.sbLo, c.piece.sbHi,
                                 pass_.radius, o))

@@ -100,9 +100,6 @@ public:
     void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) override;
     int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
                    EstimatorScratch& scratch) const override;
-
-private:
-    void buildBundle(SegmentBundle& bundle, std::vector<BeamPiece>& pieces) const;
 };
 
 }  // namespace tpb

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace tpb {
 
@@ -27,7 +28,7 @@ double chordTransmittance(double sigma_t, double sMinus, double sPlus) {
 
 void Point3DEstimator::prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) {
     // The ball kernel is zero farther than r from the point.
-    prepareOver(scene, map, pass, map.points);
+    prepareOver(scene, map, pass, map.points, /*bundles=*/true);
 }
 
 namespace {
@@ -40,6 +41,13 @@ struct PointKernelTest {
         return rayPointChord(t.ray.o, t.ray.d, t.sMax, point, t.radius).has_value();
     }
 };
+
+// The fat test of segment_bundle.h: is the point within r + slack of the block's axis (a segment
+// within slack of the axis can then pass within r of it)?
+bool acceptFatBall(const void* context, const BeamPiece&, const Vec3& point, const Vec3&) {
+    const auto& q = *static_cast<const AccelVolumeEstimator::BundleQuery*>(context);
+    return rayPointChord(q.origin, q.axis, q.length, point, q.radius + q.slack).has_value();
+}
 }  // namespace
 
 // L = sum_p sigma_s rho Phi_p (3 / (4 pi r^3)) Int_{s-}^{s+} T_r(s) ds, spread over the chord (header).
@@ -51,23 +59,20 @@ int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path
     const Region& region = scene.regions[seg.region];
     const Medium& m = region.medium;
     const double eta = region.ior, r = pass_.radius;
-    scratch.pieces.clear();
-    const PointKernelTest test{ray, seg.sMax, r};
-    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&PointKernelTest::accept, &test});
     bool haveNear = false;
     const double invVolume = 3.0 / (4.0 * kPi * r * r * r);  // K_3
     const Color kappa = pass_.profile == TimeProfile::Exact ? m.sigma_t : Color(0.0);
     const bool grey = isGrey(m.sigma_t);
     int64_t estimates = 0;
-    for (const BeamPiece& candidate : scratch.pieces) {
-        const VolumePhoton& p = map_->points[candidate.beam];
+    const auto estimate = [&](uint32_t index) {
+        const VolumePhoton& p = map_->points[index];
         const std::optional<RayPointChord> chord = rayPointChord(ray.o, ray.d, seg.sMax, p.position, r);
-        if (!chord) continue;
+        if (!chord) return;
         if (!haveNear) {
             nearShapes(scene, ray, seg.sMax, r, scratch.shapes);
             haveNear = true;
         }
-        if (!kernelPointVisible(scene, scratch.shapes, ray.at(0.5 * (chord->sMinus + chord->sPlus)), p.position)) continue;
+        if (!kernelPointVisible(scene, scratch.shapes, ray.at(0.5 * (chord->sMinus + chord->sPlus)), p.position)) return;
         const double ix = chordTransmittance(m.sigma_t.x, chord->sMinus, chord->sPlus);
         const Color integral = grey ? Color(ix) : Color(ix, chordTransmittance(m.sigma_t.y, chord->sMinus, chord->sPlus),
                                                         chordTransmittance(m.sigma_t.z, chord->sMinus, chord->sPlus));
@@ -76,7 +81,17 @@ int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path
         // t(s) = t_cam + t_p + eta s (real), t_p (unwarped); energy density exp(-sigma_t s) on the chord.
         sink.spread(L, kappa, chord->sMinus, chord->sPlus, path.oplCam + p.opl, eta, p.opl, 0.0);
         ++estimates;
+    };
+    const auto axisOf = [&](const BeamPiece& c) { return std::pair<Vec3, Vec3>(map_->points[c.beam].position, Vec3(0.0)); };
+    if (const std::vector<BundlePiece>* shared = sharedCandidates(seg, scratch, &acceptFatBall, axisOf)) {
+        // The block's shared candidates (segment_bundle.h), in the order of the query below.
+        for (const BundlePiece& c : *shared) estimate(c.piece.beam);
+        return estimates;
     }
+    scratch.pieces.clear();
+    const PointKernelTest test{ray, seg.sMax, r};
+    accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&PointKernelTest::accept, &test});
+    for (const BeamPiece& candidate : scratch.pieces) estimate(candidate.beam);
     return estimates;
 }
 

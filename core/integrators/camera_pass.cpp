@@ -115,30 +115,39 @@ BundleHint bundleHint(const Scene& scene, int x0, int y0, int w, int h) {
     return hint;
 }
 
-double bundleSlack(const Scene& scene) {
+double bundleSlack(const Scene& scene, int block) {
     const Region& region = scene.regions[scene.cameraRegions.top()];
-    if (!region.hasMedium || !region.medium.scattering) return 0.0;
+    if (!region.hasMedium || !region.medium.scattering || block < 2) return 0.0;
     const Camera& cam = scene.camera;
-    const int x0 = std::max(0, cam.width / 2 - kBundleBlock / 2), y0 = std::max(0, cam.height / 2 - kBundleBlock / 2);
-    const BundleHint h = bundleHint(scene, x0, y0, kBundleBlock, kBundleBlock);
+    const int x0 = std::max(0, cam.width / 2 - block / 2), y0 = std::max(0, cam.height / 2 - block / 2);
+    const BundleHint h = bundleHint(scene, x0, y0, block, block);
     // 1 % more: the segments that end on the bounds' farthest corner are contained too.
     return 1.01 * h.sinHalfAngle * h.maxLength;
+}
+
+BundlePlan planBundles(const Scene& scene, double radius) {
+    for (const int block : {4, 2}) {
+        const double slack = bundleSlack(scene, block);
+        if (slack > 0.0 && slack <= kMaxBundleSlackRadii * radius) return {block, slack};
+    }
+    return {};
 }
 
 void renderPixels(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,
                   const TileRect& r, TransientFilm::TileWriter& writer, CameraPassScratch& scratch,
                   CameraPassStats& stats) {
-    for (int by = r.y0; by < r.y0 + r.h; by += kBundleBlock)
-        for (int bx = r.x0; bx < r.x0 + r.w; bx += kBundleBlock) {
-            const int bw = std::min(kBundleBlock, r.x0 + r.w - bx), bh = std::min(kBundleBlock, r.y0 + r.h - by);
-            scratch.estimator.bundle.begin(bundleHint(scene, bx, by, bw, bh));
+    const int block = std::max(1, s.bundleBlock);
+    for (int by = r.y0; by < r.y0 + r.h; by += block)
+        for (int bx = r.x0; bx < r.x0 + r.w; bx += block) {
+            const int bw = std::min(block, r.x0 + r.w - bx), bh = std::min(block, r.y0 + r.h - by);
+            if (block > 1) scratch.estimator.bundle.begin(bundleHint(scene, bx, by, bw, bh));
             for (int y = by; y < by + bh; ++y)
                 for (int x = bx; x < bx + bw; ++x) {
                     renderPixel(scene, est, s, time, x, y, scratch, stats);
                     writer.addPixel(x, y, scratch.acc);
                     scratch.acc.clearTouched();
                 }
-            scratch.estimator.bundle.end();
+            if (block > 1) scratch.estimator.bundle.end();
         }
 }
 

@@ -17,6 +17,7 @@ struct CameraPassParams {
     uint64_t seed = 1;
     uint64_t pass = 1;
     int maxDepth = 16;
+    int bundleBlock = 1;  // primary segments share queries over blocks this wide (planBundles; 1: off)
 };
 
 // The estimators a camera path asks (either may be null: that stage is off for the scene).
@@ -46,9 +47,8 @@ struct CameraPassScratch {
 void renderPixel(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,
                  int x, int y, CameraPassScratch& scratch, CameraPassStats& stats);
 
-// Primary camera segments are gathered in blocks of kBundleBlock x kBundleBlock pixels that share one
-// accelerator query (estimators/segment_bundle.h); the pixels and so the films are the same.
-constexpr int kBundleBlock = 4;
+// Primary camera segments may be gathered in blocks of pixels that share one accelerator query
+// (estimators/segment_bundle.h); the pixels and so the films are the same either way.
 
 // What the camera pass tells the estimators about the block [x0, x0 + w) x [y0, y0 + h) of raster
 // positions: the axis through its centre, the sine of the widest angle to a ray through it (its
@@ -56,10 +56,28 @@ constexpr int kBundleBlock = 4;
 // farthest a primary segment can go (the scene's bounds seen from the camera).
 BundleHint bundleHint(const Scene& scene, int x0, int y0, int w, int h);
 
-// The slack (m) an estimator that shares queries builds its accelerator for: the widest block's
-// (the centre's) cone at the far end of the scene, so that every primary segment is contained
-// (segment_bundle.h); 0 when the camera's region does not scatter (no primary segment is gathered).
-double bundleSlack(const Scene& scene);
+// The slack (m) an estimator that shares queries over blocks `block` pixels wide builds its
+// accelerator for: the centre block's (the widest) cone at the far end of the scene, so that every
+// primary segment is contained (segment_bundle.h); 0 when the camera's region does not scatter (no
+// primary segment is gathered).
+double bundleSlack(const Scene& scene, int block);
+
+// How this pass's primary segments share queries: blocks `block` pixels wide, the accelerator
+// padded by `slack` (m). Block 1, slack 0: each segment takes its own query.
+struct BundlePlan {
+    int block = 1;
+    double slack = 0.0;
+};
+
+// A shared query returns the pieces within r + slack of the block's axis, and each of the block's
+// segments tests all of them: it pays while the slack is small against the radius r. Measured with
+// `tpb bench scenes/cornell_medium.json --estimator beam2d --bins-list 1` over 24..512 pixels (README
+// Measurements): blocks of 4 win at slack/r 1.2-2.6 (1.25-2x faster passes), lose at 4.6 and beyond
+// (1.2x slower at 4.6, 2.6x at 12, 3.4x at 300).
+constexpr double kMaxBundleSlackRadii = 3.0;
+
+// The widest block (4, else 2) whose slack is at most kMaxBundleSlackRadii radii; else no bundles.
+BundlePlan planBundles(const Scene& scene, double radius);
 
 // Renders the pixels of `r` through `writer`, block by block.
 void renderPixels(const Scene& scene, const CameraPassEstimators& est, const CameraPassParams& s, const TimeBins& time,

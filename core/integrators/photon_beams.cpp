@@ -84,11 +84,13 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     estimators_ = {};
     estimators_.volumeKernel = volumeKernel;
     estimators_.surfaceKernel = surfaceKernel;
+    BundlePlan bundles;
     const bool volumeInput = (needs.beams && !map_.beams.empty()) || (needs.points && !map_.points.empty());
     if (scene_.stages.beams && volumeInput) {
         ep.radius = ps.beamRadius;
         ep.timeKernel = volumeKernel;
-        ep.bundleSlack = bundleSlack(scene_);  // primary segments share queries (segment_bundle.h)
+        bundles = planBundles(scene_, ps.beamRadius);  // primary segments share queries (segment_bundle.h)
+        ep.bundleSlack = bundles.slack;
         volume_->prepare(scene_, map_, ep);
         if (!volume_->empty()) estimators_.volume = volume_.get();
         ps.beamPieces = static_cast<int64_t>(volume_->accelPrimitives());
@@ -108,6 +110,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     camera_.seed = settings_.seed;
     camera_.pass = ctx.pass;
     camera_.maxDepth = settings_.maxDepth;
+    camera_.bundleBlock = bundles.block;
     scratch_.resize(static_cast<size_t>(ctx.threads));
     for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
     tileStats_.assign(static_cast<size_t>(ctx.tiles), CameraPassStats{});
