@@ -229,18 +229,52 @@ void TransientFilm::merge(const TransientFilm& other) {
     }
 }
 
+namespace {
+
+// A pixel's pass as the tile's add reads it: touched ranges, outside and steady sums, and its
+// largest |value| (NaN propagates: the add's full check then drops it). With `values`, the
+// touched bins are appended there and the record says where.
+TileStaging::Pixel pixelRecord(const PixelAccumulator& acc, uint32_t pixel, std::vector<double>* values) {
+    TileStaging::Pixel px;
+    px.pixel = pixel;
+    double largest = 0.0;
+    const auto grow = [&largest](double x) {
+        x = std::abs(x);
+        if (!(x <= largest)) largest = x;
+    };
+    const auto grow3 = [&grow](const Color& c) { grow(c.x); grow(c.y); grow(c.z); };
+    for (int a = 0; a < 2; ++a) {
+        const TimeAxis axis = static_cast<TimeAxis>(a);
+        px.before[a] = acc.before(axis);
+        px.after[a] = acc.after(axis);
+        grow3(px.before[a]);
+        grow3(px.after[a]);
+        px.lo[a] = acc.lo(axis);
+        px.hi[a] = acc.hi(axis);
+        if (px.hi[a] < px.lo[a]) continue;
+        const double* v = acc.bin(axis, px.lo[a]);
+        const size_t n = static_cast<size_t>(px.hi[a] - px.lo[a] + 1) * 3;
+        if (values) {
+            px.offset[a] = values->size();
+            values->insert(values->end(), v, v + n);
+        }
+        for (size_t j = 0; j < n; ++j) grow(v[j]);
+    }
+    px.steady = acc.steady();
+    grow3(px.steady);
+    px.largest = largest;
+    return px;
+}
+
+}  // namespace
+
 TransientFilm::TileWriter::TileWriter(TransientFilm& film, int tile, TileStaging* staging, double passWeight)
     : film_(film), tile_(tile), lock_(film.tiles_[tile].writer), staging_(staging), passWeight_(passWeight) {
     if (!staging_) {
         next_ = std::make_shared<TileBlock>(film.current(tile)->sums);
         return;
     }
-    const int bins = film.bins();
-    if (staging_->bins != bins || staging_->pixels.size() != static_cast<size_t>(kTile * kTile)) {
-        staging_->pixels.assign(static_cast<size_t>(kTile * kTile), PixelAccumulator(bins));
-        staging_->bins = bins;
-    }
-    staged_.reserve(static_cast<size_t>(kTile * kTile));
+    staging_->clear();
 }
 
 TransientFilm::TileWriter::~TileWriter() {
@@ -258,7 +292,10 @@ void TransientFilm::TileWriter::commitStaged() {
     Tile& tile = film_.tiles_[tile_];
     const auto addStaged = [&](TileSums& sums) {
         double passMax = 0.0;
-        for (uint32_t p : staged_) passMax = std::max(passMax, addTo(sums, p, staging_->pixels[p]));
+        for (const TileStaging::Pixel& px : staging_->pixels) {
+            const double* bins[2] = {staging_->values.data() + px.offset[0], staging_->values.data() + px.offset[1]};
+            passMax = std::max(passMax, addTo(sums, px, bins));
+        }
         ++sums.passes;
         sums.weight += passWeight_;
         sums.absBound += passMax;
@@ -276,43 +313,32 @@ void TransientFilm::TileWriter::commitStaged() {
         addStaged(next_->sums);
         film_.publish(tile_, std::move(next_));
     }
-    for (uint32_t p : staged_) staging_->pixels[p].clearTouched();
+    staging_->clear();
 }
 
 void TransientFilm::TileWriter::addPixel(int x, int y, PixelAccumulator& acc) {
     const TileRect r = film_.tileRect(tile_);
-    const size_t pixel = static_cast<size_t>(y - r.y0) * r.w + (x - r.x0);
+    const uint32_t pixel = static_cast<uint32_t>((y - r.y0) * r.w + (x - r.x0));
     if (staging_) {
-        std::swap(staging_->pixels[pixel], acc);  // the staged one was cleared at the last commit
-        staged_.push_back(static_cast<uint32_t>(pixel));
+        staging_->pixels.push_back(pixelRecord(acc, pixel, &staging_->values));
+        acc.clearTouched();
         return;
     }
-    passMax_ = std::max(passMax_, addTo(next_->sums, pixel, acc));
+    const TileStaging::Pixel px = pixelRecord(acc, pixel, nullptr);
+    const double* bins[2] = {acc.bin(TimeAxis::Real, 0) + static_cast<size_t>(std::max(px.lo[0], 0)) * 3,
+                             acc.bin(TimeAxis::Unwarped, 0) + static_cast<size_t>(std::max(px.lo[1], 0)) * 3};
+    passMax_ = std::max(passMax_, addTo(next_->sums, px, bins));
 }
 
-double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAccumulator& acc) {
+double TransientFilm::TileWriter::addTo(TileSums& t, const TileStaging::Pixel& px, const double* const bins[2]) {
     // The averages are read as float: a pass whose contribution would push a sum past FLT_MAX (a
     // light power near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this
     // pixel and counted, so the film never holds (or shows) Inf. Checked first, then added, so a
     // pixel gets all of the pass or none of it. The check reads the pixel's own values only
     // while the tile's bound (TileSums::absBound) says no sum can get near FLT_MAX, and every sum
-    // it adds to only when it does.
-    double largest = 0.0;
-    const auto grow = [&largest](double x) {  // a NaN makes `largest` NaN (the full check then drops it)
-        x = std::abs(x);
-        if (!(x <= largest)) largest = x;
-    };
-    const auto grow3 = [&grow](const Color& c) { grow(c.x); grow(c.y); grow(c.z); };
-    for (int a = 0; a < 2; ++a) {
-        const TimeAxis axis = static_cast<TimeAxis>(a);
-        if (acc.hi(axis) < acc.lo(axis)) continue;
-        const double* v = acc.bin(axis, acc.lo(axis));
-        const size_t n = static_cast<size_t>(acc.hi(axis) - acc.lo(axis) + 1) * 3;
-        for (size_t j = 0; j < n; ++j) grow(v[j]);
-        grow3(acc.before(axis));
-        grow3(acc.after(axis));
-    }
-    grow3(acc.steady());
+    // it adds to only when it does. `bins[a]` points at the pixel's bin lo[a] on axis a.
+    const size_t pixel = px.pixel;
+    double largest = px.largest;
     const size_t i = pixel * 3;
     if (!(t.absBound + largest <= 0.25 * static_cast<double>(FLT_MAX))) {  // also catches NaN
         const auto fits = [](double sum, double add) {
@@ -321,9 +347,8 @@ double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAc
         };
         bool ok = true;
         for (int a = 0; a < 2 && ok; ++a) {
-            const TimeAxis axis = static_cast<TimeAxis>(a);
-            for (int k = acc.lo(axis); k <= acc.hi(axis) && ok; ++k) {
-                const double* v = acc.bin(axis, k);
+            for (int k = px.lo[a]; k <= px.hi[a] && ok; ++k) {
+                const double* v = bins[a] + static_cast<size_t>(k - px.lo[a]) * 3;
                 const FilmSum* dst = &t.bins[a][t.binIndex(pixel, k)];
                 ok = fits(dst[0], v[0]) && fits(dst[1], v[1]) && fits(dst[2], v[2]);
             }
@@ -331,9 +356,8 @@ double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAc
         const auto fits3 = [&](const std::vector<double>& sum, const Color& add) {
             return fits(sum[i], add.x) && fits(sum[i + 1], add.y) && fits(sum[i + 2], add.z);
         };
-        ok = ok && fits3(t.steady, acc.steady());
-        for (int a = 0; a < 2 && ok; ++a)
-            ok = fits3(t.before[a], acc.before(static_cast<TimeAxis>(a))) && fits3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
+        ok = ok && fits3(t.steady, px.steady);
+        for (int a = 0; a < 2 && ok; ++a) ok = fits3(t.before[a], px.before[a]) && fits3(t.after[a], px.after[a]);
         if (!ok) {
             film_.stats.overflowedPixels.fetch_add(1, std::memory_order_relaxed);
             return 0.0;
@@ -341,12 +365,11 @@ double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAc
         if (!std::isfinite(largest)) largest = 0.0;  // unreachable with finite sums; keeps the bound finite
     }
     for (int a = 0; a < 2; ++a) {
-        const TimeAxis axis = static_cast<TimeAxis>(a);
-        if (acc.hi(axis) < acc.lo(axis)) continue;
-        // The pixel's touched bins, contiguous in both (PixelAccumulator: [bin][rgb]).
-        const double* v = acc.bin(axis, acc.lo(axis));
-        FilmSum* dst = &t.bins[a][t.binIndex(pixel, acc.lo(axis))];
-        const size_t n = static_cast<size_t>(acc.hi(axis) - acc.lo(axis) + 1) * 3;
+        if (px.hi[a] < px.lo[a]) continue;
+        // The pixel's touched bins, contiguous in both (the staging and the tile: [bin][rgb]).
+        const double* v = bins[a];
+        FilmSum* dst = &t.bins[a][t.binIndex(pixel, px.lo[a])];
+        const size_t n = static_cast<size_t>(px.hi[a] - px.lo[a] + 1) * 3;
         for (size_t j = 0; j < n; ++j) dst[j] += static_cast<FilmSum>(v[j]);
     }
     const auto add3 = [i](std::vector<double>& dst, const Color& c) {
@@ -354,10 +377,10 @@ double TransientFilm::TileWriter::addTo(TileSums& t, size_t pixel, const PixelAc
         dst[i + 1] += c.y;
         dst[i + 2] += c.z;
     };
-    add3(t.steady, acc.steady());
+    add3(t.steady, px.steady);
     for (int a = 0; a < 2; ++a) {
-        add3(t.before[a], acc.before(static_cast<TimeAxis>(a)));
-        add3(t.after[a], acc.after(static_cast<TimeAxis>(a)));
+        add3(t.before[a], px.before[a]);
+        add3(t.after[a], px.after[a]);
     }
     return largest;
 }

@@ -8,12 +8,13 @@
 
 namespace tpb::test {
 
-inline void addRandomPass(TransientFilm& film, uint64_t seed, uint64_t pass) {
+// With `staging`, the tiles are written as the driver writes them (TileWriter's staging).
+inline void addRandomPass(TransientFilm& film, uint64_t seed, uint64_t pass, TileStaging* staging = nullptr) {
     PixelAccumulator acc(film.bins());
     FilmTally tally;
     const double t0 = film.time().startOpl, span = film.time().endOpl() - t0;
     for (int tile = 0; tile < film.tileCount(); ++tile) {
-        TransientFilm::TileWriter w(film, tile);
+        TransientFilm::TileWriter w(film, tile, staging);
         const TileRect r = film.tileRect(tile);
         for (int y = r.y0; y < r.y0 + r.h; ++y)
             for (int x = r.x0; x < r.x0 + r.w; ++x) {

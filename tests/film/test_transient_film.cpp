@@ -16,11 +16,11 @@ using namespace tpb;
 namespace {
 
 // Adds one pass in which every pixel gets `L` spread uniformly over t in [t0, t1] (both axes).
-void addUniformPass(TransientFilm& film, const Color& L, double t0, double t1) {
+void addUniformPass(TransientFilm& film, const Color& L, double t0, double t1, TileStaging* staging = nullptr) {
     PixelAccumulator acc(film.bins());
     FilmTally tally;
     for (int tile = 0; tile < film.tileCount(); ++tile) {
-        TransientFilm::TileWriter w(film, tile);
+        TransientFilm::TileWriter w(film, tile, staging);
         const TileRect r = film.tileRect(tile);
         for (int y = r.y0; y < r.y0 + r.h; ++y)
             for (int x = r.x0; x < r.x0 + r.w; ++x) {
@@ -95,6 +95,57 @@ TEST(Film, SumsThatWouldOverflowAreDroppedAndCounted) {
     std::vector<float> steady;
     film.steadyImage(steady);
     for (float v : steady) EXPECT_TRUE(std::isfinite(v));
+}
+
+// Energy that arrives wholly before the film (no bin touched) counts in the overflow guard too (its
+// before sum, and the steady sum that includes it): a second pass of 2e38 before the film would
+// push those sums past FLT_MAX, so it is dropped, with or without the staging.
+TEST(Film, OverflowGuardSeesEnergyThatMissesEveryBin) {
+    for (bool staged : {false, true}) {
+        TileStaging staging;
+        TransientFilm film(4, 4, TimeBins{1.0, 1.0, 2});
+        addUniformPass(film, Color(2e38), 0.0, 0.5, staged ? &staging : nullptr);
+        EXPECT_EQ(film.stats.overflowedPixels.load(), 0);
+        addUniformPass(film, Color(2e38), 0.0, 0.5, staged ? &staging : nullptr);
+        EXPECT_EQ(film.stats.overflowedPixels.load(), 16) << "staged " << staged;
+        std::vector<float> before;
+        film.beforeImage(TimeAxis::Real, before);
+        for (float v : before) EXPECT_TRUE(std::isfinite(v)) << "staged " << staged;
+    }
+}
+
+// The driver's writers stage a tile's pixels (TileStaging: touched bins packed, added when the
+// tile is done) and add in place, or to a copy while a snapshot holds the tile. Every way gives
+// the sums, pass counts and overflow bounds of the plain writer, bit for bit: the same additions.
+// One staging serves every tile and pass, as a render thread's does.
+TEST(Film, StagedWritersGiveThePlainWritersSumsBitForBit) {
+    const TimeBins time{0.5, 0.3, 9};
+    TransientFilm plain(37, 21, time), staged(37, 21, time), copied(37, 21, time);
+    TileStaging staging, staging2;
+    for (uint64_t p = 1; p <= 4; ++p) {
+        test::addRandomPass(plain, 3, p);
+        test::addRandomPass(staged, 3, p, &staging);
+        const auto held = copied.snapshot();  // every tile is added to a copy this pass
+        test::addRandomPass(copied, 3, p, &staging2);
+        EXPECT_EQ(held->minPasses(), static_cast<int64_t>(p - 1));
+    }
+    const auto a = plain.snapshot();
+    for (const TransientFilm* f : {&staged, &copied}) {
+        const auto b = f->snapshot();
+        for (int t = 0; t < a->tileCount(); ++t) {
+            const TileSums &x = a->block(t).sums, &y = b->block(t).sums;
+            ASSERT_EQ(x.passes, y.passes);
+            EXPECT_EQ(x.weight, y.weight);
+            EXPECT_EQ(x.absBound, y.absBound);
+            EXPECT_GT(x.absBound, 0.0);
+            for (int ax = 0; ax < 2; ++ax) {
+                ASSERT_TRUE(x.bins[ax] == y.bins[ax]) << "tile " << t << " axis " << ax;
+                EXPECT_TRUE(x.before[ax] == y.before[ax]);
+                EXPECT_TRUE(x.after[ax] == y.after[ax]);
+            }
+            EXPECT_TRUE(x.steady == y.steady);
+        }
+    }
 }
 
 // Merging (checkpoints, films from other machines): the films of passes 1-3 and 4-6 merged are
