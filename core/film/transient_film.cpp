@@ -232,8 +232,10 @@ void TransientFilm::merge(const TransientFilm& other) {
 namespace {
 
 // A pixel's pass as the tile's add reads it: touched ranges, outside and steady sums, and its
-// largest |value| (NaN propagates: the add's full check then drops it). With `values`, the
-// touched bins are appended there and the record says where.
+// largest |value|. The NaN guard is upstream: splatSpread rejects (and counts) non-finite
+// estimates, so none reaches the accumulator; this scan would not catch one reliably (a NaN is
+// kept only if no larger-compared value follows it). With `values`, the touched bins are appended
+// there and the record says where.
 TileStaging::Pixel pixelRecord(const PixelAccumulator& acc, uint32_t pixel, std::vector<double>* values) {
     TileStaging::Pixel px;
     px.pixel = pixel;
@@ -325,8 +327,9 @@ void TransientFilm::TileWriter::addPixel(int x, int y, PixelAccumulator& acc) {
         return;
     }
     const TileStaging::Pixel px = pixelRecord(acc, pixel, nullptr);
-    const double* bins[2] = {acc.bin(TimeAxis::Real, 0) + static_cast<size_t>(std::max(px.lo[0], 0)) * 3,
-                             acc.bin(TimeAxis::Unwarped, 0) + static_cast<size_t>(std::max(px.lo[1], 0)) * 3};
+    // Bin lo of each axis in the accumulator (lo = bins, one past the axis, when none was touched).
+    const double* bins[2] = {acc.bin(TimeAxis::Real, 0) + static_cast<size_t>(px.lo[0]) * 3,
+                             acc.bin(TimeAxis::Unwarped, 0) + static_cast<size_t>(px.lo[1]) * 3};
     passMax_ = std::max(passMax_, addTo(next_->sums, px, bins));
 }
 
