@@ -64,9 +64,12 @@ protected:
             accel_->candidates(q.origin, q.axis, q.length, h.region, scratch.pieces, {fat, &q});
             bundle.pieces.clear();
             bundle.pieces.reserve(scratch.pieces.size());
+            bundle.axes.clear();
+            bundle.axes.reserve(scratch.pieces.size());
             for (const BeamPiece& p : scratch.pieces) {
                 const std::pair<Vec3, Vec3> a = axisOf(p);
                 bundle.pieces.push_back({p, a.first, a.second});
+                bundle.axes.push(a.first, a.second, p.sbLo, p.sbHi);
             }
             bundle.markBuilt();
         }

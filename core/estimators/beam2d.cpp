@@ -149,14 +149,18 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
     if (const std::vector<BundlePiece>* shared = sharedCandidates(seg, scratch, &acceptFatCylinder, axisOf)) {
         // The block's shared candidates, each with the exact test of the query below, in the same
         // (beam, piece) order: the same estimates in the same order.
+        // The exact test over all of them at once (overlap_batch.h: rayBeamOverlap's answers bit for bit).
         NearShapes near(*scene_, seg.ray, seg.sMax, pass_.radius, scratch.shapes);
+        OverlapBatch& ob = scratch.overlaps;
+        rayBeamOverlaps(seg.ray.o, seg.ray.d, seg.sMax, scratch.bundle.axes, pass_.radius, ob);
         int64_t estimates = 0;
-        for (const BundlePiece& c : *shared) {
+        for (const uint32_t i : ob.hits) {
             RayBeamOverlap o;
-            if (!rayBeamOverlap(seg.ray.o, seg.ray.d, seg.sMax, c.origin, c.dir, c.piece.sbLo, c.piece.sbHi,
-                                pass_.radius, o))
-                continue;
-            if (gatherBeam2DOverlap(g, map_->beams[c.piece.beam], o, near, sink)) ++estimates;
+            o.sMinus = ob.sMinus[i];
+            o.sPlus = ob.sPlus[i];
+            o.sb0 = ob.sb0[i];
+            o.cosRB = ob.cosRB[i];
+            if (gatherBeam2DOverlap(g, map_->beams[(*shared)[i].piece.beam], o, near, sink)) ++estimates;
         }
         return estimates;
     }

@@ -75,6 +75,7 @@ struct EstimatorScratch {
     std::vector<BeamPiece> pieces;  // candidate beam pieces of the current segment
     std::vector<int> shapes;        // shapes near the current segment (visibility tests)
     SegmentBundle bundle;           // the block of pixels being rendered (segment_bundle.h)
+    OverlapBatch overlaps;          // one segment against the block's pieces (overlap_batch.h)
 };
 
 // Per-pass parameters of an estimator.

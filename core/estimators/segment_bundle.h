@@ -23,6 +23,7 @@
 #pragma once
 #include "accel/beam_accel.h"
 #include "base/math.h"
+#include "estimators/overlap_batch.h"
 
 #include <algorithm>
 #include <vector>
@@ -53,6 +54,7 @@ public:
         active_ = h.sinHalfAngle >= 0.0 && h.maxLength > 0.0 && glm::dot(h.axis, h.axis) > 0.5;
         built_ = false;
         pieces.clear();
+        axes.clear();
     }
     void end() {
         active_ = false;
@@ -76,6 +78,7 @@ public:
     const BundleHint& hint() const { return hint_; }
 
     std::vector<BundlePiece> pieces;  // the shared candidates, sorted by (beam, piece)
+    PieceAxes axes;                   // the same, as arrays for the batched test (overlap_batch.h)
 
 private:
     double distance2ToAxis(const Vec3& p, double len) const {

@@ -1,0 +1,56 @@
+// The ray-beam overlap of beam2d.h (rayBeamOverlap: a camera segment against a beam piece's kernel
+// cylinder) run over a whole list of candidate pieces at once: the pieces a block of pixels shares
+// (segment_bundle.h) are stored as a structure of arrays, and one camera segment is tested against
+// all of them in a loop the compiler vectorises (two doubles per SSE2 instruction, four in the AVX2
+// clone the loader picks on CPUs that have it: GCC target_clones).
+//
+// The batch computes, lane by lane, exactly the operations of the scalar rayBeamOverlap in the same
+// order (no FMA contraction, no reassociation: the file is built with -ffp-contract=off, and
+// neither -ffast-math nor FMA-enabled targets are used), with every branch replaced by a select, so
+// its answers - which pieces overlap and their intervals - are the scalar test's bit for bit
+// (tests/estimators/test_overlap_batch.cpp checks that on random and degenerate configurations).
+#pragma once
+#include "base/math.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace tpb {
+
+// Beam pieces as a structure of arrays: the beam's origin and unit direction, and the piece's
+// range [lo, hi] of beam parameters (m).
+struct PieceAxes {
+    std::vector<double> ox, oy, oz, dx, dy, dz, lo, hi;
+    size_t size() const { return ox.size(); }
+    void clear() {
+        for (std::vector<double>* v : {&ox, &oy, &oz, &dx, &dy, &dz, &lo, &hi}) v->clear();
+    }
+    void reserve(size_t n) {
+        for (std::vector<double>* v : {&ox, &oy, &oz, &dx, &dy, &dz, &lo, &hi}) v->reserve(n);
+    }
+    void push(const Vec3& origin, const Vec3& dir, double sbLo, double sbHi) {
+        ox.push_back(origin.x);
+        oy.push_back(origin.y);
+        oz.push_back(origin.z);
+        dx.push_back(dir.x);
+        dy.push_back(dir.y);
+        dz.push_back(dir.z);
+        lo.push_back(sbLo);
+        hi.push_back(sbHi);
+    }
+};
+
+// The overlaps of one camera segment with a list of pieces: for every piece i, whether it overlaps
+// (`hits` lists those i in increasing order) and, for those, the fields of RayBeamOverlap
+// (s_r interval, sb0, cos) at index i.
+struct OverlapBatch {
+    std::vector<double> sMinus, sPlus, sb0, cosRB;
+    std::vector<uint32_t> hits;
+};
+
+// rayBeamOverlap(xr, wr, sMax, origin_i, dir_i, lo_i, hi_i, radius) for every piece i of `pieces`.
+void rayBeamOverlaps(const Vec3& xr, const Vec3& wr, double sMax, const PieceAxes& pieces, double radius,
+                     OverlapBatch& out);
+
+}  // namespace tpb
