@@ -30,12 +30,12 @@ struct TimeBins {
     }
 };
 
-// Cumulative mass of exp(-kappa s) on [s0, s1], reflected so the exponent always decays:
-// M(s) = (1 - exp(-|kappa| (s' - s0))) / (1 - exp(-|kappa| len)), s' = s (kappa >= 0) or s0 + s1 - s.
-// The mass in a bin is M(v) - M(u): one expm1 per bin boundary. (Differences of M lose relative
-// precision only in bins whose share is itself tiny, so the absolute error stays ~1e-16 of E.)
-// The normalisation 1 / total is computed on first use: an estimate that lands in one bin (most
-// of them on coarse films) never needs it, nor its expm1.
+// The exponential profile exp(-kappa s) on [s0, s1] of one channel, seen from its decaying end:
+// x = s - s0 (kappa >= 0) or s1 - s (kappa < 0, `reflect`), density exp(-|kappa| x), unnormalised
+// mass of [0, x] u(x) = 1 - exp(-|kappa| x) (splat_detail::massTo). `uniform` when |kappa| len is
+// too small to matter (<= 1e-12): density 1, u(x) = x. The total u(len) and its inverse are
+// computed on first use: an estimate that lands in one bin (most of them on coarse films) never
+// needs them, nor their expm1.
 struct ExpProfile {
     double kappa, s0, s1;
     bool uniform;
@@ -43,7 +43,7 @@ struct ExpProfile {
         uniform = !(kappa * (b - a) > 1e-12);
         reflect = k < 0.0;
     }
-    double total() const {  // the unnormalised mass of [s0, s1]: cumulative(far end)
+    double total() const {  // the unnormalised mass of [s0, s1]
         if (!(total_ >= 0.0)) total_ = uniform ? s1 - s0 : -std::expm1(-kappa * (s1 - s0));
         return total_;
     }
@@ -51,30 +51,11 @@ struct ExpProfile {
         if (!(invTotal_ >= 0.0)) invTotal_ = 1.0 / total();
         return invTotal_;
     }
-    // Unnormalised mass on the decaying side of s. At the segment's ends (where splatTime's
-    // clamped bin boundaries land) without a call: 0 at the near end (-expm1(-0) = 0) and the
-    // cached total at the far end (x = s1 - s0, the same expression): the same values, bit for bit.
-    double cumulative(double s) const {
-        const double x = reflect ? (s1 - s) : (s - s0);
-        if (uniform) return x;
-        if (x == 0.0) return 0.0;
-        if (s == (reflect ? s0 : s1)) return total();
-        return -std::expm1(-kappa * x);
-    }
-    double mass(double u, double v) const {
-        const double m = reflect ? cumulative(u) - cumulative(v) : cumulative(v) - cumulative(u);
-        return std::max(0.0, m) * invTotal();
-    }
     bool reflect = false;
 
 private:
     mutable double total_ = -1.0, invTotal_ = -1.0;  // < 0: not computed yet
 };
-
-// Fraction of the mass of exp(-kappa s) on [s0, s1] that lies in [u, v] (s0 <= u <= v <= s1).
-inline double expMassFraction(double kappa, double s0, double s1, double u, double v) {
-    return ExpProfile(kappa, s0, s1).mass(u, v);
-}
 
 // The profile of one estimate on its segment, per channel: built once and spread on both time
 // axes (the profile depends on kappa and [s0, s1] only, not on the axis). Grey media (the three
@@ -86,17 +67,6 @@ struct SegmentProfile {
     SegmentProfile(const Color& kappa, double a, double b)
         : s0(a), s1(b), grey(kappa.x == kappa.y && kappa.y == kappa.z), x(kappa.x, a, b),
           y(grey ? x : ExpProfile(kappa.y, a, b)), z(grey ? x : ExpProfile(kappa.z, a, b)) {}
-    // Unnormalised mass on the decaying side of s, per channel, s clipped to [s0, s1].
-    Color cumulative(double s) const {
-        s = std::clamp(s, s0, s1);
-        const double cx = x.cumulative(s);
-        return grey ? Color(cx) : Color(cx, y.cumulative(s), z.cumulative(s));
-    }
-    // Share of the energy between two points of the segment (in either order): |M(q) - M(p)|.
-    Color share(const Color& cp, const Color& cq) const {
-        const double fx = std::abs(cq.x - cp.x) * x.invTotal();
-        return grey ? Color(fx) : Color(fx, std::abs(cq.y - cp.y) * y.invTotal(), std::abs(cq.z - cp.z) * z.invTotal());
-    }
 };
 
 // Energy of one estimate that fell outside the film, split by side: `before` arrived before the
@@ -107,9 +77,94 @@ struct OutsideFilm {
     Color after{0.0};
 };
 
+namespace splat_detail {
+
+// u(x) = -expm1(-kappa x), the unnormalised mass of [0, x] on the decaying side (x for a uniform profile).
+inline double massTo(const ExpProfile& p, double x) { return p.uniform ? x : -std::expm1(-p.kappa * x); }
+
+// The pieces of one estimate, in the order of x = the distance from the segment's end where the
+// density is largest (the decaying side of its channels' profiles, which all share it here): piece
+// 0 is [0, x_1], piece i is [x_i, x_i + dx] (dx = one bin width of time, in s), piece n is
+// [x_n, len], with n >= 1 bin boundaries x_1 < ... < x_n inside the segment. Piece i lands in bin
+// kFirst + step i (-1: before the film, `bins`: after it). C channels: 1 (grey, or one channel of
+// a colour splat whose channels decay towards different ends), or 3 sharing the side.
+//
+// Masses, per channel, normalised by the profile's total T = u(len):
+//   n <= 3: from the boundaries, u(x_1) / T, (u(x_{i+1}) - u(x_i)) / T, (T - u(x_n)) / T (one
+//           expm1 per boundary; differences of u lose relative precision only in bins whose share
+//           is itself tiny: the absolute error stays ~1e-16 of the estimate);
+//   n >= 4: by recurrence, since the interior cuts are equally spaced: with E_i = exp(-kappa x_i) =
+//           E_1 q^(i-1), q = exp(-kappa dx), the interior piece i has E_i u(dx) / T and the last
+//           E_n u(len - x_n) / T: three expm1 whatever n (E_1 = 1 - u(x_1), q = 1 - u(dx), each to
+//           ~1e-16 absolute; the recurrence adds ~n ulp relative). Uniform profiles: E = 1, q = 1.
+// Each channel's masses depend only on its own profile, so a colour splat equals, channel by
+// channel, the grey splat with that channel's kappa (tests/estimators/test_beam2d.cpp).
+// cut(i) is x_i, i = 1..n (clamped to [0, len], so that a boundary within rounding of the
+// segment's end gives the piece beyond it exactly nothing).
+template <int C, class Cut, class Sink>
+inline void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, int n, const Cut& cut, double dx,
+                        double len, int kFirst, int step, int bins, OutsideFilm& out, Sink& sink) {
+    const auto emit = [&](int k, const double (&m)[C]) {
+        Color f;
+        if constexpr (C == 1) f = Color(std::max(0.0, m[0]));
+        else f = Color(std::max(0.0, m[0]), std::max(0.0, m[1]), std::max(0.0, m[2]));
+        if (isBlack(f)) return;
+        const Color e = energy * f;
+        if (k < 0) out.before += e;
+        else if (k >= bins) out.after += e;
+        else sink(k, e);
+    };
+    double invT[C], u1[C], m[C];
+    const double x1 = cut(1);
+    for (int c = 0; c < C; ++c) {
+        invT[c] = ch[c]->invTotal();
+        u1[c] = massTo(*ch[c], x1);
+        m[c] = u1[c] * invT[c];
+    }
+    emit(kFirst, m);
+    if (n <= 3) {
+        double prev[C];
+        for (int c = 0; c < C; ++c) prev[c] = u1[c];
+        for (int i = 1; i <= n; ++i) {
+            double next[C];
+            if (i < n) {
+                const double x = cut(i + 1);
+                for (int c = 0; c < C; ++c) next[c] = massTo(*ch[c], x);
+            } else {
+                for (int c = 0; c < C; ++c) next[c] = ch[c]->total();
+            }
+            for (int c = 0; c < C; ++c) {
+                m[c] = (next[c] - prev[c]) * invT[c];
+                prev[c] = next[c];
+            }
+            emit(kFirst + step * i, m);
+        }
+        return;
+    }
+    double E[C], q[C], g[C];
+    for (int c = 0; c < C; ++c) {
+        const double uDx = massTo(*ch[c], dx);
+        E[c] = ch[c]->uniform ? 1.0 : 1.0 - u1[c];
+        q[c] = ch[c]->uniform ? 1.0 : 1.0 - uDx;
+        g[c] = uDx * invT[c];
+    }
+    for (int i = 1; i < n; ++i) {
+        for (int c = 0; c < C; ++c) {
+            m[c] = E[c] * g[c];
+            E[c] *= q[c];
+        }
+        emit(kFirst + step * i, m);
+    }
+    const double last = len - cut(n);
+    for (int c = 0; c < C; ++c) m[c] = E[c] * massTo(*ch[c], last) * invT[c];
+    emit(kFirst + step * n, m);
+}
+
+}  // namespace splat_detail
+
 // Cost: an estimate inside one bin goes there whole (no transcendental call: its share is 1);
-// otherwise one expm1 per channel per bin boundary it crosses, each boundary shared by the two
-// bins on its sides (k1 - k0 + 2 per channel, not 2 per bin).
+// otherwise splat_detail::splatPieces: per channel one expm1 per bin boundary it crosses up to
+// three boundaries, three in all beyond (plus the profile's total, shared by both time axes).
 template <class Sink>
 inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a, double b,
                              Sink&& sink) {
@@ -126,25 +181,42 @@ inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Segm
         return out;
     }
     const int kA = tb.binOf(tA), kB = tb.binOf(tB);
-    if (kA == kB && kA >= 0 && kA < tb.bins) {  // wholly inside one bin
-        sink(kA, energy);
+    if (kA == kB) {  // wholly inside one bin, or wholly before or after the film
+        if (kA < 0) out.before = energy;
+        else if (kA >= tb.bins) out.after = energy;
+        else sink(kA, energy);
         return out;
     }
-    // t(s) = a + b s crosses bin boundary j (time start + j binWidth) at s = (t_j - a) / b (b != 0
-    // here: the interval spans time); the film's start is boundary 0, its end boundary `bins`.
-    const auto cumulativeAt = [&](int j) { return p.cumulative((tb.startOpl + j * tb.binWidth - a) / b); };
-    const bool forward = b > 0.0;  // s grows with t: the segment's early end is s0, else s1
-    const int k0 = std::max(kA, 0), k1 = std::min(kB, tb.bins - 1);
-    Color lo = cumulativeAt(k0);
-    if (tA < tb.startOpl) out.before = energy * p.share(p.cumulative(forward ? s0 : s1), lo);
-    for (int k = k0; k <= k1; ++k) {
-        const Color hi = cumulativeAt(k + 1);
-        const Color f = p.share(lo, hi);
-        lo = hi;
-        if (isBlack(f)) continue;
-        sink(k, energy * f);
+    // Boundaries T_j = start + j binWidth, j = kA+1 .. kB, cut [tA, tB] (b != 0 here: the interval
+    // spans time) into pieces kA .. kB. Boundary j lies at s_j = (T_j - a) / b, clamped to [s0, s1];
+    // in x (from the decaying end of the channels at hand, `reflect`) at s_j - s0 or s1 - s_j.
+    // x grows with time when b > 0 and the profile decays along s, or b < 0 and it is reflected.
+    const double dx = tb.binWidth / std::abs(b);
+    const int n = kB - kA;
+    const auto side = [&](const ExpProfile& e, const Color& en, const auto& channels) {
+        const bool xWithTime = (b > 0.0) != e.reflect;
+        const auto cut = [&](int i) {  // x of the i-th boundary in x order
+            const int j = xWithTime ? kA + i : kB + 1 - i;
+            const double sj = std::clamp((tb.startOpl + j * tb.binWidth - a) / b, s0, s1);
+            return e.reflect ? s1 - sj : sj - s0;
+        };
+        splat_detail::splatPieces(channels, en, n, cut, dx, len, xWithTime ? kA : kB, xWithTime ? 1 : -1, tb.bins, out,
+                                  sink);
+    };
+    if (p.grey) {
+        const ExpProfile* const ch[1] = {&p.x};
+        side(p.x, energy, ch);
+    } else if (p.x.reflect == p.y.reflect && p.y.reflect == p.z.reflect) {
+        const ExpProfile* const ch[3] = {&p.x, &p.y, &p.z};
+        side(p.x, energy, ch);
+    } else {  // the channels decay towards different ends: each on its own
+        const ExpProfile* const cx[1] = {&p.x};
+        const ExpProfile* const cy[1] = {&p.y};
+        const ExpProfile* const cz[1] = {&p.z};
+        side(p.x, Color(energy.x, 0.0, 0.0), cx);
+        side(p.y, Color(0.0, energy.y, 0.0), cy);
+        side(p.z, Color(0.0, 0.0, energy.z), cz);
     }
-    if (tB > tb.endOpl()) out.after = energy * p.share(lo, p.cumulative(forward ? s1 : s0));
     return out;
 }
 
