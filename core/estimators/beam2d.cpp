@@ -60,13 +60,17 @@ bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb,
     return rayBeamOverlap(xr, wr, sMax, xb, wb, 0.0, beamLength, radius, out);
 }
 
-double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap& o) {
+ChannelIntegral transmittanceChannel(double sigma_t, double tau_b, const RayBeamOverlap& o) {
     const double kappa = sigma_t + tau_b * o.cosRB;
     const double len = o.sPlus - o.sMinus;
     // Optical depth E(s) = sigma_t s + tau_b s_b(s); start from the end where it is smallest.
     const double sRef = kappa >= 0.0 ? o.sMinus : o.sPlus;
     const double depth = sigma_t * sRef + tau_b * (o.sb0 + o.cosRB * sRef);
-    return std::exp(-depth) * len * expRel(std::abs(kappa) * len);
+    // expRel(x) written out, so that its expm1 is kept for the time splat (the same value).
+    const double x = std::abs(kappa) * len;
+    if (std::abs(x) < 1e-5) return {std::exp(-depth) * len * (1.0 - 0.5 * x + x * x / 6.0), -1.0};
+    const double total = -std::expm1(-x);
+    return {std::exp(-depth) * len * (total / x), total};
 }
 
 // ---- the estimator ------------------------------------------------------------------------------
@@ -100,15 +104,22 @@ bool gatherBeam2DOverlap(const SegmentGather& g, const Beam& b, const RayBeamOve
     // Eq. 8: L_b = sigma_s rho(theta) Phi_b / (pi r^2) * int T(s_r) T_b(s_b(s_r)) ds_r
     const Color& tauB = g.tauB;
     const double invArea = 1.0 / (kPi * r * r);  // 1 / Omega_R(r^2)
-    const double ix = transmittanceIntegral(m.sigma_t.x, tauB.x, o);
-    const Color integral = g.grey ? Color(ix) : Color(ix, transmittanceIntegral(m.sigma_t.y, tauB.y, o),
-                                                    transmittanceIntegral(m.sigma_t.z, tauB.z, o));
+    const ChannelIntegral ix = transmittanceChannel(m.sigma_t.x, tauB.x, o);
+    ChannelIntegral iy = ix, iz = ix;
+    if (!g.grey) {
+        iy = transmittanceChannel(m.sigma_t.y, tauB.y, o);
+        iz = transmittanceChannel(m.sigma_t.z, tauB.z, o);
+    }
+    const Color integral(ix.integral, iy.integral, iz.integral);
     const double rho = m.phase.eval(-c);  // scattering from w_b into -w_r (towards the camera)
     const Color L = g.path.beta * m.sigma_s * rho * b.power * invArea * integral;
-    // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r.
-    const Color kappa = g.profile == TimeProfile::Exact ? m.sigma_t + tauB * c : Color(0.0);
+    // Eqs. 12-15: t(s_r) = t_cam + t_b0 + eta s_b(s_r) + eta s_r, linear in s_r. The exact profile's
+    // kappa is the integral's (sigma_t + tau_b c per channel), so it shares the integral's expm1.
+    const bool exact = g.profile == TimeProfile::Exact;
+    SegmentProfile profile(exact ? m.sigma_t + tauB * c : Color(0.0), o.sMinus, o.sPlus);
+    if (exact) profile.shareTotals(Color(ix.massTotal, iy.massTotal, iz.massTotal));
     const double tBeam = b.opl0 + g.eta * o.sb0;
-    sink.spread(L, kappa, o.sMinus, o.sPlus, g.path.oplCam + tBeam, g.eta * (1.0 + c), tBeam, g.eta * c);
+    sink.spread(L, profile, g.path.oplCam + tBeam, g.eta * (1.0 + c), tBeam, g.eta * c);
     return true;
 }
 

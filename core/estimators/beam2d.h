@@ -55,8 +55,17 @@ bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb,
 bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
                     double sbLo, double sbHi, double radius, RayBeamOverlap& out);
 
-// Int_{s-}^{s+} exp(-sigma_t s - tau_b (sb0 + c s)) ds for one channel (closed form above).
-double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap& o);
+// Int_{s-}^{s+} exp(-sigma_t s - tau_b (sb0 + c s)) ds for one channel (closed form above), and the
+// unnormalised mass of its time profile, -expm1(-|kappa| (s+ - s-)), when the closed form computed it
+// (|kappa| len >= 1e-5; else -1): the time splat (time_splat.h) needs the same value.
+struct ChannelIntegral {
+    double integral = 0.0;
+    double massTotal = -1.0;
+};
+ChannelIntegral transmittanceChannel(double sigma_t, double tau_b, const RayBeamOverlap& o);
+inline double transmittanceIntegral(double sigma_t, double tau_b, const RayBeamOverlap& o) {
+    return transmittanceChannel(sigma_t, tau_b, o).integral;
+}
 
 // tau_b (1/m): the attenuation along a beam inside the kernel (photon_tracer.h): sigma_t for long
 // beams, sigma_t - sigma_sampling for short ones (1 for grey media).

@@ -64,6 +64,12 @@ struct PixelSink {
                 double aUnwarped, double bUnwarped) {
         splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnwarped, bUnwarped, kernel);
     }
+    // The same with the profile of exp(-kappa s) on [s0, s1] built by the estimator (SegmentProfile,
+    // time_splat.h), which can hand it totals it has computed anyway (bit for bit the same values).
+    void spread(const Color& L, const SegmentProfile& profile, double aReal, double bReal, double aUnwarped,
+                double bUnwarped) {
+        splatSpread(time, acc, tally, L, profile, aReal, bReal, aUnwarped, bUnwarped, kernel);
+    }
     // Energy L arriving at one instant on each axis.
     void instant(const Color& L, double tReal, double tUnwarped) {
         splatInstant(time, acc, tally, L, tReal, tUnwarped, kernel);

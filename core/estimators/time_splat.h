@@ -47,6 +47,12 @@ struct ExpProfile {
         if (!(total_ >= 0.0)) total_ = uniform ? s1 - s0 : -std::expm1(-kappa * (s1 - s0));
         return total_;
     }
+    // Gives the total computed elsewhere with the same expression, -expm1(-|k| (s1 - s0)) (beam2d's
+    // transmittance integral has it: ChannelIntegral), so it is not computed twice; ignored when
+    // uniform or when t < 0 (not computed there).
+    void shareTotal(double t) {
+        if (!uniform && t >= 0.0) total_ = t;
+    }
     double invTotal() const {
         if (!(invTotal_ >= 0.0)) invTotal_ = 1.0 / total();
         return invTotal_;
@@ -62,11 +68,22 @@ private:
 // kappas equal) evaluate one channel.
 struct SegmentProfile {
     double s0, s1;
+    Color kappa;  // 1/m, signed, per channel
     bool grey;
     ExpProfile x, y, z;
-    SegmentProfile(const Color& kappa, double a, double b)
-        : s0(a), s1(b), grey(kappa.x == kappa.y && kappa.y == kappa.z), x(kappa.x, a, b),
-          y(grey ? x : ExpProfile(kappa.y, a, b)), z(grey ? x : ExpProfile(kappa.z, a, b)) {}
+    SegmentProfile(const Color& k, double a, double b)
+        : s0(a), s1(b), kappa(k), grey(k.x == k.y && k.y == k.z), x(k.x, a, b), y(grey ? x : ExpProfile(k.y, a, b)),
+          z(grey ? x : ExpProfile(k.z, a, b)) {}
+    // The totals -expm1(-|kappa| (s1 - s0)) per channel where already computed (< 0: not).
+    void shareTotals(const Color& t) {
+        x.shareTotal(t.x);
+        if (grey) {
+            y = z = x;
+        } else {
+            y.shareTotal(t.y);
+            z.shareTotal(t.z);
+        }
+    }
 };
 
 // Energy of one estimate that fell outside the film, split by side: `before` arrived before the

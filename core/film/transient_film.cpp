@@ -82,6 +82,18 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
     });
 }
 
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L,
+                 const SegmentProfile& profile, double aReal, double bReal, double aUnw, double bUnw,
+                 const TimeKernel& kernel) {
+    if (kernel.active()) {
+        splatSpread(time, acc, tally, L, profile.kappa, profile.s0, profile.s1, aReal, bReal, aUnw, bUnw, kernel);
+        return;
+    }
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) {
+        return splatTime(time, L, profile, a, b, sink);
+    });
+}
+
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
                  double s0, double s1, double aReal, double bReal, double aUnw, double bUnw, const TimeKernel& kernel) {
     if (!kernel.active()) {  // the kernel-free code itself: bit-identical films

@@ -96,6 +96,10 @@ struct FilmTally {
 // non-finite estimate is counted in tally.rejected and dropped.
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
                  double s0, double s1, double aReal, double bReal, double aUnwarped, double bUnwarped);
+// The same with the estimate's profile built by the caller (which may share its totals: beam2d).
+void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L,
+                 const SegmentProfile& profile, double aReal, double bReal, double aUnwarped, double bUnwarped,
+                 const TimeKernel& kernel);
 // An estimate that arrives at one instant on each axis (surface photons, path-traced paths).
 inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, double tReal,
                          double tUnwarped) {
