@@ -39,6 +39,7 @@ struct TimeBins {
 struct ExpProfile {
     double kappa, s0, s1;
     bool uniform;
+    ExpProfile() = default;  // unset: SegmentProfile's y and z of a grey profile (never read)
     ExpProfile(double k, double a, double b) : kappa(std::abs(k)), s0(a), s1(b) {
         uniform = !(kappa * (b - a) > 1e-12);
         reflect = k < 0.0;
@@ -71,15 +72,18 @@ struct SegmentProfile {
     Color kappa;  // 1/m, signed, per channel
     bool grey;
     ExpProfile x, y, z;
+    // A grey profile (three equal kappas) sets and reads x only: y and z stay unset.
     SegmentProfile(const Color& k, double a, double b)
-        : s0(a), s1(b), kappa(k), grey(k.x == k.y && k.y == k.z), x(k.x, a, b), y(grey ? x : ExpProfile(k.y, a, b)),
-          z(grey ? x : ExpProfile(k.z, a, b)) {}
+        : s0(a), s1(b), kappa(k), grey(k.x == k.y && k.y == k.z), x(k.x, a, b) {
+        if (!grey) {
+            y = ExpProfile(k.y, a, b);
+            z = ExpProfile(k.z, a, b);
+        }
+    }
     // The totals -expm1(-|kappa| (s1 - s0)) per channel where already computed (< 0: not).
     void shareTotals(const Color& t) {
         x.shareTotal(t.x);
-        if (grey) {
-            y = z = x;
-        } else {
+        if (!grey) {
             y.shareTotal(t.y);
             z.shareTotal(t.z);
         }
