@@ -27,6 +27,22 @@ inline bool isFinite(const Color& c) { return std::isfinite(c.x) && std::isfinit
 inline bool isBlack(const Color& c) { return c.x == 0.0 && c.y == 0.0 && c.z == 0.0; }
 inline bool isGrey(const Color& c) { return c.x == c.y && c.y == c.z; }  // one channel stands for all three
 
+// 1 - exp(-y) = -expm1(-y), the mass of [0, y] of a decaying exponential: the kernels' transmittance
+// integrals and the time splat evaluate it once or more per estimate. For 0 <= y <= 1/32 (thin media
+// over a kernel's width: kappa ~ 0.3/m over a few cm) the Taylor series to y^9, in Estrin's form
+// (the truncation, y^10 / 10!, is below 3e-22 of y there); else std::expm1. Within 1e-15 relative of
+// the exact value on [0, 1/32] (tests/base/test_math.cpp, against long double; glibc's expm1 is
+// ~4 ns, this ~1 ns, measured in a tight loop).
+inline double oneMinusExpNeg(double y) {
+    if (!(y >= 0.0 && y <= 0.03125)) return -std::expm1(-y);
+    constexpr double c2 = -1.0 / 2.0, c3 = 1.0 / 6.0, c4 = -1.0 / 24.0, c5 = 1.0 / 120.0, c6 = -1.0 / 720.0,
+                     c7 = 1.0 / 5040.0, c8 = -1.0 / 40320.0, c9 = 1.0 / 362880.0;
+    const double y2 = y * y, y4 = y2 * y2;
+    const double lo = (1.0 + c2 * y) + (c3 + c4 * y) * y2;
+    const double hi = (c5 + c6 * y) + (c7 + c8 * y) * y2;
+    return y * (lo + (hi + c9 * y * y4) * y4);
+}
+
 // Orthonormal basis around a unit vector n (Duff et al. 2017, branchless).
 inline void coordinateSystem(const Vec3& n, Vec3& t, Vec3& b) {
     const double sign = std::copysign(1.0, n.z);

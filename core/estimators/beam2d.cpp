@@ -69,7 +69,7 @@ ChannelIntegral transmittanceChannel(double sigma_t, double tau_b, const RayBeam
     // expRel(x) written out, so that its expm1 is kept for the time splat (the same value).
     const double x = std::abs(kappa) * len;
     if (std::abs(x) < 1e-5) return {std::exp(-depth) * len * (1.0 - 0.5 * x + x * x / 6.0), -1.0};
-    const double total = -std::expm1(-x);
+    const double total = oneMinusExpNeg(x);
     return {std::exp(-depth) * len * (total / x), total};
 }
 

@@ -39,7 +39,7 @@ namespace tpb {
 // g(x) = (1 - exp(-x)) / x, with g(0) = 1. Stable for all x >= -700.
 inline double expRel(double x) {
     if (std::abs(x) < 1e-5) return 1.0 - 0.5 * x + x * x / 6.0;
-    return -std::expm1(-x) / x;
+    return oneMinusExpNeg(x) / x;
 }
 
 // Interval of the camera segment inside the beam's kernel cylinder (radius r, axis = the beam's
@@ -56,7 +56,7 @@ bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb,
                     double sbLo, double sbHi, double radius, RayBeamOverlap& out);
 
 // Int_{s-}^{s+} exp(-sigma_t s - tau_b (sb0 + c s)) ds for one channel (closed form above), and the
-// unnormalised mass of its time profile, -expm1(-|kappa| (s+ - s-)), when the closed form computed it
+// unnormalised mass of its time profile, oneMinusExpNeg(|kappa| (s+ - s-)), when the closed form computed it
 // (|kappa| len >= 1e-5; else -1): the time splat (time_splat.h) needs the same value.
 struct ChannelIntegral {
     double integral = 0.0;

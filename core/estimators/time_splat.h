@@ -45,10 +45,10 @@ struct ExpProfile {
         reflect = k < 0.0;
     }
     double total() const {  // the unnormalised mass of [s0, s1]
-        if (!(total_ >= 0.0)) total_ = uniform ? s1 - s0 : -std::expm1(-kappa * (s1 - s0));
+        if (!(total_ >= 0.0)) total_ = uniform ? s1 - s0 : oneMinusExpNeg(kappa * (s1 - s0));
         return total_;
     }
-    // Gives the total computed elsewhere with the same expression, -expm1(-|k| (s1 - s0)) (beam2d's
+    // Gives the total computed elsewhere with the same expression, oneMinusExpNeg(|k| (s1 - s0)) (beam2d's
     // transmittance integral has it: ChannelIntegral), so it is not computed twice; ignored when
     // uniform or when t < 0 (not computed there).
     void shareTotal(double t) {
@@ -100,8 +100,8 @@ struct OutsideFilm {
 
 namespace splat_detail {
 
-// u(x) = -expm1(-kappa x), the unnormalised mass of [0, x] on the decaying side (x for a uniform profile).
-inline double massTo(const ExpProfile& p, double x) { return p.uniform ? x : -std::expm1(-p.kappa * x); }
+// u(x) = 1 - exp(-kappa x) (oneMinusExpNeg, base/math.h), the unnormalised mass of [0, x] on the decaying side (x for a uniform profile).
+inline double massTo(const ExpProfile& p, double x) { return p.uniform ? x : oneMinusExpNeg(p.kappa * x); }
 
 // The pieces of one estimate, in the order of x = the distance from the segment's end where the
 // density is largest (the decaying side of its channels' profiles, which all share it here): piece
