@@ -8,6 +8,17 @@
 #include <cstdint>
 #include <limits>
 
+// For the small helpers of the per-estimate path (the time splat, the exponential masses): GCC
+// stops inlining them once their callers grow, and a call per bin costs more than the helper.
+// TPB_HOT_LAMBDA goes after a lambda's parameter list, for the same reason.
+#if defined(__GNUC__)
+#define TPB_HOT_INLINE inline __attribute__((always_inline))
+#define TPB_HOT_LAMBDA __attribute__((always_inline))
+#else
+#define TPB_HOT_INLINE inline
+#define TPB_HOT_LAMBDA
+#endif
+
 namespace tpb {
 
 using Vec3 = glm::dvec3;
@@ -33,7 +44,7 @@ inline bool isGrey(const Color& c) { return c.x == c.y && c.y == c.z; }  // one 
 // (the truncation, y^10 / 10!, is below 3e-22 of y there); else std::expm1. Within 1e-15 relative of
 // the exact value on [0, 1/32] (tests/base/test_math.cpp, against long double; glibc's expm1 is
 // ~4 ns, this ~1 ns, measured in a tight loop).
-inline double oneMinusExpNeg(double y) {
+TPB_HOT_INLINE double oneMinusExpNeg(double y) {
     if (!(y >= 0.0 && y <= 0.03125)) return -std::expm1(-y);
     constexpr double c2 = -1.0 / 2.0, c3 = 1.0 / 6.0, c4 = -1.0 / 24.0, c5 = 1.0 / 120.0, c6 = -1.0 / 720.0,
                      c7 = 1.0 / 5040.0, c8 = -1.0 / 40320.0, c9 = 1.0 / 362880.0;

@@ -22,7 +22,7 @@ struct TimeBins {
     int bins = 1;
     double endOpl() const { return startOpl + binWidth * bins; }
     // Bin of time t, or -1 before the film / bins after it (clamped, no integer overflow).
-    int binOf(double t) const {
+    TPB_HOT_INLINE int binOf(double t) const {
         const double k = std::floor((t - startOpl) / binWidth);
         if (!(k >= 0.0)) return -1;
         if (k >= static_cast<double>(bins)) return bins;
@@ -101,7 +101,7 @@ struct OutsideFilm {
 namespace splat_detail {
 
 // u(x) = 1 - exp(-kappa x) (oneMinusExpNeg, base/math.h), the unnormalised mass of [0, x] on the decaying side (x for a uniform profile).
-inline double massTo(const ExpProfile& p, double x) { return p.uniform ? x : oneMinusExpNeg(p.kappa * x); }
+TPB_HOT_INLINE double massTo(const ExpProfile& p, double x) { return p.uniform ? x : oneMinusExpNeg(p.kappa * x); }
 
 // The pieces of one estimate, in the order of x = the distance from the segment's end where the
 // density is largest (the decaying side of its channels' profiles, which all share it here): piece
@@ -123,9 +123,9 @@ inline double massTo(const ExpProfile& p, double x) { return p.uniform ? x : one
 // cut(i) is x_i, i = 1..n (clamped to [0, len], so that a boundary within rounding of the
 // segment's end gives the piece beyond it exactly nothing).
 template <int C, class Cut, class Sink>
-inline void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, int n, const Cut& cut, double dx,
+TPB_HOT_INLINE void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, int n, const Cut& cut, double dx,
                         double len, int kFirst, int step, int bins, OutsideFilm& out, Sink& sink) {
-    const auto emit = [&](int k, const double (&m)[C]) {
+    const auto emit = [&](int k, const double (&m)[C]) TPB_HOT_LAMBDA {
         Color f;
         if constexpr (C == 1) f = Color(std::max(0.0, m[0]));
         else f = Color(std::max(0.0, m[0]), std::max(0.0, m[1]), std::max(0.0, m[2]));
@@ -187,7 +187,7 @@ inline void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, i
 // otherwise splat_detail::splatPieces: per channel one expm1 per bin boundary it crosses up to
 // three boundaries, three in all beyond (plus the profile's total, shared by both time axes).
 template <class Sink>
-inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a, double b,
+TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a, double b,
                              Sink&& sink) {
     OutsideFilm out;
     const double s0 = p.s0, s1 = p.s1;
@@ -214,9 +214,9 @@ inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Segm
     // x grows with time when b > 0 and the profile decays along s, or b < 0 and it is reflected.
     const double dx = tb.binWidth / std::abs(b);
     const int n = kB - kA;
-    const auto side = [&](const ExpProfile& e, const Color& en, const auto& channels) {
+    const auto side = [&](const ExpProfile& e, const Color& en, const auto& channels) TPB_HOT_LAMBDA {
         const bool xWithTime = (b > 0.0) != e.reflect;
-        const auto cut = [&](int i) {  // x of the i-th boundary in x order
+        const auto cut = [&](int i) TPB_HOT_LAMBDA {  // x of the i-th boundary in x order
             const int j = xWithTime ? kA + i : kB + 1 - i;
             const double sj = std::clamp((tb.startOpl + j * tb.binWidth - a) / b, s0, s1);
             return e.reflect ? s1 - sj : sj - s0;

@@ -49,12 +49,12 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
     // all-black-film check relies on), what falls outside comes back split by side.
     Color binned[2] = {Color(0.0), Color(0.0)};
     int64_t written = 0;
-    const OutsideFilm outReal = splat(aReal, bReal, [&](int k, const Color& c) {
+    const OutsideFilm outReal = splat(aReal, bReal, [&](int k, const Color& c) TPB_HOT_LAMBDA {
         acc.add(TimeAxis::Real, k, c);
         binned[0] += c;
         ++written;
     });
-    const OutsideFilm outUnw = splat(aUnw, bUnw, [&](int k, const Color& c) {
+    const OutsideFilm outUnw = splat(aUnw, bUnw, [&](int k, const Color& c) TPB_HOT_LAMBDA {
         acc.add(TimeAxis::Unwarped, k, c);
         binned[1] += c;
         ++written;
@@ -77,7 +77,7 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
                  double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
     const SegmentProfile profile(kappa, s0, s1);  // the same on both axes
-    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) {
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) TPB_HOT_LAMBDA {
         return splatTime(time, L, profile, a, b, sink);
     });
 }
@@ -89,7 +89,7 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
         splatSpread(time, acc, tally, L, profile.kappa, profile.s0, profile.s1, aReal, bReal, aUnw, bUnw, kernel);
         return;
     }
-    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) {
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) TPB_HOT_LAMBDA {
         return splatTime(time, L, profile, a, b, sink);
     });
 }

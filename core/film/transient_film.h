@@ -38,7 +38,7 @@ class PixelAccumulator {
 public:
     explicit PixelAccumulator(int bins = 1) { reset(bins); }
     void reset(int bins);
-    void add(TimeAxis axis, int bin, const Color& c) {
+    TPB_HOT_INLINE void add(TimeAxis axis, int bin, const Color& c) {
         double* p = &data_[(static_cast<size_t>(axis) * bins_ + bin) * 3];
         p[0] += c.x; p[1] += c.y; p[2] += c.z;
         int& lo = lo_[static_cast<int>(axis)];
