@@ -73,6 +73,14 @@ public:
         for (const Piece& p : pieces_)
             if (p.region == region && test(candidate(p), p.origin, p.dir)) out.push_back(candidate(p));  // already in (beam, piece) order
     }
+    void boxCandidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out,
+                       PieceAxes& axes) const override {
+        for (const Piece& p : pieces_)
+            if (p.region == region) {
+                out.push_back(candidate(p));
+                axes.push(p.origin, p.dir, p.sbLo, p.sbHi);
+            }
+    }
     std::string name() const override { return "brute-force"; }
     size_t pieceCount() const override { return pieces_.size(); }
 
@@ -101,13 +109,37 @@ public:
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
                     const CandidateTest& test) const override {
         const size_t from = hits.size();
+        traverse(o, d, sMax, region, hits, &test, nullptr);
+        sortBeamPieces(hits, from);
+    }
+    void boxCandidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out,
+                       PieceAxes& axes) const override {
+        traverse(o, d, sMax, region, out, nullptr, &axes);
+    }
+    std::string name() const override { return "embree"; }
+    size_t pieceCount() const override { return pieces_.size(); }
+
+private:
+    struct Context {
+        RTCIntersectContext base;  // must be first: Embree hands this pointer back to the callbacks
+        const EmbreeBeams* self;
+        int region;
+        std::vector<BeamPiece>* hits;
+        const CandidateTest* test;  // candidates(): keep what it accepts
+        PieceAxes* axes;            // boxCandidates(): keep everything, with the axes
+    };
+
+    // Visits every piece whose padded box the segment crosses (intersectFn).
+    void traverse(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
+                  const CandidateTest* test, PieceAxes* axes) const {
         if (pieces_.empty() || !scene_) return;
         Context ctx;
         rtcInitIntersectContext(&ctx.base);
         ctx.self = this;
         ctx.region = region;
         ctx.hits = &hits;
-        ctx.test = &test;
+        ctx.test = test;
+        ctx.axes = axes;
         RTCRayHit rh;
         rh.ray.org_x = static_cast<float>(o.x);
         rh.ray.org_y = static_cast<float>(o.y);
@@ -124,19 +156,7 @@ public:
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene_, &ctx.base, &rh);
-        sortBeamPieces(hits, from);
     }
-    std::string name() const override { return "embree"; }
-    size_t pieceCount() const override { return pieces_.size(); }
-
-private:
-    struct Context {
-        RTCIntersectContext base;  // must be first: Embree hands this pointer back to the callbacks
-        const EmbreeBeams* self;
-        int region;
-        std::vector<BeamPiece>* hits;
-        const CandidateTest* test;
-    };
 
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
         const auto* self = static_cast<const EmbreeBeams*>(args->geometryUserPtr);
@@ -160,7 +180,12 @@ private:
         // Embree reached this piece's padded box: a candidate, kept if the estimator's test accepts it.
         if (p.region != ctx->region) return;
         const BeamPiece c = candidate(p);
-        if ((*ctx->test)(c, p.origin, p.dir)) ctx->hits->push_back(c);
+        if (ctx->axes) {
+            ctx->hits->push_back(c);
+            ctx->axes->push(p.origin, p.dir, p.sbLo, p.sbHi);
+        } else if ((*ctx->test)(c, p.origin, p.dir)) {
+            ctx->hits->push_back(c);
+        }
         // No hit is reported to Embree: traversal goes on and visits every candidate piece.
     }
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}

@@ -22,6 +22,7 @@
 // either beams or points, whichever it was last built over.
 #pragma once
 #include "accel/accel_backend.h"
+#include "accel/piece_axes.h"
 #include "photons/photon_tracer.h"
 
 #include <memory>
@@ -90,6 +91,12 @@ public:
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out) const {
         candidates(o, d, sMax, region, out, CandidateTest{});
     }
+    // Every piece of `region` whose padded box the segment may cross, in traversal order (unsorted;
+    // a piece may come twice), appended to `out` with its beam's axis and its range appended to
+    // `axes` (the same values the CandidateTest is handed): for an estimator that tests the whole
+    // list at once (the shared query's fat test, overlap_batch.h) and then sorts what it keeps.
+    virtual void boxCandidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out,
+                               PieceAxes& axes) const = 0;
     virtual std::string name() const = 0;
     virtual size_t pieceCount() const = 0;  // beam pieces, or points
 

@@ -5,6 +5,8 @@
 #pragma once
 #include "estimators/estimator.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -70,6 +72,50 @@ protected:
                 const std::pair<Vec3, Vec3> a = axisOf(p);
                 bundle.pieces.push_back({p, a.first, a.second});
                 bundle.axes.push(a.first, a.second, p.sbLo, p.sbHi);
+            }
+            bundle.markBuilt();
+        }
+        return &bundle.pieces;
+    }
+
+    // sharedCandidates() with the fat test of the beam kernels' cylinder (beam2d's acceptFatCylinder:
+    // the block's axis against the piece's cylinder of radius r + slack, caps moved out by slack) run
+    // on all of the query's box candidates at once (overlap_batch.h: rayBeamOverlap's answers bit for
+    // bit) instead of one callback per piece during the traversal; the kept pieces are then sorted
+    // by (beam, piece), one per piece, as candidates() sorts them: the same list, in the same order.
+    const std::vector<BundlePiece>* sharedCylinderCandidates(const CameraSegment& seg, EstimatorScratch& scratch) const {
+        SegmentBundle& bundle = scratch.bundle;
+        if (!(pass_.bundleSlack > 0.0) || !bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack))
+            return nullptr;
+        if (!bundle.built()) {
+            const BundleHint& h = bundle.hint();
+            const BundleQuery q{h.origin, h.axis, bundle.axisLength(pass_.bundleSlack), pass_.radius,
+                                pass_.bundleSlack * (1.0 + 1e-6)};
+            std::vector<BeamPiece>& box = scratch.pieces;
+            PieceAxes& fat = scratch.boxAxes;
+            box.clear();
+            fat.clear();
+            accel_->boxCandidates(q.origin, q.axis, q.length, h.region, box, fat);
+            for (size_t i = 0; i < box.size(); ++i) {
+                fat.lo[i] = box[i].sbLo - q.slack;
+                fat.hi[i] = box[i].sbHi + q.slack;
+            }
+            OverlapBatch& ob = scratch.overlaps;
+            rayBeamOverlaps(q.origin, q.axis, q.length, fat, q.radius + q.slack, ob);
+            // Sort the kept ones by (beam, piece) and keep one per piece (sortBeamPieces' order).
+            std::vector<std::pair<uint64_t, uint32_t>>& keys = scratch.keys;
+            keys.clear();
+            for (const uint32_t i : ob.hits)
+                keys.push_back({(static_cast<uint64_t>(box[i].beam) << 32) | box[i].piece, i});
+            std::sort(keys.begin(), keys.end());
+            bundle.pieces.clear();
+            bundle.axes.clear();
+            for (size_t k = 0; k < keys.size(); ++k) {
+                if (k > 0 && keys[k].first == keys[k - 1].first) continue;
+                const uint32_t i = keys[k].second;
+                const Vec3 origin(fat.ox[i], fat.oy[i], fat.oz[i]), dir(fat.dx[i], fat.dy[i], fat.dz[i]);
+                bundle.pieces.push_back({box[i], origin, dir});
+                bundle.axes.push(origin, dir, box[i].sbLo, box[i].sbHi);
             }
             bundle.markBuilt();
         }

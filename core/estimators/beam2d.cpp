@@ -136,14 +136,6 @@ struct CylinderTest {
     }
 };
 
-// The fat test of segment_bundle.h: can a segment within `slack` of the block's axis meet the
-// piece's kernel? The axis against the cylinder of radius r + slack with caps moved out by slack.
-bool acceptFatCylinder(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
-    const auto& q = *static_cast<const AccelVolumeEstimator::BundleQuery*>(context);
-    RayBeamOverlap o;
-    return rayBeamOverlap(q.origin, q.axis, q.length, origin, dir, piece.sbLo - q.slack, piece.sbHi + q.slack,
-                          q.radius + q.slack, o);
-}
 }  // namespace
 
 // Beam radiance estimate along the camera segment x_r + s w_r, s in [0, sMax] (eqs. 8, 10, 12-15).
@@ -153,14 +145,11 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const Region& region = scene_->regions[seg.region];
     const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
                           beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
-    const auto axisOf = [&](const BeamPiece& p) {
-        const Beam& b = map_->beams[p.beam];
-        return std::pair<Vec3, Vec3>(b.origin, b.dir);
-    };
-    if (const std::vector<BundlePiece>* shared = sharedCandidates(seg, scratch, &acceptFatCylinder, axisOf)) {
-        // The block's shared candidates, each with the exact test of the query below, in the same
-        // (beam, piece) order: the same estimates in the same order.
-        // The exact test over all of them at once (overlap_batch.h: rayBeamOverlap's answers bit for bit).
+    if (const std::vector<BundlePiece>* shared = sharedCylinderCandidates(seg, scratch)) {
+        // The block's shared candidates (segment_bundle.h; their fat test batched too), each with the
+        // exact test of the query below, in the same (beam, piece) order: the same estimates in the
+        // same order. The exact test over all of them at once (overlap_batch.h: rayBeamOverlap's
+        // answers bit for bit).
         NearShapes near(*scene_, seg.ray, seg.sMax, pass_.radius, scratch.shapes);
         OverlapBatch& ob = scratch.overlaps;
         rayBeamOverlaps(seg.ray.o, seg.ray.d, seg.sMax, scratch.bundle.axes, pass_.radius, ob);

@@ -82,6 +82,8 @@ struct EstimatorScratch {
     std::vector<int> shapes;        // shapes near the current segment (visibility tests)
     SegmentBundle bundle;           // the block of pixels being rendered (segment_bundle.h)
     OverlapBatch overlaps;          // one segment against the block's pieces (overlap_batch.h)
+    PieceAxes boxAxes;              // a shared query's box candidates, for its fat test
+    std::vector<std::pair<uint64_t, uint32_t>> keys;  // their (beam, piece) keys, to sort the kept ones
 };
 
 // Per-pass parameters of an estimator.

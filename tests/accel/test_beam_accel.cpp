@@ -228,6 +228,38 @@ TEST(BeamAccel, EmbreeCandidatesContainEveryOverlapAndMatchBruteForce) {
     EXPECT_LT(total.candidatesEmbree, total.candidatesBrute / 10);
 }
 
+// boxCandidates (the raw list a batched test reads): for both backends, sorted and made unique it
+// is candidates() without a test, and its axes are the beams' axes and the pieces' ranges, bit for bit.
+TEST(BeamAccel, BoxCandidatesAreTheUntestedCandidatesWithTheirAxes) {
+    Rng rng(3000, Stream::Test, 0, 0);
+    const double radius = 0.05;
+    const std::vector<Beam> beams = randomBeams(rng, 300, radius);
+    size_t listed = 0;
+    for (AccelBackend backend : {AccelBackend::BruteForce, AccelBackend::Embree}) {
+        auto accel = BeamAccel::create(backend);
+        accel->build(beams, radius, 1);
+        for (int q = 0; q < 500; ++q) {
+            const Segment s = randomSegment(rng, beams, radius);
+            std::vector<BeamPiece> want, box;
+            PieceAxes axes;
+            accel->candidates(s.o, s.d, s.sMax, s.region, want);
+            accel->boxCandidates(s.o, s.d, s.sMax, s.region, box, axes);
+            ASSERT_EQ(axes.size(), box.size());
+            for (size_t i = 0; i < box.size(); ++i) {
+                const Beam& b = beams[box[i].beam];
+                EXPECT_TRUE(axes.ox[i] == b.origin.x && axes.oy[i] == b.origin.y && axes.oz[i] == b.origin.z);
+                EXPECT_TRUE(axes.dx[i] == b.dir.x && axes.dy[i] == b.dir.y && axes.dz[i] == b.dir.z);
+                EXPECT_TRUE(axes.lo[i] == box[i].sbLo && axes.hi[i] == box[i].sbHi);
+            }
+            sortBeamPieces(box, 0);
+            ASSERT_EQ(box.size(), want.size()) << "query " << q;
+            for (size_t i = 0; i < box.size(); ++i) EXPECT_EQ(key(box[i]), key(want[i])) << "query " << q;
+            listed += box.size();
+        }
+    }
+    EXPECT_GT(listed, 1000u);
+}
+
 TEST(BeamAccel, RebuildReplacesTheBeams) {
     const Counts n = compareBackends(2000, 200, 0.05, 2000, /*rebuild=*/true);
     EXPECT_EQ(n.queries, 2000u);
