@@ -230,7 +230,7 @@ void Viewer::updateBinEnergy() {
         BinEnergyResult r;
         r.key = key;
         r.complete = snap->minPasses() == snap->maxPasses();
-        r.energy = binEnergy(*snap, key.axis);
+        r.energy = binEnergy(*snap, key.axis, kAutoBinStride);
         return r;
     });
 }

@@ -183,18 +183,21 @@ std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mo
     return out;
 }
 
-std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis) {
+std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis, int stride) {
     // The luminance of each pixel's average as a frame shows it (float), summed over the image; read
     // pixel by pixel, each one's time series contiguous (TileSums layout).
     const int bins = s.bins();
     std::vector<double> energy(static_cast<size_t>(bins), 0.0);
     const int a = static_cast<int>(axis);
+    stride = std::max(stride, 1);
     for (int t = 0; t < s.tileCount(); ++t) {
         const TileSums& sums = s.block(t).sums;
         const double inv = inversePasses(sums);
         const TileRect& r = s.tileRect(t);
         const size_t pixels = static_cast<size_t>(r.w) * r.h;
         for (size_t p = 0; p < pixels; ++p) {
+            const int x = r.x0 + static_cast<int>(p % static_cast<size_t>(r.w)), y = r.y0 + static_cast<int>(p / static_cast<size_t>(r.w));
+            if (x % stride != 0 || y % stride != 0) continue;
             const FilmSum* v = &sums.bins[a][sums.binIndex(p, 0)];
             for (int k = 0; k < bins; ++k, v += 3) {
                 const auto f = [inv](FilmSum x) { return static_cast<float>(static_cast<double>(x) * inv); };

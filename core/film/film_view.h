@@ -35,6 +35,9 @@ std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, Em
 // Whole volume (W*H*bins*3, pixel-major: ((y*W + x)*bins + k)*3), in double.
 std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mode, const TimeResponse& response = {});
 // Luminance (base/math.h) summed over the image, per bin of the delta frames (bins values).
-std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis);
+// stride > 1: over the pixels (x, y) with x and y multiples of stride only (1 / stride^2 of the
+// film's memory read: the viewer's choice of the brightest bin, which runs while the film renders
+// and holds a snapshot as long as it reads).
+std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis, int stride = 1);
 
 }  // namespace tpb

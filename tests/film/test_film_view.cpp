@@ -127,3 +127,27 @@ TEST(FilmView, BinEnergyIsTheFramesLuminance) {
         EXPECT_GT(e[k], 0.0) << k;
     }
 }
+
+// With a stride (the viewer's automatic bin: every 4th pixel in x and y), the same sums over the
+// pixels whose coordinates are multiples of the stride, tiles full and partial (37x21 px).
+TEST(FilmView, StridedBinEnergyIsTheLuminanceOfEveryStrideThPixel) {
+    const auto s = threePassSnapshot();
+    for (int stride : {2, 4, 5}) {
+        const std::vector<double> e = binEnergy(*s, TimeAxis::Real, stride);
+        ASSERT_EQ(e.size(), static_cast<size_t>(s->bins()));
+        for (int k = 0; k < s->bins(); ++k) {
+            const std::vector<float> f = frameImage(*s, k, TimeAxis::Real, EmissionMode::Delta);
+            double sum = 0.0, all = 0.0;
+            for (int y = 0; y < s->height(); ++y)
+                for (int x = 0; x < s->width(); ++x) {
+                    const size_t p = (static_cast<size_t>(y) * s->width() + x) * 3;
+                    const double l = 0.2126 * f[p] + 0.7152 * f[p + 1] + 0.0722 * f[p + 2];
+                    all += l;
+                    if (x % stride == 0 && y % stride == 0) sum += l;
+                }
+            EXPECT_NEAR(e[k], sum, 1e-12 * sum) << stride << " " << k;
+            EXPECT_GT(e[k], 0.0) << stride << " " << k;
+            EXPECT_LT(e[k], 0.5 * all) << stride << " " << k;  // a subset, not the whole image
+        }
+    }
+}
