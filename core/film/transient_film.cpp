@@ -61,13 +61,16 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
     });
     tally.binsSplatted += written;
     acc.addSteady(L);
-    acc.addOutside(TimeAxis::Real, outReal);
-    acc.addOutside(TimeAxis::Unwarped, outUnw);
     const OutsideFilm* outs[2] = {&outReal, &outUnw};
     for (int a = 0; a < 2; ++a) {
-        const double before = luminance(outs[a]->before);
-        tally.before[a] += before;
-        tally.outside[a] += before + luminance(outs[a]->after);
+        // Most estimates land wholly inside the film: nothing to add outside (adding zeros would
+        // change no sum).
+        if (!isBlack(outs[a]->before) || !isBlack(outs[a]->after)) {
+            acc.addOutside(static_cast<TimeAxis>(a), *outs[a]);
+            const double before = luminance(outs[a]->before);
+            tally.before[a] += before;
+            tally.outside[a] += before + luminance(outs[a]->after);
+        }
         tally.inside[a] += luminance(binned[a]);
     }
 }
