@@ -155,12 +155,14 @@ void Viewer::updateFrame() {
     const bool rendering = driver_->running() && !driver_->paused();
     const double gap = std::max(frameComplete_ ? 0.25 : 1.0 / 30.0, 10.0 * fetchSec_);
     if (changed || ((!frameComplete_ || rendering) && now - lastFetch_ >= gap)) {
-        const std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+        std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
         frameRgb_ = key.steady ? steadyImage(*snap) : frameImage(*snap, key.bin, key.axis, key.mode, key.response);
         frameComplete_ = snap->minPasses() == snap->maxPasses();
+        const int width = snap->width(), height = snap->height();
+        snap.reset();  // read: let go before the upload and the exposure fit (a held tile is copied by its writer)
         frameKey_ = key;
         lastFetch_ = now;
-        image_.upload(snap->width(), snap->height(), frameRgb_.data());
+        image_.upload(width, height, frameRgb_.data());
         imageDirty_ = true;
         fitPendingExposure(key);
         if (firstLightSec_ < 0.0 && std::any_of(frameRgb_.begin(), frameRgb_.end(), [](float v) { return v > 0.0f; }))
