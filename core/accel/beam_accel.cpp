@@ -114,7 +114,28 @@ public:
     }
     void boxCandidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out,
                        PieceAxes& axes) const override {
-        traverse(o, d, sMax, region, out, nullptr, &axes);
+        // The callback only notes the piece's index; the pieces and their axes are copied after the
+        // traversal, in one loop over arrays sized once (not nine push_backs per candidate inside it).
+        thread_local std::vector<uint32_t> ids;
+        ids.clear();
+        traverse(o, d, sMax, region, out, nullptr, &ids);
+        const size_t base = out.size(), n = ids.size();
+        out.resize(base + n);
+        for (std::vector<double>* v : {&axes.ox, &axes.oy, &axes.oz, &axes.dx, &axes.dy, &axes.dz, &axes.lo, &axes.hi})
+            v->resize(base + n);
+        for (size_t k = 0; k < n; ++k) {
+            const Piece& p = pieces_[ids[k]];
+            const size_t i = base + k;
+            out[i] = candidate(p);
+            axes.ox[i] = p.origin.x;
+            axes.oy[i] = p.origin.y;
+            axes.oz[i] = p.origin.z;
+            axes.dx[i] = p.dir.x;
+            axes.dy[i] = p.dir.y;
+            axes.dz[i] = p.dir.z;
+            axes.lo[i] = p.sbLo;
+            axes.hi[i] = p.sbHi;
+        }
     }
     std::string name() const override { return "embree"; }
     size_t pieceCount() const override { return pieces_.size(); }
@@ -126,12 +147,12 @@ private:
         int region;
         std::vector<BeamPiece>* hits;
         const CandidateTest* test;  // candidates(): keep what it accepts
-        PieceAxes* axes;            // boxCandidates(): keep everything, with the axes
+        std::vector<uint32_t>* ids;  // boxCandidates(): note every piece of the region
     };
 
     // Visits every piece whose padded box the segment crosses (intersectFn).
     void traverse(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
-                  const CandidateTest* test, PieceAxes* axes) const {
+                  const CandidateTest* test, std::vector<uint32_t>* ids) const {
         if (pieces_.empty() || !scene_) return;
         Context ctx;
         rtcInitIntersectContext(&ctx.base);
@@ -139,7 +160,7 @@ private:
         ctx.region = region;
         ctx.hits = &hits;
         ctx.test = test;
-        ctx.axes = axes;
+        ctx.ids = ids;
         RTCRayHit rh;
         rh.ray.org_x = static_cast<float>(o.x);
         rh.ray.org_y = static_cast<float>(o.y);
@@ -179,13 +200,12 @@ private:
         const Piece& p = ctx->self->pieces_[args->primID];
         // Embree reached this piece's padded box: a candidate, kept if the estimator's test accepts it.
         if (p.region != ctx->region) return;
-        const BeamPiece c = candidate(p);
-        if (ctx->axes) {
-            ctx->hits->push_back(c);
-            ctx->axes->push(p.origin, p.dir, p.sbLo, p.sbHi);
-        } else if ((*ctx->test)(c, p.origin, p.dir)) {
-            ctx->hits->push_back(c);
+        if (ctx->ids) {
+            ctx->ids->push_back(args->primID);
+            return;
         }
+        const BeamPiece c = candidate(p);
+        if ((*ctx->test)(c, p.origin, p.dir)) ctx->hits->push_back(c);
         // No hit is reported to Embree: traversal goes on and visits every candidate piece.
     }
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}
