@@ -47,13 +47,10 @@ protected:
         buildAccel(items, support, pass.radius, pass.threads);
     }
 
-    // The block's shared candidates if it contains `seg` (null: the segment takes its own query),
-    // listed on first use: `fat` is the estimator's test of a piece against the query (its context
-    // a BundleQuery), `axisOf(piece)` the (origin, dir) the estimator's exact test reads. In the
-    // accelerator's (beam, piece) order, so the estimates come in the order of the own query.
-    template <class AxisOf>
-    const std::vector<BundlePiece>* sharedCandidates(const CameraSegment& seg, EstimatorScratch& scratch,
-                                                     decltype(CandidateTest::accept) fat, AxisOf&& axisOf) const {
+    // The block's shared list if it contains `seg` (null: the segment takes its own query), made on
+    // first use by list(query, region, bundle), which fills bundle.pieces and bundle.axes.
+    template <class List>
+    const std::vector<BundlePiece>* sharedList(const CameraSegment& seg, EstimatorScratch& scratch, List&& list) const {
         SegmentBundle& bundle = scratch.bundle;
         if (!(pass_.bundleSlack > 0.0) || !bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack))
             return nullptr;
@@ -62,40 +59,46 @@ protected:
             // The slack with a margin for rounding (the accelerator pads by slack (1 + 2e-6)).
             const BundleQuery q{h.origin, h.axis, bundle.axisLength(pass_.bundleSlack), pass_.radius,
                                 pass_.bundleSlack * (1.0 + 1e-6)};
-            scratch.pieces.clear();
-            accel_->candidates(q.origin, q.axis, q.length, h.region, scratch.pieces, {fat, &q});
             bundle.pieces.clear();
-            bundle.pieces.reserve(scratch.pieces.size());
             bundle.axes.clear();
+            list(q, h.region, bundle);
+            bundle.markBuilt();
+        }
+        return &bundle.pieces;
+    }
+
+    // The block's shared candidates (sharedList): `fat` is the estimator's test of a piece against
+    // the query (its context a BundleQuery), run by the accelerator on each piece it reaches;
+    // `axisOf(piece)` the (origin, dir) the estimator's exact test reads. In the accelerator's
+    // (beam, piece) order, so the estimates come in the order of the own query.
+    template <class AxisOf>
+    const std::vector<BundlePiece>* sharedCandidates(const CameraSegment& seg, EstimatorScratch& scratch,
+                                                     decltype(CandidateTest::accept) fat, AxisOf&& axisOf) const {
+        return sharedList(seg, scratch, [&](const BundleQuery& q, int region, SegmentBundle& bundle) {
+            scratch.pieces.clear();
+            accel_->candidates(q.origin, q.axis, q.length, region, scratch.pieces, {fat, &q});
+            bundle.pieces.reserve(scratch.pieces.size());
             bundle.axes.reserve(scratch.pieces.size());
             for (const BeamPiece& p : scratch.pieces) {
                 const std::pair<Vec3, Vec3> a = axisOf(p);
                 bundle.pieces.push_back({p, a.first, a.second});
                 bundle.axes.push(a.first, a.second, p.sbLo, p.sbHi);
             }
-            bundle.markBuilt();
-        }
-        return &bundle.pieces;
+        });
     }
 
-    // sharedCandidates() with the fat test of the beam kernels' cylinder (beam2d's acceptFatCylinder:
-    // the block's axis against the piece's cylinder of radius r + slack, caps moved out by slack) run
-    // on all of the query's box candidates at once (overlap_batch.h: rayBeamOverlap's answers bit for
-    // bit) instead of one callback per piece during the traversal; the kept pieces are then sorted
-    // by (beam, piece), one per piece, as candidates() sorts them: the same list, in the same order.
+    // sharedCandidates() with the fat test of the beam kernels' cylinder (the block's axis against
+    // the piece's cylinder of radius r + slack, caps moved out by slack) run on all of the query's
+    // box candidates at once (overlap_batch.h: rayBeamOverlap's answers bit for bit) instead of one
+    // callback per piece during the traversal; the kept pieces are then sorted by (beam, piece), one
+    // per piece, as candidates() sorts them: the same list, in the same order.
     const std::vector<BundlePiece>* sharedCylinderCandidates(const CameraSegment& seg, EstimatorScratch& scratch) const {
-        SegmentBundle& bundle = scratch.bundle;
-        if (!(pass_.bundleSlack > 0.0) || !bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack))
-            return nullptr;
-        if (!bundle.built()) {
-            const BundleHint& h = bundle.hint();
-            const BundleQuery q{h.origin, h.axis, bundle.axisLength(pass_.bundleSlack), pass_.radius,
-                                pass_.bundleSlack * (1.0 + 1e-6)};
+        return sharedList(seg, scratch, [&](const BundleQuery& q, int region, SegmentBundle& bundle) {
             std::vector<BeamPiece>& box = scratch.pieces;
             PieceAxes& fat = scratch.boxAxes;
             box.clear();
             fat.clear();
-            accel_->boxCandidates(q.origin, q.axis, q.length, h.region, box, fat);
+            accel_->boxCandidates(q.origin, q.axis, q.length, region, box, fat);
             for (size_t i = 0; i < box.size(); ++i) {
                 fat.lo[i] = box[i].sbLo - q.slack;
                 fat.hi[i] = box[i].sbHi + q.slack;
@@ -108,8 +111,6 @@ protected:
             for (const uint32_t i : ob.hits)
                 keys.push_back({(static_cast<uint64_t>(box[i].beam) << 32) | box[i].piece, i});
             std::sort(keys.begin(), keys.end());
-            bundle.pieces.clear();
-            bundle.axes.clear();
             for (size_t k = 0; k < keys.size(); ++k) {
                 if (k > 0 && keys[k].first == keys[k - 1].first) continue;
                 const uint32_t i = keys[k].second;
@@ -117,9 +118,7 @@ protected:
                 bundle.pieces.push_back({box[i], origin, dir});
                 bundle.axes.push(origin, dir, box[i].sbLo, box[i].sbHi);
             }
-            bundle.markBuilt();
-        }
-        return &bundle.pieces;
+        });
     }
 
     void buildAccel(const std::vector<Beam>& beams, double support, double radius, int threads) {
