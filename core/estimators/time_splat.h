@@ -48,9 +48,9 @@ struct ExpProfile {
         if (!(total_ >= 0.0)) total_ = uniform ? s1 - s0 : oneMinusExpNeg(kappa * (s1 - s0));
         return total_;
     }
-    // Gives the total computed elsewhere with the same expression, oneMinusExpNeg(|k| (s1 - s0)) (beam2d's
-    // transmittance integral has it: ChannelIntegral), so it is not computed twice; ignored when
-    // uniform or when t < 0 (not computed there).
+    // Gives the total computed elsewhere with the same expression, oneMinusExpNeg(|k| (s1 - s0))
+    // (beam2d's transmittance integral has it: ChannelIntegral), so it is not computed twice;
+    // ignored when uniform or when t < 0 (not computed there).
     void shareTotal(double t) {
         if (!uniform && t >= 0.0) total_ = t;
     }
@@ -80,7 +80,7 @@ struct SegmentProfile {
             z = ExpProfile(k.z, a, b);
         }
     }
-    // The totals -expm1(-|kappa| (s1 - s0)) per channel where already computed (< 0: not).
+    // The totals oneMinusExpNeg(|kappa| (s1 - s0)) per channel where already computed (< 0: not).
     void shareTotals(const Color& t) {
         x.shareTotal(t.x);
         if (!grey) {
@@ -100,7 +100,8 @@ struct OutsideFilm {
 
 namespace splat_detail {
 
-// u(x) = 1 - exp(-kappa x) (oneMinusExpNeg, base/math.h), the unnormalised mass of [0, x] on the decaying side (x for a uniform profile).
+// u(x) = 1 - exp(-kappa x) (oneMinusExpNeg, base/math.h): the unnormalised mass of [0, x] on the
+// decaying side (x for a uniform profile).
 TPB_HOT_INLINE double massTo(const ExpProfile& p, double x) { return p.uniform ? x : oneMinusExpNeg(p.kappa * x); }
 
 // The pieces of one estimate, in the order of x = the distance from the segment's end where the
