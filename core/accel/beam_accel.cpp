@@ -14,10 +14,8 @@
 namespace tpb {
 
 void sortBeamPieces(std::vector<BeamPiece>& hits, size_t from) {
-    // One 64-bit key per piece: (beam, piece) in lexicographic order.
-    const auto key = [](const BeamPiece& p) { return (static_cast<uint64_t>(p.beam) << 32) | p.piece; };
     std::sort(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
-              [&](const BeamPiece& a, const BeamPiece& b) { return key(a) < key(b); });
+              [](const BeamPiece& a, const BeamPiece& b) { return beamPieceKey(a) < beamPieceKey(b); });
     // Embree may visit a primitive twice (spatial splits); keep one hit per (beam, piece).
     hits.erase(std::unique(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
                            [](const BeamPiece& a, const BeamPiece& b) { return a.beam == b.beam && a.piece == b.piece; }),

@@ -103,6 +103,9 @@ public:
     static std::unique_ptr<BeamAccel> create(AccelBackend kind);
 };
 
+// One 64-bit key per piece: (beam, piece) in lexicographic order.
+inline uint64_t beamPieceKey(const BeamPiece& p) { return (static_cast<uint64_t>(p.beam) << 32) | p.piece; }
+
 // Sorts out[from..] by (beam, piece) and keeps one entry per piece.
 void sortBeamPieces(std::vector<BeamPiece>& out, size_t from);
 

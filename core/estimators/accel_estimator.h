@@ -48,9 +48,10 @@ protected:
     }
 
     // The block's shared list if it contains `seg` (null: the segment takes its own query), made on
-    // first use by list(query, region, bundle), which fills bundle.pieces and bundle.axes.
+    // first use by list(query, region, bundle), which fills bundle.pieces (and bundle.axes, if its
+    // estimator reads them).
     template <class List>
-    const std::vector<BundlePiece>* sharedList(const CameraSegment& seg, EstimatorScratch& scratch, List&& list) const {
+    const std::vector<BeamPiece>* sharedList(const CameraSegment& seg, EstimatorScratch& scratch, List&& list) const {
         SegmentBundle& bundle = scratch.bundle;
         if (!(pass_.bundleSlack > 0.0) || !bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack))
             return nullptr;
@@ -68,22 +69,12 @@ protected:
     }
 
     // The block's shared candidates (sharedList): `fat` is the estimator's test of a piece against
-    // the query (its context a BundleQuery), run by the accelerator on each piece it reaches;
-    // `axisOf(piece)` the (origin, dir) the estimator's exact test reads. In the accelerator's
-    // (beam, piece) order, so the estimates come in the order of the own query.
-    template <class AxisOf>
-    const std::vector<BundlePiece>* sharedCandidates(const CameraSegment& seg, EstimatorScratch& scratch,
-                                                     decltype(CandidateTest::accept) fat, AxisOf&& axisOf) const {
+    // the query (its context a BundleQuery), run by the accelerator on each piece it reaches. In the
+    // accelerator's (beam, piece) order, so the estimates come in the order of the own query.
+    const std::vector<BeamPiece>* sharedCandidates(const CameraSegment& seg, EstimatorScratch& scratch,
+                                                   decltype(CandidateTest::accept) fat) const {
         return sharedList(seg, scratch, [&](const BundleQuery& q, int region, SegmentBundle& bundle) {
-            scratch.pieces.clear();
-            accel_->candidates(q.origin, q.axis, q.length, region, scratch.pieces, {fat, &q});
-            bundle.pieces.reserve(scratch.pieces.size());
-            bundle.axes.reserve(scratch.pieces.size());
-            for (const BeamPiece& p : scratch.pieces) {
-                const std::pair<Vec3, Vec3> a = axisOf(p);
-                bundle.pieces.push_back({p, a.first, a.second});
-                bundle.axes.push(a.first, a.second, p.sbLo, p.sbHi);
-            }
+            accel_->candidates(q.origin, q.axis, q.length, region, bundle.pieces, {fat, &q});
         });
     }
 
@@ -91,8 +82,9 @@ protected:
     // the piece's cylinder of radius r + slack, caps moved out by slack) run on all of the query's
     // box candidates at once (overlap_batch.h: rayBeamOverlap's answers bit for bit) instead of one
     // callback per piece during the traversal; the kept pieces are then sorted by (beam, piece), one
-    // per piece, as candidates() sorts them: the same list, in the same order.
-    const std::vector<BundlePiece>* sharedCylinderCandidates(const CameraSegment& seg, EstimatorScratch& scratch) const {
+    // per piece, as candidates() sorts them: the same list, in the same order, with their axes in
+    // bundle.axes for the exact test, batched too.
+    const std::vector<BeamPiece>* sharedCylinderCandidates(const CameraSegment& seg, EstimatorScratch& scratch) const {
         return sharedList(seg, scratch, [&](const BundleQuery& q, int region, SegmentBundle& bundle) {
             std::vector<BeamPiece>& box = scratch.pieces;
             PieceAxes& fat = scratch.boxAxes;
@@ -108,15 +100,14 @@ protected:
             // Sort the kept ones by (beam, piece) and keep one per piece (sortBeamPieces' order).
             std::vector<std::pair<uint64_t, uint32_t>>& keys = scratch.keys;
             keys.clear();
-            for (const uint32_t i : ob.hits)
-                keys.push_back({(static_cast<uint64_t>(box[i].beam) << 32) | box[i].piece, i});
+            for (const uint32_t i : ob.hits) keys.push_back({beamPieceKey(box[i]), i});
             std::sort(keys.begin(), keys.end());
             for (size_t k = 0; k < keys.size(); ++k) {
                 if (k > 0 && keys[k].first == keys[k - 1].first) continue;
                 const uint32_t i = keys[k].second;
-                const Vec3 origin(fat.ox[i], fat.oy[i], fat.oz[i]), dir(fat.dx[i], fat.dy[i], fat.dz[i]);
-                bundle.pieces.push_back({box[i], origin, dir});
-                bundle.axes.push(origin, dir, box[i].sbLo, box[i].sbHi);
+                bundle.pieces.push_back(box[i]);
+                bundle.axes.push(Vec3(fat.ox[i], fat.oy[i], fat.oz[i]), Vec3(fat.dx[i], fat.dy[i], fat.dz[i]),
+                                 box[i].sbLo, box[i].sbHi);
             }
         });
     }

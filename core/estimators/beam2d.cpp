@@ -66,11 +66,8 @@ ChannelIntegral transmittanceChannel(double sigma_t, double tau_b, const RayBeam
     // Optical depth E(s) = sigma_t s + tau_b s_b(s); start from the end where it is smallest.
     const double sRef = kappa >= 0.0 ? o.sMinus : o.sPlus;
     const double depth = sigma_t * sRef + tau_b * (o.sb0 + o.cosRB * sRef);
-    // expRel(x) written out, so that its expm1 is kept for the time splat (the same value).
-    const double x = std::abs(kappa) * len;
-    if (std::abs(x) < 1e-5) return {std::exp(-depth) * len * (1.0 - 0.5 * x + x * x / 6.0), -1.0};
-    const double total = oneMinusExpNeg(x);
-    return {std::exp(-depth) * len * (total / x), total};
+    const ExpRel g = expRelAndMass(std::abs(kappa) * len);  // its 1 - e^-x goes to the time splat
+    return {std::exp(-depth) * len * g.value, g.oneMinusExp};
 }
 
 // ---- the estimator ------------------------------------------------------------------------------
@@ -145,7 +142,7 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const Region& region = scene_->regions[seg.region];
     const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
                           beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
-    if (const std::vector<BundlePiece>* shared = sharedCylinderCandidates(seg, scratch)) {
+    if (const std::vector<BeamPiece>* shared = sharedCylinderCandidates(seg, scratch)) {
         // The block's shared candidates (segment_bundle.h; their fat test batched too), each with the
         // exact test of the query below, in the same (beam, piece) order: the same estimates in the
         // same order. The exact test over all of them at once (overlap_batch.h: rayBeamOverlap's
@@ -160,7 +157,7 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
             o.sPlus = ob.sPlus[i];
             o.sb0 = ob.sb0[i];
             o.cosRB = ob.cosRB[i];
-            if (gatherBeam2DOverlap(g, map_->beams[(*shared)[i].piece.beam], o, near, sink)) ++estimates;
+            if (gatherBeam2DOverlap(g, map_->beams[(*shared)[i].beam], o, near, sink)) ++estimates;
         }
         return estimates;
     }

@@ -36,11 +36,18 @@
 
 namespace tpb {
 
-// g(x) = (1 - exp(-x)) / x, with g(0) = 1. Stable for all x >= -700.
-inline double expRel(double x) {
-    if (std::abs(x) < 1e-5) return 1.0 - 0.5 * x + x * x / 6.0;
-    return oneMinusExpNeg(x) / x;
+// g(x) = (1 - exp(-x)) / x, with g(0) = 1. Stable for all x >= -700. Also 1 - exp(-x) itself when it
+// was computed on the way (|x| >= 1e-5; else -1): the time profile of the same estimate needs it.
+struct ExpRel {
+    double value;
+    double oneMinusExp;
+};
+inline ExpRel expRelAndMass(double x) {
+    if (std::abs(x) < 1e-5) return {1.0 - 0.5 * x + x * x / 6.0, -1.0};
+    const double m = oneMinusExpNeg(x);
+    return {m / x, m};
 }
+inline double expRel(double x) { return expRelAndMass(x).value; }
 
 // Interval of the camera segment inside the beam's kernel cylinder (radius r, axis = the beam's
 // segment, flat end caps), intersected with the segment [0, sMax]. Returns false when empty.

@@ -13,8 +13,7 @@ namespace tpb {
 
 namespace {
 
-// The scalar test for lanes [i0, n), written out as it is in beam2d.cpp's rayBeamOverlap (the
-// vector loop below computes the same expressions).
+// The camera segment as the kernel reads it: origin, unit direction, length, radius squared.
 struct Ray1 {
     double rx, ry, rz, wx, wy, wz, sMax, r2;
 };

@@ -82,10 +82,9 @@ int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path
         sink.spread(L, kappa, chord->sMinus, chord->sPlus, path.oplCam + p.opl, eta, p.opl, 0.0);
         ++estimates;
     };
-    const auto axisOf = [&](const BeamPiece& c) { return std::pair<Vec3, Vec3>(map_->points[c.beam].position, Vec3(0.0)); };
-    if (const std::vector<BundlePiece>* shared = sharedCandidates(seg, scratch, &acceptFatBall, axisOf)) {
+    if (const std::vector<BeamPiece>* shared = sharedCandidates(seg, scratch, &acceptFatBall)) {
         // The block's shared candidates (segment_bundle.h), in the order of the query below.
-        for (const BundlePiece& c : *shared) estimate(c.piece.beam);
+        for (const BeamPiece& c : *shared) estimate(c.beam);
         return estimates;
     }
     scratch.pieces.clear();

@@ -39,12 +39,6 @@ struct BundleHint {
     int region = 0;             // the camera's region
 };
 
-// A candidate of the shared list with its beam's axis (the exact test needs no load of the beam).
-struct BundlePiece {
-    BeamPiece piece;
-    Vec3 origin, dir;
-};
-
 class SegmentBundle {
 public:
     // Starts a block: `slack` (m) is the estimator's (the accelerator's extra support radius);
@@ -77,8 +71,8 @@ public:
     }
     const BundleHint& hint() const { return hint_; }
 
-    std::vector<BundlePiece> pieces;  // the shared candidates, sorted by (beam, piece)
-    PieceAxes axes;                   // the same, as arrays for the batched test (overlap_batch.h)
+    std::vector<BeamPiece> pieces;  // the shared candidates, sorted by (beam, piece)
+    PieceAxes axes;  // their axes, as arrays, for an estimator that tests them in a batch (overlap_batch.h)
 
 private:
     double distance2ToAxis(const Vec3& p, double len) const {
