@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cfloat>
+#include <climits>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -47,18 +48,24 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
     if (isBlack(L)) return;
     // What lands in the bins is summed as it lands (exactly zero when nothing does, which the
     // all-black-film check relies on), what falls outside comes back split by side.
+    // The bins each splat writes are contiguous: they are marked touched once, as a range.
     Color binned[2] = {Color(0.0), Color(0.0)};
     int64_t written = 0;
-    const OutsideFilm outReal = splat(aReal, bReal, [&](int k, const Color& c) TPB_HOT_LAMBDA {
-        acc.add(TimeAxis::Real, k, c);
-        binned[0] += c;
-        ++written;
-    });
-    const OutsideFilm outUnw = splat(aUnw, bUnw, [&](int k, const Color& c) TPB_HOT_LAMBDA {
-        acc.add(TimeAxis::Unwarped, k, c);
-        binned[1] += c;
-        ++written;
-    });
+    const auto onAxis = [&](TimeAxis axis, double a, double b) TPB_HOT_LAMBDA {
+        int kMin = INT_MAX, kMax = -1;
+        Color& sum = binned[static_cast<int>(axis)];
+        const OutsideFilm out = splat(a, b, [&](int k, const Color& c) TPB_HOT_LAMBDA {
+            acc.addUnmarked(axis, k, c);
+            kMin = std::min(kMin, k);
+            kMax = std::max(kMax, k);
+            sum += c;
+            ++written;
+        });
+        if (kMax >= 0) acc.mark(axis, kMin, kMax);
+        return out;
+    };
+    const OutsideFilm outReal = onAxis(TimeAxis::Real, aReal, bReal);
+    const OutsideFilm outUnw = onAxis(TimeAxis::Unwarped, aUnw, bUnw);
     tally.binsSplatted += written;
     acc.addSteady(L);
     const OutsideFilm* outs[2] = {&outReal, &outUnw};
@@ -110,7 +117,9 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
 
 void PixelAccumulator::reset(int bins) {
     bins_ = bins;
+    words_ = (bins + 63) / 64;
     data_.assign(static_cast<size_t>(bins) * 2 * 3, 0.0);
+    marks_.assign(static_cast<size_t>(words_) * 2, 0);
     lo_[0] = lo_[1] = bins;
     hi_[0] = hi_[1] = -1;
     steady_ = Color(0.0);
@@ -120,8 +129,12 @@ void PixelAccumulator::reset(int bins) {
 void PixelAccumulator::clearTouched() {
     for (int a = 0; a < 2; ++a) {
         if (hi_[a] >= lo_[a]) {
-            double* p = &data_[(static_cast<size_t>(a) * bins_ + lo_[a]) * 3];
-            std::fill(p, p + static_cast<size_t>(hi_[a] - lo_[a] + 1) * 3, 0.0);
+            double* row = &data_[static_cast<size_t>(a) * bins_ * 3];
+            forEachRun(static_cast<TimeAxis>(a), [row](int k0, int k1) {
+                std::fill(row + static_cast<size_t>(k0) * 3, row + static_cast<size_t>(k1 + 1) * 3, 0.0);
+            });
+            uint64_t* w = &marks_[static_cast<size_t>(a) * words_];
+            std::fill(w + (lo_[a] >> 6), w + (hi_[a] >> 6) + 1, uint64_t(0));
         }
         lo_[a] = bins_;
         hi_[a] = -1;
@@ -246,12 +259,11 @@ void TransientFilm::merge(const TransientFilm& other) {
 
 namespace {
 
-// A pixel's pass as the tile's add reads it: touched ranges, outside and steady sums, and its
-// largest |value|. The NaN guard is upstream: splatSpread rejects (and counts) non-finite
-// estimates, so none reaches the accumulator; this scan would not catch one reliably (a NaN is
-// kept only if no larger-compared value follows it). With `values`, the touched bins are appended
-// there and the record says where.
-TileStaging::Pixel pixelRecord(const PixelAccumulator& acc, uint32_t pixel, std::vector<double>* values) {
+// A pixel's pass as the tile's add reads it: its touched runs, appended to the staging's runs and
+// values, its outside and steady sums, and its largest |value|. The NaN guard is upstream:
+// splatSpread rejects (and counts) non-finite estimates, so none reaches the accumulator; this
+// scan would not catch one reliably (a NaN is kept only if no larger-compared value follows it).
+TileStaging::Pixel pixelRecord(const PixelAccumulator& acc, uint32_t pixel, TileStaging& staging) {
     TileStaging::Pixel px;
     px.pixel = pixel;
     double largest = 0.0;
@@ -260,30 +272,30 @@ TileStaging::Pixel pixelRecord(const PixelAccumulator& acc, uint32_t pixel, std:
         if (!(x <= largest)) largest = x;
     };
     const auto grow3 = [&grow](const Color& c) { grow(c.x); grow(c.y); grow(c.z); };
+    // The largest |value| of the touched bins: four independent maxima (no branch, no chain
+    // through one register), the same value as a scan one by one.
+    double m[4] = {0.0, 0.0, 0.0, 0.0};
     for (int a = 0; a < 2; ++a) {
         const TimeAxis axis = static_cast<TimeAxis>(a);
         px.before[a] = acc.before(axis);
         px.after[a] = acc.after(axis);
         grow3(px.before[a]);
         grow3(px.after[a]);
-        px.lo[a] = acc.lo(axis);
-        px.hi[a] = acc.hi(axis);
-        if (px.hi[a] < px.lo[a]) continue;
-        const double* v = acc.bin(axis, px.lo[a]);
-        const size_t n = static_cast<size_t>(px.hi[a] - px.lo[a] + 1) * 3;
-        if (values) {
-            px.offset[a] = values->size();
-            values->insert(values->end(), v, v + n);
-        }
-        // The largest |value| of the touched bins: four independent maxima (no branch, no chain
-        // through one register), the same value as a scan one by one.
-        double m[4] = {0.0, 0.0, 0.0, 0.0};
-        size_t j = 0;
-        for (; j + 4 <= n; j += 4)
-            for (int l = 0; l < 4; ++l) m[l] = std::max(m[l], std::abs(v[j + l]));
-        for (; j < n; ++j) m[0] = std::max(m[0], std::abs(v[j]));
-        grow(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])));
+        px.firstRun[a] = static_cast<uint32_t>(staging.runs.size());
+        px.offset[a] = staging.values.size();
+        acc.forEachRun(axis, [&](int k0, int k1) {
+            staging.runs.push_back({k0, k1 - k0 + 1});
+            const double* v = acc.bin(axis, k0);
+            const size_t n = static_cast<size_t>(k1 - k0 + 1) * 3;
+            staging.values.insert(staging.values.end(), v, v + n);
+            size_t j = 0;
+            for (; j + 4 <= n; j += 4)
+                for (int l = 0; l < 4; ++l) m[l] = std::max(m[l], std::abs(v[j + l]));
+            for (; j < n; ++j) m[0] = std::max(m[0], std::abs(v[j]));
+        });
+        px.runCount[a] = static_cast<uint32_t>(staging.runs.size()) - px.firstRun[a];
     }
+    grow(std::max(std::max(m[0], m[1]), std::max(m[2], m[3])));
     px.steady = acc.steady();
     grow3(px.steady);
     px.largest = largest;
@@ -316,10 +328,7 @@ void TransientFilm::TileWriter::commitStaged() {
     Tile& tile = film_.tiles_[tile_];
     const auto addStaged = [&](TileSums& sums) {
         double passMax = 0.0;
-        for (const TileStaging::Pixel& px : staging_->pixels) {
-            const double* bins[2] = {staging_->values.data() + px.offset[0], staging_->values.data() + px.offset[1]};
-            passMax = std::max(passMax, addTo(sums, px, bins));
-        }
+        for (const TileStaging::Pixel& px : staging_->pixels) passMax = std::max(passMax, addTo(sums, *staging_, px));
         ++sums.passes;
         sums.weight += passWeight_;
         sums.absBound += passMax;
@@ -344,25 +353,32 @@ void TransientFilm::TileWriter::addPixel(int x, int y, PixelAccumulator& acc) {
     const TileRect r = film_.tileRect(tile_);
     const uint32_t pixel = static_cast<uint32_t>((y - r.y0) * r.w + (x - r.x0));
     if (staging_) {
-        staging_->pixels.push_back(pixelRecord(acc, pixel, &staging_->values));
+        staging_->pixels.push_back(pixelRecord(acc, pixel, *staging_));
         acc.clearTouched();
         return;
     }
-    const TileStaging::Pixel px = pixelRecord(acc, pixel, nullptr);
-    // Bin lo of each axis in the accumulator (lo = bins, one past the axis, when none was touched).
-    const double* bins[2] = {acc.bin(TimeAxis::Real, 0) + static_cast<size_t>(px.lo[0]) * 3,
-                             acc.bin(TimeAxis::Unwarped, 0) + static_cast<size_t>(px.lo[1]) * 3};
-    passMax_ = std::max(passMax_, addTo(next_->sums, px, bins));
+    own_.clear();
+    const TileStaging::Pixel px = pixelRecord(acc, pixel, own_);
+    passMax_ = std::max(passMax_, addTo(next_->sums, own_, px));
 }
 
-double TransientFilm::TileWriter::addTo(TileSums& t, const TileStaging::Pixel& px, const double* const bins[2]) {
+double TransientFilm::TileWriter::addTo(TileSums& t, const TileStaging& staged, const TileStaging::Pixel& px) {
     // The averages are read as float: a pass whose contribution would push a sum past FLT_MAX (a
     // light power near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this
     // pixel and counted, so the film never holds (or shows) Inf. Checked first, then added, so a
     // pixel gets all of the pass or none of it. The check reads the pixel's own values only
     // while the tile's bound (TileSums::absBound) says no sum can get near FLT_MAX, and every sum
-    // it adds to only when it does. `bins[a]` points at the pixel's bin lo[a] on axis a.
+    // it adds to only when it does.
     const size_t pixel = px.pixel;
+    // Calls f(k0, count, values) for each staged run of axis a (values: its rgb, count x 3).
+    const auto forRuns = [&](int a, const auto& f) {
+        const double* v = staged.values.data() + px.offset[a];
+        for (uint32_t r = 0; r < px.runCount[a]; ++r) {
+            const TileStaging::Run& run = staged.runs[px.firstRun[a] + r];
+            f(run.bin, run.count, v);
+            v += static_cast<size_t>(run.count) * 3;
+        }
+    };
     double largest = px.largest;
     const size_t i = pixel * 3;
     if (!(t.absBound + largest <= 0.25 * static_cast<double>(FLT_MAX))) {  // also catches NaN
@@ -371,13 +387,11 @@ double TransientFilm::TileWriter::addTo(TileSums& t, const TileStaging::Pixel& p
             return r >= -static_cast<double>(FLT_MAX) && r <= static_cast<double>(FLT_MAX);  // false for NaN too
         };
         bool ok = true;
-        for (int a = 0; a < 2 && ok; ++a) {
-            for (int k = px.lo[a]; k <= px.hi[a] && ok; ++k) {
-                const double* v = bins[a] + static_cast<size_t>(k - px.lo[a]) * 3;
-                const FilmSum* dst = &t.bins[a][t.binIndex(pixel, k)];
-                ok = fits(dst[0], v[0]) && fits(dst[1], v[1]) && fits(dst[2], v[2]);
-            }
-        }
+        for (int a = 0; a < 2 && ok; ++a)
+            forRuns(a, [&](int k0, int count, const double* v) {
+                const FilmSum* dst = &t.bins[a][t.binIndex(pixel, k0)];
+                for (int j = 0; j < count * 3 && ok; ++j) ok = fits(dst[j], v[j]);
+            });
         const auto fits3 = [&](const std::vector<double>& sum, const Color& add) {
             return fits(sum[i], add.x) && fits(sum[i + 1], add.y) && fits(sum[i + 2], add.z);
         };
@@ -389,14 +403,14 @@ double TransientFilm::TileWriter::addTo(TileSums& t, const TileStaging::Pixel& p
         }
         if (!std::isfinite(largest)) largest = 0.0;  // unreachable with finite sums; keeps the bound finite
     }
-    for (int a = 0; a < 2; ++a) {
-        if (px.hi[a] < px.lo[a]) continue;
-        // The pixel's touched bins, contiguous in both (the staging and the tile: [bin][rgb]).
-        const double* v = bins[a];
-        FilmSum* dst = &t.bins[a][t.binIndex(pixel, px.lo[a])];
-        const size_t n = static_cast<size_t>(px.hi[a] - px.lo[a] + 1) * 3;
-        for (size_t j = 0; j < n; ++j) dst[j] += static_cast<FilmSum>(v[j]);
-    }
+    // Each touched run is contiguous in both (the staging and the tile: [bin][rgb]); the bins
+    // between runs are zero in this pass and are not read.
+    for (int a = 0; a < 2; ++a)
+        forRuns(a, [&](int k0, int count, const double* v) {
+            FilmSum* dst = &t.bins[a][t.binIndex(pixel, k0)];
+            const size_t n = static_cast<size_t>(count) * 3;
+            for (size_t j = 0; j < n; ++j) dst[j] += static_cast<FilmSum>(v[j]);
+        });
     const auto add3 = [i](std::vector<double>& dst, const Color& c) {
         dst[i] += c.x;
         dst[i + 1] += c.y;

@@ -9,6 +9,9 @@
 #include <cfloat>
 #include <cmath>
 #include <memory>
+#include <random>
+#include <utility>
+#include <vector>
 #include <stdexcept>
 
 using namespace tpb;
@@ -146,6 +149,118 @@ TEST(Film, StagedWritersGiveThePlainWritersSumsBitForBit) {
             EXPECT_TRUE(x.steady == y.steady);
         }
     }
+}
+
+// The accumulator's touched runs (PixelAccumulator::forEachRun): ranges marked at random, across
+// and on the 64-bin word boundaries and the axis' ends, give exactly the maximal runs of bins
+// that some range covered (a plain bool per bin says which), in increasing order; clearTouched
+// zeroes every value and forgets the marks, round after round.
+TEST(PixelAccumulator, RunsAreTheMaximalRunsOfTouchedBins) {
+    const int bins = 300;  // five words, the last one partly used
+    PixelAccumulator acc(bins);
+    std::mt19937_64 rng(17);
+    for (int round = 0; round < 200; ++round) {
+        std::vector<bool> touched[2] = {std::vector<bool>(bins, false), std::vector<bool>(bins, false)};
+        const int ranges = static_cast<int>(rng() % 6);
+        for (int i = 0; i < ranges; ++i) {
+            const int a = static_cast<int>(rng() % 2);
+            static const int edges[] = {0, 1, 62, 63, 64, 65, 127, 128, 191, 192, 255, 256, 298, 299};
+            const int k0 = rng() % 3 == 0 ? edges[rng() % 14] : static_cast<int>(rng() % bins);
+            const int k1 = std::min(bins - 1, k0 + static_cast<int>(rng() % (rng() % 2 ? 4 : 140)));
+            for (int k = k0; k <= k1; ++k) {
+                acc.addUnmarked(static_cast<TimeAxis>(a), k, Color(1.0 + k, 2.0, 3.0));
+                touched[a][k] = true;
+            }
+            acc.mark(static_cast<TimeAxis>(a), k0, k1);
+        }
+        if (rng() % 2) {  // single bins through add(), which marks them itself
+            const int a = static_cast<int>(rng() % 2), k = static_cast<int>(rng() % bins);
+            acc.add(static_cast<TimeAxis>(a), k, Color(0.5));
+            touched[a][k] = true;
+        }
+        for (int a = 0; a < 2; ++a) {
+            std::vector<std::pair<int, int>> expected, got;
+            for (int k = 0; k < bins; ++k) {
+                if (!touched[a][k]) continue;
+                if (k > 0 && touched[a][k - 1]) expected.back().second = k;
+                else expected.push_back({k, k});
+            }
+            acc.forEachRun(static_cast<TimeAxis>(a), [&](int k0, int k1) { got.push_back({k0, k1}); });
+            ASSERT_EQ(got, expected) << "round " << round << " axis " << a;
+        }
+        acc.clearTouched();
+        for (int a = 0; a < 2; ++a) {
+            for (int k = 0; k < bins; ++k) {
+                const double* v = acc.bin(static_cast<TimeAxis>(a), k);
+                ASSERT_TRUE(v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0) << "round " << round << " bin " << k;
+            }
+            int runs = 0;
+            acc.forEachRun(static_cast<TimeAxis>(a), [&](int, int) { ++runs; });
+            ASSERT_EQ(runs, 0);
+        }
+    }
+}
+
+// The tile's add reads each pixel's touched runs only (TileStaging::Run). With estimates that
+// leave wide gaps between them on a 300-bin film, every sum is the sum, pass after pass, of the
+// accumulator's values read densely over all the bins before each add: the gaps add nothing,
+// and no touched value is missed.
+TEST(Film, TouchedRunsAddWhatTheWholeAccumulatorHolds) {
+    const TimeBins time{0.0, 0.01, 300};
+    TransientFilm film(20, 18, time);
+    std::vector<double> dense[2];
+    for (int a = 0; a < 2; ++a) dense[a].assign(static_cast<size_t>(20 * 18) * 300 * 3, 0.0);
+    PixelAccumulator acc(time.bins);
+    FilmTally tally;
+    TileStaging staging;
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int pass = 0; pass < 3; ++pass)
+        for (int tile = 0; tile < film.tileCount(); ++tile) {
+            TransientFilm::TileWriter w(film, tile, &staging);
+            const TileRect r = film.tileRect(tile);
+            for (int y = r.y0; y < r.y0 + r.h; ++y)
+                for (int x = r.x0; x < r.x0 + r.w; ++x) {
+                    for (int e = 0; e < 4; ++e) {  // narrow estimates anywhere on the axis
+                        const double t = u(rng) * 3.1 - 0.05, width = u(rng) * (e == 0 ? 0.9 : 0.05);
+                        splatSpread(time, acc, tally, Color(u(rng), u(rng), 0.2), Color(u(rng)), 0.0, 1.0, t, width,
+                                    t * 0.8, width);
+                    }
+                    for (int a = 0; a < 2; ++a)
+                        for (int k = 0; k < time.bins; ++k)
+                            for (int c = 0; c < 3; ++c)
+                                dense[a][((static_cast<size_t>(y) * 20 + x) * 300 + k) * 3 + c] +=
+                                    acc.bin(static_cast<TimeAxis>(a), k)[c];
+                    w.addPixel(x, y, acc);
+                    acc.clearTouched();
+                }
+        }
+    const auto snap = film.snapshot();
+    int gappy = 0;
+    for (int tile = 0; tile < snap->tileCount(); ++tile) {
+        const TileRect r = snap->tileRect(tile);
+        const TileSums& s = snap->block(tile).sums;
+        for (int y = r.y0; y < r.y0 + r.h; ++y)
+            for (int x = r.x0; x < r.x0 + r.w; ++x) {
+                const size_t p = static_cast<size_t>((y - r.y0) * r.w + (x - r.x0));
+                for (int a = 0; a < 2; ++a) {
+                    bool seen = false, gap = false;
+                    for (int k = 0; k < time.bins; ++k)
+                        for (int c = 0; c < 3; ++c) {
+                            const double want = dense[a][((static_cast<size_t>(y) * 20 + x) * 300 + k) * 3 + c];
+                            ASSERT_EQ(s.bins[a][s.binIndex(p, k) + c], want) << x << "," << y << " axis " << a << " bin " << k;
+                            if (c == 0 && want > 0.0) {
+                                gappy += seen && gap;
+                                seen = true;
+                                gap = false;
+                            } else if (c == 0 && seen) {
+                                gap = true;
+                            }
+                        }
+                }
+            }
+    }
+    EXPECT_GT(gappy, 100);  // the passes did leave gaps inside pixels' touched ranges
 }
 
 // Merging (checkpoints, films from other machines): the films of passes 1-3 and 4-6 merged are
