@@ -195,13 +195,15 @@ private:
     static void intersectFn(const RTCIntersectFunctionNArguments* args) {
         if (!args->valid[0]) return;
         auto* ctx = reinterpret_cast<Context*>(args->context);
-        const Piece& p = ctx->self->pieces_[args->primID];
         // Embree reached this piece's padded box: a candidate, kept if the estimator's test accepts it.
-        if (p.region != ctx->region) return;
+        // The region is read from its own small array: a box query touches the pieces themselves
+        // only after the traversal, in a loop whose loads overlap (boxCandidates).
+        if (ctx->self->regions_[args->primID] != ctx->region) return;
         if (ctx->ids) {
             ctx->ids->push_back(args->primID);
             return;
         }
+        const Piece& p = ctx->self->pieces_[args->primID];
         const BeamPiece c = candidate(p);
         if ((*ctx->test)(c, p.origin, p.dir)) ctx->hits->push_back(c);
         // No hit is reported to Embree: traversal goes on and visits every candidate piece.
@@ -210,6 +212,8 @@ private:
 
     // Embree's BVH over pieces_ (replaces the previous one).
     void buildBvh() {
+        regions_.resize(pieces_.size());
+        for (size_t i = 0; i < pieces_.size(); ++i) regions_[i] = pieces_[i].region;
         if (scene_) rtcReleaseScene(scene_);
         scene_ = nullptr;
         try {
@@ -238,6 +242,7 @@ private:
 
     double radius_ = 0.0;
     std::vector<Piece> pieces_;
+    std::vector<int> regions_;  // pieces_[i].region, contiguous (the traversal's callback reads it)
     RTCScene scene_ = nullptr;
 };
 

@@ -285,6 +285,36 @@ TEST(TimeSplat, OneBinIsExactAndChannelsMatchGreySplats) {
     }
 }
 
+// binOf(t, 1 / binWidth), which multiplies, gives binOf(t)'s bin (which divides) for every t: on
+// and within a few ulp of the boundaries of films with awkward widths (0.1, 1/3, 0.3, 1e-3 ...),
+// far before and after them, at +-inf and NaN, and at random times.
+TEST(TimeSplat, BinByReciprocalIsTheBinByDivision) {
+    const TimeBins films[] = {{0.0, 0.1, 10}, {0.5, 0.3, 9}, {1.0, 1.0 / 3.0, 1024}, {-2.7, 1e-3, 4096},
+                              {123.456, 0.0123, 256}, {0.0, 7.0, 1}, {1e-9, 3e-5, 100000}};
+    Rng rng(99, Stream::Test, 0, 0);
+    int64_t checked = 0, nearBoundary = 0;
+    for (const TimeBins& tb : films) {
+        const double inv = 1.0 / tb.binWidth;
+        const auto same = [&](double t) {
+            ASSERT_EQ(tb.binOf(t, inv), tb.binOf(t)) << "t = " << t << " start " << tb.startOpl << " width " << tb.binWidth;
+            ++checked;
+        };
+        for (int j = -3; j <= tb.bins + 3; j += (tb.bins > 5000 ? 97 : 1)) {
+            double t = tb.startOpl + j * tb.binWidth;
+            for (int u = 0; u < 4; ++u) t = std::nextafter(t, -kInf);
+            for (int u = 0; u < 9; ++u, t = std::nextafter(t, kInf)) {
+                same(t);
+                ++nearBoundary;
+            }
+        }
+        for (const double t : {kInf, -kInf, std::nan(""), 1e300, -1e300, 1e18, -1e18, 0.0, -0.0})
+            same(t);
+        for (int i = 0; i < 20000; ++i) same(tb.startOpl + (rng.uniform() * 1.4 - 0.2) * tb.bins * tb.binWidth);
+    }
+    EXPECT_GT(nearBoundary, 10000);
+    EXPECT_GT(checked, 150000);
+}
+
 TEST(TimeSplat, CollapsedIntervalGoesToOneBin) {
     TimeBins tb{0.0, 0.1, 10};
     std::vector<double> bins(10, 0.0);
