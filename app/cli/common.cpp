@@ -201,7 +201,7 @@ void RenderOverrides::add(CLI::App* cmd) {
                        "(e.g. box:0.05)";
             },
             "none|box|box:WIDTH"));
-    cmd->add_option("--accel", accel, "Beam query backend: embree | brute")->check(CLI::IsMember({"embree", "brute"}));
+    cmd->add_option("--accel", accel, "Beam query backend: bvh | embree | brute")->check(CLI::IsMember({"bvh", "embree", "brute"}));
 }
 
 SettingsOverrides RenderOverrides::settings() const {
@@ -223,7 +223,7 @@ SettingsOverrides RenderOverrides::settings() const {
     if (profile == "uniform") o.profile = TimeProfile::Uniform;
     if (beamLength == "short") o.beamLength = BeamLength::Short;
     if (beamLength == "long") o.beamLength = BeamLength::Long;
-    if (accel) o.accel = *accel == "brute" ? AccelBackend::BruteForce : AccelBackend::Embree;
+    if (accel) o.accel = *parseAccelBackend(*accel);
     if (ptFreeFlight) o.equiangular = false;
     o.volumeEstimator = estimator;
     o.surfaceEstimator = surfaceEstimator;

@@ -61,7 +61,7 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
                      {"surface_radius0_m", s.surfaceRadius0}, {"alpha", s.alpha}, {"seed", s.seed},
                      {"threads", s.threads}, {"time_profile", s.profile == TimeProfile::Exact ? "exact" : "uniform"},
                      {"beam_length", s.beamLength == BeamLength::Short ? "short" : "long"},
-                     {"accel", s.accel == AccelBackend::Embree ? "embree" : "brute-force"},
+                     {"accel", accelBackendName(s.accel)},
                      {"volume_estimator", s.volumeEstimator}, {"surface_estimator", s.surfaceEstimator},
                      {"time_kernel", timeKernelName(s.timeKernel)}, {"max_depth", s.maxDepth},
                      {"warmup_passes", s.warmupPasses}, {"pass_limit", s.passes}, {"time_budget_s", s.timeBudgetSec}};

@@ -2,6 +2,8 @@
 // beam pieces (the shared device of scene/embree_device.h; Embree errors are thrown as EmbreeError).
 #include "accel/beam_accel.h"
 
+#include "accel/piece_bvh.h"
+
 #include "base/error.h"
 #include "scene/embree_device.h"
 
@@ -87,36 +89,39 @@ private:
     std::vector<Piece> pieces_;
 };
 
-class EmbreeBeams final : public BeamAccel {
+// What the two hierarchies share: the pieces (their regions also in an array of their own, which
+// a traversal reads for every box it reaches, the pieces only for those of the query's region),
+// each piece's padded box, and the copy of a box query's hits into the caller's arrays.
+class IndexedPieces : public BeamAccel {
 public:
-    ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
+    size_t pieceCount() const override { return pieces_.size(); }
 
-    using BeamAccel::build;
-    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
+protected:
+    void setBeams(const std::vector<Beam>& beams, const BeamSupport& support) {
         radius_ = support.radius;
         makePieces(beams, support.pieceRadius, pieces_);
-        buildBvh();
+        setRegions();
     }
-    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
+    void setPoints(const std::vector<VolumePhoton>& points, double radius) {
         radius_ = radius;
         makePointPieces(points, pieces_);
-        buildBvh();
+        setRegions();
     }
-
-    using BeamAccel::candidates;
-    void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
-                    const CandidateTest& test) const override {
-        const size_t from = hits.size();
-        traverse(o, d, sMax, region, hits, &test, nullptr);
-        sortBeamPieces(hits, from);
+    // Piece i's box padded by the support radius (plus 1e-5 of it and 1e-6 of the distance from
+    // the origin, for the float boxes), rounded outward to float.
+    void paddedBox(size_t i, float lo[3], float hi[3]) const {
+        const Piece& p = pieces_[i];
+        const Vec3 a = p.origin + p.sbLo * p.dir, e = p.origin + p.sbHi * p.dir;
+        const double pad = radius_ * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
+        const Vec3 l = glm::min(a, e) - pad, h = glm::max(a, e) + pad;
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::nextafter(static_cast<float>(l[k]), -INFINITY);
+            hi[k] = std::nextafter(static_cast<float>(h[k]), INFINITY);
+        }
     }
-    void boxCandidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out,
-                       PieceAxes& axes) const override {
-        // The callback only notes the piece's index; the pieces and their axes are copied after the
-        // traversal, in one loop over arrays sized once (not nine push_backs per candidate inside it).
-        thread_local std::vector<uint32_t> ids;
-        ids.clear();
-        traverse(o, d, sMax, region, out, nullptr, &ids);
+    // The pieces and axes of a box query's hits `ids`, appended in one loop over arrays sized once
+    // (not nine push_backs per candidate inside the traversal).
+    void copyHits(const std::vector<uint32_t>& ids, std::vector<BeamPiece>& out, PieceAxes& axes) const {
         const size_t base = out.size(), n = ids.size();
         out.resize(base + n);
         for (std::vector<double>* v : {&axes.ox, &axes.oy, &axes.oz, &axes.dx, &axes.dy, &axes.dz, &axes.lo, &axes.hi})
@@ -135,8 +140,106 @@ public:
             axes.hi[i] = p.sbHi;
         }
     }
+    // The segment's far end as the traversals take it: a little beyond sMax, so that rounding
+    // never drops a piece the estimator's double test would accept.
+    static double paddedEnd(double sMax) { return std::isfinite(sMax) ? sMax * (1.0 + 1e-5) + 1e-5 : sMax; }
+
+    double radius_ = 0.0;
+    std::vector<Piece> pieces_;
+    std::vector<int> regions_;  // pieces_[i].region, contiguous
+
+private:
+    void setRegions() {
+        regions_.resize(pieces_.size());
+        for (size_t i = 0; i < pieces_.size(); ++i) regions_[i] = pieces_[i].region;
+    }
+};
+
+// Our own hierarchy (accel/piece_bvh.h): built in a few ms, traversed without a callback per box.
+class BvhBeams final : public IndexedPieces {
+public:
+    using BeamAccel::build;
+    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
+        setBeams(beams, support);
+        buildBvh();
+    }
+    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
+        setPoints(points, radius);
+        buildBvh();
+    }
+    using BeamAccel::candidates;
+    void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
+                    const CandidateTest& test) const override {
+        const size_t from = hits.size();
+        bvh_.forEachCrossed(o, d, paddedEnd(sMax), [&](uint32_t i) TPB_HOT_LAMBDA {
+            if (regions_[i] != region) return;
+            const Piece& p = pieces_[i];
+            const BeamPiece c = candidate(p);
+            if (test(c, p.origin, p.dir)) hits.push_back(c);
+        });
+        sortBeamPieces(hits, from);
+    }
+    void boxCandidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out,
+                       PieceAxes& axes) const override {
+        thread_local std::vector<uint32_t> ids;
+        ids.clear();
+        bvh_.forEachCrossed(o, d, paddedEnd(sMax), [&](uint32_t i) TPB_HOT_LAMBDA {
+            if (regions_[i] == region) ids.push_back(i);
+        });
+        copyHits(ids, out, axes);
+    }
+    std::string name() const override { return "bvh"; }
+
+private:
+    // The hierarchy, then the pieces (and regions) stored in its order: a query's hits, reported
+    // by position, are then read from nearby memory (the candidates' order does not matter: they
+    // are sorted by (beam, piece), and a box query's hits are sorted by their user).
+    void buildBvh() {
+        boxes_.resize(pieces_.size());
+        for (size_t i = 0; i < pieces_.size(); ++i) paddedBox(i, boxes_[i].lo, boxes_[i].hi);
+        bvh_.build(boxes_);
+        const std::vector<uint32_t>& order = bvh_.order();
+        sortedPieces_.resize(pieces_.size());
+        for (size_t k = 0; k < order.size(); ++k) sortedPieces_[k] = pieces_[order[k]];
+        pieces_.swap(sortedPieces_);
+        for (size_t k = 0; k < pieces_.size(); ++k) regions_[k] = pieces_[k].region;
+    }
+    std::vector<PieceBvh::Box> boxes_;
+    std::vector<Piece> sortedPieces_;
+    PieceBvh bvh_;
+};
+
+class EmbreeBeams final : public IndexedPieces {
+public:
+    ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
+
+    using BeamAccel::build;
+    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
+        setBeams(beams, support);
+        buildBvh();
+    }
+    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
+        setPoints(points, radius);
+        buildBvh();
+    }
+
+    using BeamAccel::candidates;
+    void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
+                    const CandidateTest& test) const override {
+        const size_t from = hits.size();
+        traverse(o, d, sMax, region, hits, &test, nullptr);
+        sortBeamPieces(hits, from);
+    }
+    void boxCandidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& out,
+                       PieceAxes& axes) const override {
+        // The callback only notes the piece's index; the pieces and their axes are copied after the
+        // traversal (copyHits).
+        thread_local std::vector<uint32_t> ids;
+        ids.clear();
+        traverse(o, d, sMax, region, out, nullptr, &ids);
+        copyHits(ids, out, axes);
+    }
     std::string name() const override { return "embree"; }
-    size_t pieceCount() const override { return pieces_.size(); }
 
 private:
     struct Context {
@@ -168,7 +271,7 @@ private:
         rh.ray.dir_z = static_cast<float>(d.z);
         rh.ray.tnear = 0.0f;
         // Pad the float ray so Embree's culling never drops a piece the double test would accept.
-        rh.ray.tfar = std::isfinite(sMax) ? static_cast<float>(sMax * (1.0 + 1e-5) + 1e-5) : std::numeric_limits<float>::infinity();
+        rh.ray.tfar = std::isfinite(sMax) ? static_cast<float>(paddedEnd(sMax)) : std::numeric_limits<float>::infinity();
         rh.ray.mask = 0xFFFFFFFFu;
         rh.ray.flags = 0;
         rh.ray.time = 0.0f;
@@ -179,17 +282,15 @@ private:
 
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
         const auto* self = static_cast<const EmbreeBeams*>(args->geometryUserPtr);
-        const Piece& p = self->pieces_[args->primID];
-        const Vec3 a = p.origin + p.sbLo * p.dir, e = p.origin + p.sbHi * p.dir;
-        const double pad = self->radius_ * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
-        const Vec3 lo = glm::min(a, e) - pad, hi = glm::max(a, e) + pad;
+        float lo[3], hi[3];
+        self->paddedBox(args->primID, lo, hi);
         RTCBounds* out = args->bounds_o;
-        out->lower_x = std::nextafter(static_cast<float>(lo.x), -INFINITY);
-        out->lower_y = std::nextafter(static_cast<float>(lo.y), -INFINITY);
-        out->lower_z = std::nextafter(static_cast<float>(lo.z), -INFINITY);
-        out->upper_x = std::nextafter(static_cast<float>(hi.x), INFINITY);
-        out->upper_y = std::nextafter(static_cast<float>(hi.y), INFINITY);
-        out->upper_z = std::nextafter(static_cast<float>(hi.z), INFINITY);
+        out->lower_x = lo[0];
+        out->lower_y = lo[1];
+        out->lower_z = lo[2];
+        out->upper_x = hi[0];
+        out->upper_y = hi[1];
+        out->upper_z = hi[2];
     }
 
     static void intersectFn(const RTCIntersectFunctionNArguments* args) {
@@ -212,8 +313,6 @@ private:
 
     // Embree's BVH over pieces_ (replaces the previous one).
     void buildBvh() {
-        regions_.resize(pieces_.size());
-        for (size_t i = 0; i < pieces_.size(); ++i) regions_[i] = pieces_[i].region;
         if (scene_) rtcReleaseScene(scene_);
         scene_ = nullptr;
         try {
@@ -240,9 +339,6 @@ private:
         }
     }
 
-    double radius_ = 0.0;
-    std::vector<Piece> pieces_;
-    std::vector<int> regions_;  // pieces_[i].region, contiguous (the traversal's callback reads it)
     RTCScene scene_ = nullptr;
 };
 
@@ -250,6 +346,7 @@ private:
 
 std::unique_ptr<BeamAccel> BeamAccel::create(AccelBackend kind) {
     if (kind == AccelBackend::BruteForce) return std::make_unique<BruteForceBeams>();
+    if (kind == AccelBackend::Bvh) return std::make_unique<BvhBeams>();
     return std::make_unique<EmbreeBeams>();
 }
 

@@ -123,7 +123,7 @@ protected:
     const PhotonMap* map_ = nullptr;
     EstimatorPass pass_;
     std::unique_ptr<BeamAccel> accel_;
-    AccelBackend backend_ = AccelBackend::Embree;
+    AccelBackend backend_ = AccelBackend::Bvh;
     bool ready_ = false;
 };
 

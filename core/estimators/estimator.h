@@ -91,7 +91,7 @@ struct EstimatorPass {
     double radius = 0.01;  // m, this pass's kernel radius
     TimeProfile profile = TimeProfile::Exact;
     BeamLength beamLength = BeamLength::Short;
-    AccelBackend accel = AccelBackend::Embree;
+    AccelBackend accel = AccelBackend::Bvh;
     int threads = 1;
     TimeKernel timeKernel;  // this pass's time kernel of the estimator (None: off); the sink applies it
     // m: how far a camera segment may lie from a block's shared query axis (segment_bundle.h); an

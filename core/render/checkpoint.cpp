@@ -139,7 +139,7 @@ PassStats passFrom(const json& j) {
 // ---- the command-line overrides ------------------------------------------------------------------
 const char* profileName(TimeProfile p) { return p == TimeProfile::Exact ? "exact" : "uniform"; }
 const char* lengthName(BeamLength b) { return b == BeamLength::Short ? "short" : "long"; }
-const char* accelName(AccelBackend a) { return a == AccelBackend::Embree ? "embree" : "brute"; }
+const char* accelName(AccelBackend a) { return a == AccelBackend::BruteForce ? "brute" : accelBackendName(a); }
 
 json overridesJson(const SettingsOverrides& o) {
     json j = json::object();
@@ -191,7 +191,7 @@ SettingsOverrides overridesFrom(const json& j) {
     get("seed", o.seed);
     if (j.contains("profile")) o.profile = j.at("profile") == "exact" ? TimeProfile::Exact : TimeProfile::Uniform;
     if (j.contains("beam_length")) o.beamLength = j.at("beam_length") == "short" ? BeamLength::Short : BeamLength::Long;
-    if (j.contains("accel")) o.accel = j.at("accel") == "embree" ? AccelBackend::Embree : AccelBackend::BruteForce;
+    if (j.contains("accel")) o.accel = parseAccelBackend(j.at("accel").get<std::string>()).value_or(AccelBackend::Bvh);
     get("equiangular", o.equiangular);
     get("estimator", o.volumeEstimator);
     get("surface_estimator", o.surfaceEstimator);

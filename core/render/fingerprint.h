@@ -6,7 +6,8 @@
 // (2, 2, 2)").
 //
 // Not in it, on purpose: the pass count and time budget (a resume renders more passes), threads
-// (pass i does not depend on them: driver.h), how the film is shown (emission mode, time axis
+// (pass i does not depend on them: driver.h), the beam accelerator (every backend gives the same
+// candidates once tested, hence the same films: accel/beam_accel.h), how the film is shown (emission mode, time axis
 // shown, unwarping) and the photon-map memory cap (it refuses a pass, never changes one). Mesh
 // files are in it by the FNV-1a 64 of their bytes, so an edited OBJ is seen; the scene file's own
 // bytes are not (comments, key order and the render block's pass count may change).
@@ -27,7 +28,7 @@ using Fingerprint = std::vector<std::pair<std::string, std::string>>;
 // is left to settingsFingerprint (its values after the overrides are what count).
 Fingerprint sceneFingerprint(const SceneDesc& desc);
 // The settings that enter a pass (method, seed, photons, warm-up, radii, alpha, estimators, time
-// kernel, max depth, time profile, beam length, accelerator, path tracer's spp and sampling).
+// kernel, max depth, time profile, beam length, path tracer's spp and sampling).
 Fingerprint settingsFingerprint(const RenderSettings& s);
 // The film's time axis (bins, start, width: bit-exact, as %.17g).
 Fingerprint timeFingerprint(const TimeBins& t);

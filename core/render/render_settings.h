@@ -107,7 +107,7 @@ struct RenderSettings {
     double alpha = 0.7;            // progressive shrink, (0, 1]
     TimeProfile profile = TimeProfile::Exact;
     BeamLength beamLength = BeamLength::Short;
-    AccelBackend accel = AccelBackend::Embree;
+    AccelBackend accel = AccelBackend::Bvh;
     // The density estimators, by name (estimators/registry.cpp, docs/estimators.md).
     std::string volumeEstimator = "beam2d";  // along camera segments in media
     std::string surfaceEstimator = "ppm";    // at diffuse camera-path vertices

@@ -168,10 +168,12 @@ struct Counts {
 
 // `rebuild`: both accelerators are first built over other beams (the estimator keeps one accelerator
 // across passes), so the comparison also checks that a build replaces the previous one.
-Counts compareBackends(uint64_t seed, size_t beamCount, double radius, size_t queries, bool rebuild = false) {
+// `indexed`: the backend compared with brute force (Embree's BVH or ours).
+Counts compareBackends(AccelBackend indexed, uint64_t seed, size_t beamCount, double radius, size_t queries,
+                       bool rebuild = false) {
     Rng rng(seed, Stream::Test, 0, 0);
     auto brute = BeamAccel::create(AccelBackend::BruteForce);
-    auto embree = BeamAccel::create(AccelBackend::Embree);
+    auto embree = BeamAccel::create(indexed);
     const std::vector<Beam> previous = rebuild ? randomBeams(rng, beamCount, 2.0 * radius) : std::vector<Beam>{};
     if (rebuild) {
         brute->build(previous, 2.0 * radius, 1);
@@ -190,7 +192,7 @@ Counts compareBackends(uint64_t seed, size_t beamCount, double radius, size_t qu
         brute->candidates(s.o, s.d, s.sMax, s.region, cb);
         embree->candidates(s.o, s.d, s.sMax, s.region, ce);
         expectSortedUniqueOfRegion(cb, beams, s.region, "brute-force");
-        expectSortedUniqueOfRegion(ce, beams, s.region, "embree");
+        expectSortedUniqueOfRegion(ce, beams, s.region, embree->name().c_str());
         // (b) Embree's pieces are the brute-force ones (same ranges), i.e. a subset of them.
         size_t j = 0;
         for (const BeamPiece& p : ce) {
@@ -213,19 +215,22 @@ Counts compareBackends(uint64_t seed, size_t beamCount, double radius, size_t qu
 
 }  // namespace
 
-TEST(BeamAccel, EmbreeCandidatesContainEveryOverlapAndMatchBruteForce) {
-    const double radii[] = {0.01, 0.05, 0.3};
-    Counts total;
-    for (int i = 0; i < 3; ++i) {
-        const Counts n = compareBackends(1000 + i, 300, radii[i], 3000);
-        EXPECT_EQ(n.queries, 3000u);
-        total.overlaps += n.overlaps;
-        total.candidatesEmbree += n.candidatesEmbree;
-        total.candidatesBrute += n.candidatesBrute;
+// Embree's BVH and ours (accel/piece_bvh.h) against brute force.
+TEST(BeamAccel, IndexedCandidatesContainEveryOverlapAndMatchBruteForce) {
+    for (AccelBackend indexed : {AccelBackend::Embree, AccelBackend::Bvh}) {
+        const double radii[] = {0.01, 0.05, 0.3};
+        Counts total;
+        for (int i = 0; i < 3; ++i) {
+            const Counts n = compareBackends(indexed, 1000 + i, 300, radii[i], 3000);
+            EXPECT_EQ(n.queries, 3000u);
+            total.overlaps += n.overlaps;
+            total.candidatesEmbree += n.candidatesEmbree;
+            total.candidatesBrute += n.candidatesBrute;
+        }
+        // The comparison is not vacuous: many overlaps found, and the hierarchy culls most pieces.
+        EXPECT_GT(total.overlaps, 3000u);
+        EXPECT_LT(total.candidatesEmbree, total.candidatesBrute / 10);
     }
-    // The comparison is not vacuous: many overlaps found, and Embree culls most pieces.
-    EXPECT_GT(total.overlaps, 3000u);
-    EXPECT_LT(total.candidatesEmbree, total.candidatesBrute / 10);
 }
 
 // boxCandidates (the raw list a batched test reads): for both backends, sorted and made unique it
@@ -235,7 +240,7 @@ TEST(BeamAccel, BoxCandidatesAreTheUntestedCandidatesWithTheirAxes) {
     const double radius = 0.05;
     const std::vector<Beam> beams = randomBeams(rng, 300, radius);
     size_t listed = 0;
-    for (AccelBackend backend : {AccelBackend::BruteForce, AccelBackend::Embree}) {
+    for (AccelBackend backend : {AccelBackend::BruteForce, AccelBackend::Embree, AccelBackend::Bvh}) {
         auto accel = BeamAccel::create(backend);
         accel->build(beams, radius, 1);
         for (int q = 0; q < 500; ++q) {
@@ -261,13 +266,15 @@ TEST(BeamAccel, BoxCandidatesAreTheUntestedCandidatesWithTheirAxes) {
 }
 
 TEST(BeamAccel, RebuildReplacesTheBeams) {
-    const Counts n = compareBackends(2000, 200, 0.05, 2000, /*rebuild=*/true);
-    EXPECT_EQ(n.queries, 2000u);
-    EXPECT_GT(n.overlaps, 500u);
+    for (AccelBackend indexed : {AccelBackend::Embree, AccelBackend::Bvh}) {
+        const Counts n = compareBackends(indexed, 2000, 200, 0.05, 2000, /*rebuild=*/true);
+        EXPECT_EQ(n.queries, 2000u);
+        EXPECT_GT(n.overlaps, 500u);
+    }
 }
 
 TEST(BeamAccel, EmptyBeamListAndRegionsWithoutBeams) {
-    for (AccelBackend backend : {AccelBackend::Embree, AccelBackend::BruteForce}) {
+    for (AccelBackend backend : {AccelBackend::Embree, AccelBackend::BruteForce, AccelBackend::Bvh}) {
         auto accel = BeamAccel::create(backend);
         std::vector<BeamPiece> c;
         const std::vector<Beam> none;
@@ -357,9 +364,10 @@ TEST(BeamAccel, PointCandidatesContainEveryPointNearTheSegmentAndMatchBruteForce
             v.region = b.region;
             points.push_back(v);
         }
-    auto brute = BeamAccel::create(AccelBackend::BruteForce);
-    auto embree = BeamAccel::create(AccelBackend::Embree);
-    for (int round = 0; round < 2; ++round) {  // round 1: rebuilt over beams in between
+    for (AccelBackend indexed : {AccelBackend::Embree, AccelBackend::Bvh})
+    for (int round = 0; round < 2; ++round) {
+        auto brute = BeamAccel::create(AccelBackend::BruteForce);
+        auto embree = BeamAccel::create(indexed);  // round 1: rebuilt over beams in between
         if (round == 1) {
             brute->build(beams, radius, 1);
             embree->build(beams, radius, 1);
@@ -370,8 +378,9 @@ TEST(BeamAccel, PointCandidatesContainEveryPointNearTheSegmentAndMatchBruteForce
         ASSERT_EQ(embree->pieceCount(), points.size());
         size_t overlaps = 0, candidatesEmbree = 0, candidatesBrute = 0;
         std::vector<BeamPiece> cb, ce;
+        Rng qrng(3100 + round, Stream::Test, 0, 0);  // the same queries for both backends
         for (int q = 0; q < 3000; ++q) {
-            const Segment s = randomSegment(rng, beams, radius);
+            const Segment s = randomSegment(qrng, beams, radius);
             cb.clear();
             ce.clear();
             brute->candidates(s.o, s.d, s.sMax, s.region, cb);

@@ -3,13 +3,14 @@
 // pass 1's kernel radius:
 //   BM_BeamAccelBuild:      BeamAccel::build over the beams (accel/beam_accel.h), the accelerator
 //                           kept across iterations as the estimators keep it (buffers reused);
-//                           Arg: backend (0 Embree, 1 brute force). items/s = beams indexed.
+//                           Arg: backend (0 Embree, 1 brute force, 2 our BVH). items/s = beams indexed.
 //   BM_EstimatorPrepare:    VolumeEstimator::prepare (the accelerator build over its input);
 //                           Arg: 0 beam2d (beams), 1 point3d (volume photons).
 //   BM_BeamAccelCandidates: Embree candidates() for the first segment of camera rays (the camera
 //                           ray up to its first surface), without a test (every piece whose padded
 //                           box the ray crosses) and with the cylinder test (Arg 1, the test beam2d
-//                           hands the traversal: rayBeamOverlap). ns_per_ray: per query ray.
+//                           hands the traversal: rayBeamOverlap); Arg backend 0 Embree, 2 our BVH.
+//                           ns_per_ray: per query ray.
 //   BM_EstimatorGather:     VolumeEstimator::gather along those segments into a pixel accumulator
 //                           over the film's time axis (the scene's 256 bins), the estimates'
 //                           wall tests and time splats included; Arg: 0 beam2d, 1 point3d.
@@ -22,10 +23,16 @@
 
 #include <benchmark/benchmark.h>
 
+#include <string>
 #include <vector>
 
 namespace tpb {
 namespace {
+
+// Arg backend: 0 Embree, 1 brute force, 2 our BVH (accel/piece_bvh.h).
+AccelBackend backendOf(int64_t arg) {
+    return arg == 0 ? AccelBackend::Embree : arg == 1 ? AccelBackend::BruteForce : AccelBackend::Bvh;
+}
 
 // The volume kernel's radius of pass 1 (the progressive schedule starts at the scene's radius).
 double passOneRadius() { return bench::defaultScene().settings.beamRadius0; }
@@ -73,7 +80,7 @@ EstimatorPass estimatorPass() {
 
 void BM_BeamAccelBuild(benchmark::State& state) {
     const PhotonMap& map = bench::defaultPhotonMap();
-    const AccelBackend kind = state.range(0) == 0 ? AccelBackend::Embree : AccelBackend::BruteForce;
+    const AccelBackend kind = backendOf(state.range(0));
     const std::unique_ptr<BeamAccel> accel = BeamAccel::create(kind);
     for (auto _ : state) {
         accel->build(map.beams, passOneRadius(), 1);
@@ -84,7 +91,7 @@ void BM_BeamAccelBuild(benchmark::State& state) {
     state.counters["pieces"] = static_cast<double>(accel->pieceCount());
     state.SetLabel(accel->name());
 }
-BENCHMARK(BM_BeamAccelBuild)->Arg(0)->Arg(1)->ArgName("backend")->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_BeamAccelBuild)->Arg(0)->Arg(1)->Arg(2)->ArgName("backend")->Unit(benchmark::kMicrosecond)->UseRealTime();
 
 void BM_EstimatorPrepare(benchmark::State& state) {
     const PreparedRender& p = bench::defaultScene();
@@ -117,7 +124,7 @@ void BM_BeamAccelCandidates(benchmark::State& state) {
     const PhotonMap& map = bench::defaultPhotonMap();
     const std::vector<CameraSegment>& segs = cameraSegments();
     const bool withTest = state.range(0) != 0;
-    const std::unique_ptr<BeamAccel> accel = BeamAccel::create(AccelBackend::Embree);
+    const std::unique_ptr<BeamAccel> accel = BeamAccel::create(backendOf(state.range(1)));
     accel->build(map.beams, passOneRadius(), 1);
     std::vector<BeamPiece> pieces;
     int64_t found = 0;
@@ -134,9 +141,9 @@ void BM_BeamAccelCandidates(benchmark::State& state) {
     perRay(state, segs.size());
     state.counters["pieces_per_ray"] =
         static_cast<double>(found) / (static_cast<double>(state.iterations()) * static_cast<double>(segs.size()));
-    state.SetLabel(withTest ? "cylinder test" : "boxes only");
+    state.SetLabel(std::string(withTest ? "cylinder test, " : "boxes only, ") + accel->name());
 }
-BENCHMARK(BM_BeamAccelCandidates)->Arg(0)->Arg(1)->ArgName("test")->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_BeamAccelCandidates)->ArgsProduct({{0, 1}, {0, 2}})->ArgNames({"test", "backend"})->Unit(benchmark::kMicrosecond);
 
 void BM_EstimatorGather(benchmark::State& state) {
     const PreparedRender& p = bench::defaultScene();

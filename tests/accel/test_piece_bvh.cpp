@@ -1,0 +1,140 @@
+// PieceBvh (core/accel/piece_bvh.h): every box a segment meets is reported, once, and nothing far
+// from the segment is, against a brute-force slab test in long double; on random boxes, flat and
+// point-like ones, many identical ones (equal Morton codes: the depth cap), axis-parallel segments
+// (zero direction components), segments that start on a box's face, and unbounded ones.
+#include "accel/piece_bvh.h"
+#include "base/rng.h"
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <vector>
+
+using namespace tpb;
+
+namespace {
+
+// Does o + s d, s in [0, sMax], meet the box enlarged by `grow` on every side? (long double)
+bool meets(const PieceBvh::Box& b, const Vec3& o, const Vec3& d, double sMax, long double grow) {
+    long double lo = 0.0L, hi = sMax;
+    const double org[3] = {o.x, o.y, o.z}, dir[3] = {d.x, d.y, d.z};
+    for (int a = 0; a < 3; ++a) {
+        const long double l = static_cast<long double>(b.lo[a]) - grow, h = static_cast<long double>(b.hi[a]) + grow;
+        if (dir[a] == 0.0) {
+            if (org[a] < l || org[a] > h) return false;
+            continue;
+        }
+        long double t0 = (l - org[a]) / dir[a], t1 = (h - org[a]) / dir[a];
+        if (t0 > t1) std::swap(t0, t1);
+        lo = std::max(lo, t0);
+        hi = std::min(hi, t1);
+    }
+    return lo <= hi;
+}
+
+Vec3 randomUnit(Rng& rng) {
+    const double z = 2.0 * rng.uniform() - 1.0, phi = 2.0 * kPi * rng.uniform();
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    return Vec3(r * std::cos(phi), r * std::sin(phi), z);
+}
+
+struct Stats {
+    size_t queries = 0, reported = 0, exact = 0;
+};
+
+// Every box the segment meets is reported exactly once; every reported box lies within `slack`
+// (relative to the scene's size) of the segment.
+Stats check(const std::vector<PieceBvh::Box>& boxes, Rng& rng, int queries) {
+    PieceBvh bvh;
+    bvh.build(boxes);
+    EXPECT_EQ(bvh.size(), boxes.size());
+    Stats st;
+    for (int q = 0; q < queries; ++q) {
+        Vec3 o(4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0);
+        Vec3 d = randomUnit(rng);
+        if (q % 5 == 0) d = Vec3(q % 3 == 0, q % 3 == 1, q % 3 == 2);  // axis-parallel
+        if (q % 7 == 0 && !boxes.empty()) {  // starting on a face of some box
+            const PieceBvh::Box& b = boxes[rng.uniform() * boxes.size()];
+            o = Vec3(b.lo[0], 0.5 * (b.lo[1] + b.hi[1]), 0.5 * (b.lo[2] + b.hi[2]));
+        }
+        const double sMax = q % 4 == 0 ? kInf : 3.0 * rng.uniform();
+        std::vector<int> seen(boxes.size(), 0);
+        bvh.forEachCrossed(o, d, sMax, [&](uint32_t k) { ++seen[bvh.order()[k]]; });
+        for (size_t i = 0; i < boxes.size(); ++i) {
+            const bool in = meets(boxes[i], o, d, sMax, 0.0L);
+            if (in) {
+                EXPECT_EQ(seen[i], 1) << "box " << i << " query " << q;
+                ++st.exact;
+            } else {
+                EXPECT_LE(seen[i], 1) << "box " << i << " query " << q;
+            }
+            if (seen[i]) {
+                EXPECT_TRUE(meets(boxes[i], o, d, sMax, 1e-5L)) << "box " << i << " reported far from query " << q;
+                ++st.reported;
+            }
+        }
+        ++st.queries;
+        if (::testing::Test::HasFailure()) break;
+    }
+    return st;
+}
+
+PieceBvh::Box box(const Vec3& c, const Vec3& half) {
+    PieceBvh::Box b;
+    for (int a = 0; a < 3; ++a) {
+        b.lo[a] = static_cast<float>(c[a] - half[a]);
+        b.hi[a] = static_cast<float>(c[a] + half[a]);
+    }
+    return b;
+}
+
+}  // namespace
+
+TEST(PieceBvh, ReportsEveryBoxTheSegmentMeetsOnceAndNoneFarFromIt) {
+    Rng rng(41, Stream::Test, 0, 0);
+    std::vector<PieceBvh::Box> boxes;
+    for (int i = 0; i < 3000; ++i) {
+        const Vec3 c(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0);
+        Vec3 half(0.25 * rng.uniform(), 0.25 * rng.uniform(), 0.25 * rng.uniform());
+        if (i % 10 == 0) half.y = 0.0;      // flat
+        if (i % 17 == 0) half = Vec3(0.0);  // a point
+        boxes.push_back(box(c, half));
+    }
+    const Stats st = check(boxes, rng, 400);
+    EXPECT_EQ(st.queries, 400u);
+    EXPECT_GT(st.exact, 2000u);  // not vacuous
+    EXPECT_LT(st.reported, st.exact + st.exact / 20);  // and not much more than the exact set
+}
+
+// Equal centres give equal Morton codes (split at the middle, then the depth cap: a leaf of many);
+// a flat cloud (all centres on one plane) has one axis without extent.
+TEST(PieceBvh, IdenticalAndCoplanarBoxes) {
+    Rng rng(43, Stream::Test, 0, 0);
+    std::vector<PieceBvh::Box> same(5000, box(Vec3(0.25, -0.5, 0.75), Vec3(0.2, 0.1, 0.3)));
+    Stats st = check(same, rng, 60);
+    EXPECT_EQ(st.queries, 60u);
+    EXPECT_GT(st.exact, 5000u);
+    std::vector<PieceBvh::Box> flat;
+    for (int i = 0; i < 2000; ++i)
+        flat.push_back(box(Vec3(2.0 * rng.uniform() - 1.0, 0.3, 2.0 * rng.uniform() - 1.0), Vec3(0.05, 0.0, 0.05)));
+    st = check(flat, rng, 300);
+    EXPECT_EQ(st.queries, 300u);
+    EXPECT_GT(st.exact, 100u);
+}
+
+TEST(PieceBvh, EmptyAndSingleBox) {
+    Rng rng(47, Stream::Test, 0, 0);
+    PieceBvh bvh;
+    bvh.build({});
+    int calls = 0;
+    bvh.forEachCrossed(Vec3(0.0), Vec3(1.0, 0.0, 0.0), kInf, [&](uint32_t) { ++calls; });
+    EXPECT_EQ(calls, 0);
+    const std::vector<PieceBvh::Box> one = {box(Vec3(1.0, 0.0, 0.0), Vec3(0.1))};
+    bvh.build(one);
+    bvh.forEachCrossed(Vec3(0.0), Vec3(1.0, 0.0, 0.0), kInf, [&](uint32_t k) { calls += 1 + static_cast<int>(k); });
+    EXPECT_EQ(calls, 1);
+    bvh.forEachCrossed(Vec3(0.0), Vec3(1.0, 0.0, 0.0), 0.85, [&](uint32_t) { ++calls; });
+    EXPECT_EQ(calls, 1);  // ends before the box
+    const Stats st = check(one, rng, 200);
+    EXPECT_EQ(st.queries, 200u);
+}
