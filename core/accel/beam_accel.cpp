@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace tpb {
@@ -55,6 +56,7 @@ void makePointPieces(const std::vector<VolumePhoton>& points, std::vector<Piece>
 }
 
 BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
+
 
 class BruteForceBeams final : public BeamAccel {
 public:
@@ -115,8 +117,8 @@ protected:
         const double pad = radius_ * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
         const Vec3 l = glm::min(a, e) - pad, h = glm::max(a, e) + pad;
         for (int k = 0; k < 3; ++k) {
-            lo[k] = std::nextafter(static_cast<float>(l[k]), -INFINITY);
-            hi[k] = std::nextafter(static_cast<float>(h[k]), INFINITY);
+            lo[k] = nextFloat(static_cast<float>(l[k]), false);
+            hi[k] = nextFloat(static_cast<float>(h[k]), true);
         }
     }
     // The pieces and axes of a box query's hits `ids`, appended in one loop over arrays sized once

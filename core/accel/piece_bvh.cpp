@@ -17,14 +17,9 @@ uint64_t spread3(uint64_t x) {
     return x;
 }
 
-// The interior of a node is bounded by at most 128 entries of the traversal's stack: the depth is
-// capped well below that (a range that deep becomes one leaf, however many boxes it holds).
-constexpr int kMaxDepth = 100;
-
 }  // namespace
 
 void PieceBvh::build(const std::vector<Box>& boxes) {
-    nodes_.clear();
     const size_t n = boxes.size();
     order_.resize(n);
     if (n == 0) return;
@@ -66,118 +61,88 @@ void PieceBvh::build(const std::vector<Box>& boxes) {
     }
     sorted_.resize(n);
     for (size_t i = 0; i < n; ++i) sorted_[i] = boxes[order_[i]];
-    nodes_.reserve(2 * (n / kLeafSize + 1));
-    buildRange(0, static_cast<uint32_t>(n), 0);
     nodes4_.clear();
-    nodes4_.reserve(nodes_.size() / 2 + 1);
-    collapse(0);
+    nodes4_.reserve(n / 2 + 1);
+    if (n == 1) {  // one leaf slot
+        Node4 node{};
+        node.slots = 1;
+        node.count[0] = 1;
+        for (int a = 0; a < 3; ++a)
+            for (int j = 0; j < 4; ++j) {
+                node.lo[a][j] = j == 0 ? sorted_[0].lo[a] - 1e-6f * (1.0f + std::abs(sorted_[0].lo[a])) : 1.0f;
+                node.hi[a][j] = j == 0 ? sorted_[0].hi[a] + 1e-6f * (1.0f + std::abs(sorted_[0].hi[a])) : -1.0f;
+            }
+        nodes4_.push_back(node);
+        return;
+    }
+    Bounds root;
+    buildNode(0, static_cast<uint32_t>(n), 0, root);
 }
 
-// Node4 for the binary subtree at `binary`: its children, opened (the largest first) until there
-// are four or only leaves. Its boxes are padded by 1e-6 of their coordinates (+1e-6) so that the
-// float slab test never rejects a box that the double test of the leaf's boxes would accept.
-uint32_t PieceBvh::collapse(uint32_t binary) {
-    uint32_t slot[4];
-    int slots = 0;
-    if (nodes_[binary].count > 0) {
-        slot[slots++] = binary;  // a root that is a leaf
-    } else {
-        slot[slots++] = binary + 1;
-        slot[slots++] = nodes_[binary].first;
-        while (slots < 4) {
-            int open = -1;
-            float best = -1.0f;
-            for (int j = 0; j < slots; ++j) {
-                const Node& c = nodes_[slot[j]];
-                if (c.count > 0) continue;
-                const float dx = c.hi[0] - c.lo[0], dy = c.hi[1] - c.lo[1], dz = c.hi[2] - c.lo[2];
-                const float area = dx * dy + dy * dz + dz * dx;
-                if (area > best) {
-                    best = area;
-                    open = j;
-                }
-            }
-            if (open < 0) break;
-            const uint32_t b = slot[open];
-            slot[open] = b + 1;
-            slot[slots++] = nodes_[b].first;
+// Where the sorted range [begin, end) splits: where the highest bit in which its first and last
+// codes differ turns on (one place, the codes being sorted), or the middle when they are equal.
+uint32_t PieceBvh::splitOf(uint32_t begin, uint32_t end) const {
+    const uint64_t first = codes_[begin], last = codes_[end - 1];
+    if (first == last) return begin + (end - begin) / 2;
+    const int bit = 63 - __builtin_clzll(first ^ last);
+    const uint64_t mask = ~uint64_t(0) << bit;  // the shared prefix and the bit
+    const uint64_t target = last & mask;
+    return static_cast<uint32_t>(std::lower_bound(codes_.begin() + begin, codes_.begin() + end, target,
+                                                  [mask](uint64_t c, uint64_t t) { return (c & mask) < t; }) -
+                                 codes_.begin());
+}
+
+// The node over the sorted range [begin, end) (at least two boxes): its range split twice (the
+// binary LBVH's two levels at once) into up to four children; a child of one box, or at the depth
+// cap, is a leaf slot. Returns the node's index; `bounds` gets the range's box. Slot boxes are
+// padded by 1e-6 of their coordinates (+1e-6) so that the float slab test never rejects a box that
+// a leaf's exact test would accept.
+uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Bounds& bounds) {
+    int ranges = 0;
+    const uint32_t mid = splitOf(begin, end);
+    uint32_t r[4][2];
+    for (const auto& [b, e] : {std::pair<uint32_t, uint32_t>{begin, mid}, std::pair<uint32_t, uint32_t>{mid, end}}) {
+        if (e - b >= 2 && depth + 1 < kMaxDepth) {
+            const uint32_t m = splitOf(b, e);
+            r[ranges][0] = b;
+            r[ranges++][1] = m;
+            r[ranges][0] = m;
+            r[ranges++][1] = e;
+        } else {
+            r[ranges][0] = b;
+            r[ranges++][1] = e;
         }
     }
     const uint32_t index = static_cast<uint32_t>(nodes4_.size());
     nodes4_.push_back({});
-    uint32_t child[4] = {0, 0, 0, 0}, count[4] = {0, 0, 0, 0};
-    for (int j = 0; j < slots; ++j) {
-        const Node& c = nodes_[slot[j]];
-        if (c.count > 0) {
-            child[j] = c.first;
-            count[j] = c.count;
-        } else {
-            child[j] = collapse(slot[j]);
-        }
-    }
-    Node4& node = nodes4_[index];
-    node.slots = slots;
+    Node4 node{};
+    node.slots = ranges;
+    bounds = Bounds{};
     for (int j = 0; j < 4; ++j) {
-        node.child[j] = child[j];
-        node.count[j] = count[j];
+        Bounds c;
+        if (j < ranges) {
+            const uint32_t b = r[j][0], e = r[j][1];
+            if (e - b == 1 || depth + 2 >= kMaxDepth) {  // a leaf slot
+                for (uint32_t k = b; k < e; ++k) c.grow(sorted_[k]);
+                node.child[j] = b;
+                node.count[j] = e - b;
+            } else {
+                node.child[j] = buildNode(b, e, depth + 2, c);
+                node.count[j] = 0;
+            }
+            bounds.grow(c);
+        }
         for (int a = 0; a < 3; ++a) {
-            if (j >= slots) {  // unused: a box no segment meets (lo > hi on every axis)
+            if (j >= ranges) {  // unused: a box no segment meets (lo > hi on every axis)
                 node.lo[a][j] = 1.0f;
                 node.hi[a][j] = -1.0f;
                 continue;
             }
-            const Node& c = nodes_[slot[j]];
             node.lo[a][j] = c.lo[a] - 1e-6f * (1.0f + std::abs(c.lo[a]));
             node.hi[a][j] = c.hi[a] + 1e-6f * (1.0f + std::abs(c.hi[a]));
         }
     }
-    return index;
-}
-
-// Builds the subtree over order_[begin, end) and returns its root's index.
-uint32_t PieceBvh::buildRange(uint32_t begin, uint32_t end, int depth) {
-    const uint32_t index = static_cast<uint32_t>(nodes_.size());
-    nodes_.push_back({});
-    if (end - begin <= static_cast<uint32_t>(kLeafSize) || depth >= kMaxDepth) {
-        Node leaf;
-        for (int a = 0; a < 3; ++a) {
-            leaf.lo[a] = INFINITY;
-            leaf.hi[a] = -INFINITY;
-        }
-        for (uint32_t k = begin; k < end; ++k) {
-            const Box& b = sorted_[k];
-            for (int a = 0; a < 3; ++a) {
-                leaf.lo[a] = std::min(leaf.lo[a], b.lo[a]);
-                leaf.hi[a] = std::max(leaf.hi[a], b.hi[a]);
-            }
-        }
-        leaf.first = begin;
-        leaf.count = end - begin;
-        nodes_[index] = leaf;
-        return index;
-    }
-    // Split where the highest differing bit of the range's codes turns on (sorted: one place).
-    uint32_t split = begin + (end - begin) / 2;
-    const uint64_t first = codes_[begin], last = codes_[end - 1];
-    if (first != last) {
-        const int bit = 63 - __builtin_clzll(first ^ last);
-        const uint64_t mask = ~uint64_t(0) << bit;  // codes at or above the split share the prefix + bit
-        const uint64_t target = (last & mask);
-        split = static_cast<uint32_t>(std::lower_bound(codes_.begin() + begin, codes_.begin() + end, target,
-                                                       [mask](uint64_t c, uint64_t t) { return (c & mask) < t; }) -
-                                      codes_.begin());
-    }
-    buildRange(begin, split, depth + 1);
-    const uint32_t right = buildRange(split, end, depth + 1);
-    const Node &l = nodes_[index + 1], &r = nodes_[right];
-    Node node;
-    for (int a = 0; a < 3; ++a) {
-        node.lo[a] = std::min(l.lo[a], r.lo[a]);
-        node.hi[a] = std::max(l.hi[a], r.hi[a]);
-    }
-    node.first = right;
-    node.count = 0;
-    nodes_[index] = node;
+    nodes4_[index] = node;
     return index;
 }
 

@@ -4,10 +4,10 @@
 //
 // Build (a linear BVH, Lauterbach et al. 2009 "Fast BVH construction on GPUs"): the boxes' centres
 // get 33-bit Morton codes (11 bits per axis over the centres' bounds) and are sorted by them (three
-// passes of an 11-bit radix sort); a node's range of the sorted boxes is split where the highest
-// bit in which its first and last codes differ changes (the middle when they are equal), down to
-// leaves of at most kLeafSize boxes. O(n) after the sort; nodes are laid out depth first (a node's
-// left child follows it), 32 bytes each. Issue 15: Embree's user-geometry build took 22 ms for the
+// passes of an 11-bit radix sort); a range of the sorted boxes is split where the highest bit in
+// which its first and last codes differ changes (the middle when they are equal), two levels at a
+// time, so that a node has up to four children (their boxes side by side, tested at once), down to
+// single boxes. O(n) after the sort; 128-byte nodes in depth-first order. Issue 15: Embree's user-geometry build took 22 ms for the
 // default scene's 99k pieces (57 % of a 32x32 beam2d pass), and its traversal ~57 ns per box
 // reached, in calls through its callback.
 //
@@ -21,13 +21,18 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace tpb {
 
 class PieceBvh {
 public:
-    static constexpr int kLeafSize = 1;
+    // The binary splits' depth cap (33 Morton bits, then halving runs of equal codes: enough for
+    // 2^27 boxes with one centre): a range that deep becomes one leaf, however many boxes it has.
+    // A node descends two binary levels and leaves at most three siblings pending, so the
+    // traversal's stack never holds more than 3 kMaxDepth / 2 + 4 entries.
+    static constexpr int kMaxDepth = 60;
     struct Box {
         float lo[3], hi[3];
     };
@@ -69,14 +74,17 @@ public:
             }
             return tNear <= tFar;
         };
-        uint32_t stack[256];
+        uint32_t stack[3 * kMaxDepth / 2 + 8];
         int top = 0;
         uint32_t n = 0;
         while (true) {
             const Node4& node = nodes4_[n];
             V4 tNear = V4{}, tFar = tMax4;
             for (int a = 0; a < 3; ++a) {
-                const V4 t0 = (node.lo[a] - o4[a]) * i4[a], t1 = (node.hi[a] - o4[a]) * i4[a];
+                V4 lo, hi;
+                std::memcpy(&lo, node.lo[a], sizeof lo);
+                std::memcpy(&hi, node.hi[a], sizeof hi);
+                const V4 t0 = (lo - o4[a]) * i4[a], t1 = (hi - o4[a]) * i4[a];
                 tNear = vmax(tNear, vmin(t0, t1));
                 tFar = vmin(tFar, vmax(t0, t1));
             }
@@ -103,24 +111,33 @@ private:
     using V4 = float __attribute__((vector_size(16)));
     static V4 vmin(V4 a, V4 b) { return a < b ? a : b; }
     static V4 vmax(V4 a, V4 b) { return a > b ? a : b; }
-    // The hierarchy that is traversed: four children per node, their boxes side by side (one
-    // vector per axis and side: the four slab tests at once).
+    // A node: up to four children, their boxes side by side (one vector per axis and side: the
+    // four slab tests at once).
     struct Node4 {
-        V4 lo[3], hi[3];
+        alignas(16) float lo[3][4];
+        alignas(16) float hi[3][4];
         uint32_t child[4];  // a leaf's first box in order_, or an interior child's node
         uint32_t count[4];  // a leaf's boxes, 0 for an interior child
         int slots;          // children in use (1..4)
     };
-    uint32_t collapse(uint32_t binary);
-    // The binary build's nodes, collapsed into nodes4_ afterwards.
-    struct Node {
-        float lo[3], hi[3];
-        uint32_t first;  // leaf: its first box in order_; interior: its right child
-        uint32_t count;  // leaf: its boxes (>= 1); interior: 0
+    struct Bounds {
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        void grow(const Box& b) {
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], b.lo[a]);
+                hi[a] = std::max(hi[a], b.hi[a]);
+            }
+        }
+        void grow(const Bounds& b) {
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], b.lo[a]);
+                hi[a] = std::max(hi[a], b.hi[a]);
+            }
+        }
     };
-    uint32_t buildRange(uint32_t begin, uint32_t end, int depth);
+    uint32_t splitOf(uint32_t begin, uint32_t end) const;
+    uint32_t buildNode(uint32_t begin, uint32_t end, int depth, Bounds& bounds);
 
-    std::vector<Node> nodes_;
     std::vector<Node4> nodes4_;
     std::vector<uint32_t> order_;  // box indices in Morton order (the positions queries report)
     std::vector<Box> sorted_;      // the boxes in that order (a leaf's boxes are contiguous)

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 // For the small helpers of the per-estimate path (the time splat, the exponential masses): GCC
@@ -52,6 +53,18 @@ TPB_HOT_INLINE double oneMinusExpNeg(double y) {
     const double lo = (1.0 + c2 * y) + (c3 + c4 * y) * y2;
     const double hi = (c5 + c6 * y) + (c7 + c8 * y) * y2;
     return y * (lo + (hi + c9 * y * y4) * y4);
+}
+
+// std::nextafter(f, up ? +inf : -inf), from the float's bits (the libm call was 9 % of building
+// the beam pieces' BVH, which rounds every box outward to float): tests/base/test_math.cpp.
+inline float nextFloat(float f, bool up) {
+    if (std::isnan(f) || f == (up ? INFINITY : -INFINITY)) return f;
+    if (f == 0.0f) return up ? std::numeric_limits<float>::denorm_min() : -std::numeric_limits<float>::denorm_min();
+    uint32_t bits;
+    std::memcpy(&bits, &f, sizeof bits);
+    bits = ((f > 0.0f) == up) ? bits + 1 : bits - 1;  // away from zero, or towards it
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
 }
 
 // Orthonormal basis around a unit vector n (Duff et al. 2017, branchless).

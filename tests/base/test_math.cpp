@@ -6,6 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <vector>
+
 #include <cmath>
 
 using namespace tpb;
@@ -38,4 +41,24 @@ TEST(OneMinusExpNeg, OutsideThePolynomialItIsExpm1AndContinuousAtTheSwitch) {
     const double below = 0.03125, above = std::nextafter(0.03125, 1.0);
     EXPECT_NEAR(oneMinusExpNeg(below), reference(below), 1e-17);
     EXPECT_NEAR(oneMinusExpNeg(above) - oneMinusExpNeg(below), reference(above) - reference(below), 2e-17);
+}
+
+// nextFloat (by the bits) is std::nextafter towards +-inf: on zeros, denormals, the largest float,
+// infinities, NaN, and a sweep of magnitudes of both signs.
+TEST(Math, NextFloatIsNextafterTowardsInfinity) {
+    std::vector<float> values = {0.0f, -0.0f, std::numeric_limits<float>::denorm_min(),
+                                 -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min(),
+                                 -std::numeric_limits<float>::min(), std::numeric_limits<float>::max(),
+                                 -std::numeric_limits<float>::max(), INFINITY, -INFINITY, 1.0f, -1.0f};
+    for (double x = 1e-40; x < 1e38; x *= 1.37) {
+        values.push_back(static_cast<float>(x));
+        values.push_back(static_cast<float>(-x));
+    }
+    for (const float f : values)
+        for (const bool up : {false, true}) {
+            const float want = std::nextafter(f, up ? INFINITY : -INFINITY), got = nextFloat(f, up);
+            EXPECT_EQ(std::memcmp(&want, &got, sizeof want), 0) << f << (up ? " up" : " down");
+        }
+    EXPECT_TRUE(std::isnan(nextFloat(NAN, true)));
+    EXPECT_TRUE(std::isnan(nextFloat(NAN, false)));
 }
