@@ -96,19 +96,23 @@ private:
 // each piece's padded box, and the copy of a box query's hits into the caller's arrays.
 class IndexedPieces : public BeamAccel {
 public:
-    size_t pieceCount() const override { return pieces_.size(); }
-
-protected:
-    void setBeams(const std::vector<Beam>& beams, const BeamSupport& support) {
+    using BeamAccel::build;
+    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) final {
         radius_ = support.radius;
         makePieces(beams, support.pieceRadius, pieces_);
         setRegions();
+        buildBvh();
     }
-    void setPoints(const std::vector<VolumePhoton>& points, double radius) {
+    void build(const std::vector<VolumePhoton>& points, double radius, int) final {
         radius_ = radius;
         makePointPieces(points, pieces_);
         setRegions();
+        buildBvh();
     }
+    size_t pieceCount() const override { return pieces_.size(); }
+
+protected:
+    virtual void buildBvh() = 0;  // the hierarchy over pieces_ (replaces the previous one)
     // Piece i's box padded by the support radius (plus 1e-5 of it and 1e-6 of the distance from
     // the origin, for the float boxes), rounded outward to float.
     void paddedBox(size_t i, float lo[3], float hi[3]) const {
@@ -160,15 +164,6 @@ private:
 // Our own hierarchy (accel/piece_bvh.h): built in a few ms, traversed without a callback per box.
 class BvhBeams final : public IndexedPieces {
 public:
-    using BeamAccel::build;
-    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
-        setBeams(beams, support);
-        buildBvh();
-    }
-    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
-        setPoints(points, radius);
-        buildBvh();
-    }
     using BeamAccel::candidates;
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
                     const CandidateTest& test) const override {
@@ -196,7 +191,7 @@ private:
     // The hierarchy, then the pieces (and regions) stored in its order: a query's hits, reported
     // by position, are then read from nearby memory (the candidates' order does not matter: they
     // are sorted by (beam, piece), and a box query's hits are sorted by their user).
-    void buildBvh() {
+    void buildBvh() override {
         boxes_.resize(pieces_.size());
         for (size_t i = 0; i < pieces_.size(); ++i) paddedBox(i, boxes_[i].lo, boxes_[i].hi);
         bvh_.build(boxes_);
@@ -215,15 +210,6 @@ class EmbreeBeams final : public IndexedPieces {
 public:
     ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
 
-    using BeamAccel::build;
-    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
-        setBeams(beams, support);
-        buildBvh();
-    }
-    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
-        setPoints(points, radius);
-        buildBvh();
-    }
 
     using BeamAccel::candidates;
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
@@ -314,7 +300,7 @@ private:
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}
 
     // Embree's BVH over pieces_ (replaces the previous one).
-    void buildBvh() {
+    void buildBvh() override {
         if (scene_) rtcReleaseScene(scene_);
         scene_ = nullptr;
         try {
