@@ -137,8 +137,8 @@ TPB_HOT_INLINE double massTo(const ExpProfile& p, double x) { return p.uniform ?
 // channel, the grey splat with that channel's kappa (tests/estimators/test_beam2d.cpp).
 // cut(i) is x_i, i = 1..n (clamped to [0, len], so that a boundary within rounding of the
 // segment's end gives the piece beyond it exactly nothing).
-template <int C, class Cut, class Sink>
-TPB_HOT_INLINE void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, int n, const Cut& cut, double dx,
+template <int C, class Cut, class Dx, class Sink>
+TPB_HOT_INLINE void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, int n, const Cut& cut, const Dx& dxOf,
                         double len, int kFirst, int step, int bins, OutsideFilm& out, Sink& sink) {
     const auto emit = [&](int k, const double (&m)[C]) TPB_HOT_LAMBDA {
         Color f;
@@ -178,6 +178,7 @@ TPB_HOT_INLINE void splatPieces(const ExpProfile* const (&ch)[C], const Color& e
         return;
     }
     double E[C], q[C], g[C];
+    const double dx = dxOf();
     for (int c = 0; c < C; ++c) {
         const double uDx = massTo(*ch[c], dx);
         E[c] = ch[c]->uniform ? 1.0 : 1.0 - u1[c];
@@ -228,7 +229,8 @@ TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, co
     // spans time) into pieces kA .. kB. Boundary j lies at s_j = (T_j - a) / b, clamped to [s0, s1];
     // in x (from the decaying end of the channels at hand, `reflect`) at s_j - s0 or s1 - s_j.
     // x grows with time when b > 0 and the profile decays along s, or b < 0 and it is reflected.
-    const double dx = tb.binWidth / std::abs(b);
+    // One bin width of time in s, computed only by the recurrence (n >= 4; a division).
+    const auto dxOf = [&]() TPB_HOT_LAMBDA { return tb.binWidth / std::abs(b); };
     const int n = kB - kA;
     const auto side = [&](const ExpProfile& e, const Color& en, const auto& channels) TPB_HOT_LAMBDA {
         const bool xWithTime = (b > 0.0) != e.reflect;
@@ -237,7 +239,7 @@ TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, co
             const double sj = std::clamp((tb.startOpl + j * tb.binWidth - a) / b, s0, s1);
             return e.reflect ? s1 - sj : sj - s0;
         };
-        splat_detail::splatPieces(channels, en, n, cut, dx, len, xWithTime ? kA : kB, xWithTime ? 1 : -1, tb.bins, out,
+        splat_detail::splatPieces(channels, en, n, cut, dxOf, len, xWithTime ? kA : kB, xWithTime ? 1 : -1, tb.bins, out,
                                   sink);
     };
     if (p.grey) {
