@@ -248,7 +248,12 @@ TEST(Fingerprint, NamesEachChangedKeyAndIgnoresWhatAResumeMayChange) {
     t.threads = 7;
     t.timeBudgetSec = 5.0;
     t.emission = EmissionMode::Continuous;
+    t.accel = AccelBackend::Embree;  // every backend gives the same films
     EXPECT_TRUE(fingerprintChanges(settingsFingerprint(s), settingsFingerprint(t)).empty());
+    // A checkpoint written when the accelerator was in the fingerprint still resumes.
+    Fingerprint older = settingsFingerprint(s);
+    older.push_back({"render.accel", "embree"});
+    EXPECT_TRUE(fingerprintChanges(older, settingsFingerprint(t)).empty());
     t.seed = 2;
     t.alpha = 0.5;
     EXPECT_EQ(fingerprintChanges(settingsFingerprint(s), settingsFingerprint(t)).size(), 2u);
