@@ -228,11 +228,16 @@ void Viewer::updateBinEnergy() {
     binEnergyRequested_ = key;
     binEnergyLaunched_ = now;
     std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
-    binEnergyJob_ = std::async(std::launch::async, [snap = std::move(snap), key] {
+    // The job lets go of its snapshot as soon as it has read it: the callable (and what it holds)
+    // lives in the future's state until the UI thread collects the result, a frame or more later,
+    // and every tile a render thread finished meanwhile would be copied (tile blocks held by a
+    // snapshot are copied on write: film_snapshot.h).
+    binEnergyJob_ = std::async(std::launch::async, [snap = std::move(snap), key]() mutable {
         BinEnergyResult r;
         r.key = key;
         r.complete = snap->minPasses() == snap->maxPasses();
         r.energy = binEnergy(*snap, key.axis, kAutoBinStride);
+        snap.reset();
         return r;
     });
 }
@@ -256,13 +261,14 @@ void Viewer::updateProfile() {
     if (!profileJob_.valid() && !(key == profileRequested_)) {
         profileRequested_ = key;
         std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
-        profileJob_ = std::async(std::launch::async, [snap = std::move(snap), key] {
+        profileJob_ = std::async(std::launch::async, [snap = std::move(snap), key]() mutable {
             ProfileResult r;
             r.key = key;
             r.width = snap->width();
             r.bins = snap->bins();
             r.profile = pixelProfile(*snap, key.x, key.y, key.axis, key.mode, key.response);
             r.streak = streakImage(*snap, key.y, key.axis, key.mode, key.response);
+            snap.reset();  // read: let go now, not when the UI collects the result (as above)
             return r;
         });
     }

@@ -245,7 +245,10 @@ void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
     // four passes within 3 s).
     std::printf("timeline first_light_s %.3f warmup %d pass_end_s", firstLightSec_, driver_->settings().warmupPasses);
     for (const PassStats& ps : driver_->history()) std::printf(" %.3f", ps.elapsedSec);
-    std::printf("\n");
+    // Tile adds that had to copy their block because the viewer held a snapshot of it, of all.
+    const FilmStats& fs = driver_->film().stats;
+    std::printf(" copied_tiles %lld of %lld\n", static_cast<long long>(fs.copiedTiles.load()),
+                static_cast<long long>(fs.stagedTiles.load()));
     // The controls (window pixels) now and in the first frame, drawn while the first pass rendered.
     std::printf("messages_area %.1f %.1f\n", controlsMinX_, controlsMaxX_);
     std::printf("layout_first passes %llu running %d\n", static_cast<unsigned long long>(firstPasses_),

@@ -205,6 +205,8 @@ void TransientFilm::clear() {
     }
     stats.rejectedSamples = 0;
     stats.overflowedPixels = 0;
+    stats.copiedTiles = 0;
+    stats.stagedTiles = 0;
     for (int a = 0; a < 2; ++a) { stats.outside[a] = 0.0; stats.before[a] = 0.0; stats.inside[a] = 0.0; }
 }
 
@@ -326,6 +328,7 @@ TransientFilm::TileWriter::~TileWriter() {
 
 void TransientFilm::TileWriter::commitStaged() {
     Tile& tile = film_.tiles_[tile_];
+    film_.stats.stagedTiles.fetch_add(1, std::memory_order_relaxed);
     const auto addStaged = [&](TileSums& sums) {
         double passMax = 0.0;
         for (const TileStaging::Pixel& px : staging_->pixels) passMax = std::max(passMax, addTo(sums, *staging_, px));
@@ -340,6 +343,7 @@ void TransientFilm::TileWriter::commitStaged() {
             tile.block->invalidateCumulative();
         } else {
             next_ = std::make_shared<TileBlock>(tile.block->sums);
+            film_.stats.copiedTiles.fetch_add(1, std::memory_order_relaxed);
         }
     }
     if (next_) {  // a snapshot holds the block: add to a copy (outside the lock), then publish it

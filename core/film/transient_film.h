@@ -121,6 +121,10 @@ struct FilmStats {
     // Pixel sums that would have exceeded the film's float images (3.4e38): the pass's contribution to
     // that pixel was dropped (counted, reported; the film never holds Inf).
     std::atomic<int64_t> overflowedPixels{0};
+    // Staged tile adds that copied the tile's block because a snapshot held it (film_snapshot.h),
+    // and all staged tile adds: how much readers cost the writers (the viewer prints both in its
+    // timeline). A diagnostic of this run: not merged, not in checkpoints.
+    std::atomic<int64_t> copiedTiles{0}, stagedTiles{0};
     // Luminance of energy that fell outside the film's time range (sum over passes, not averaged),
     // per time axis, of it the part that arrived before the film, and the luminance that landed
     // inside (to report the fractions).

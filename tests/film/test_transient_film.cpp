@@ -263,6 +263,30 @@ TEST(Film, TouchedRunsAddWhatTheWholeAccumulatorHolds) {
     EXPECT_GT(gappy, 100);  // the passes did leave gaps inside pixels' touched ranges
 }
 
+// The writers count the staged tile adds, and those that copied their block because a snapshot
+// held it (FilmStats::copiedTiles, the viewer's timeline prints both): none without a reader,
+// every tile while one is held, none again once it is dropped.
+TEST(Film, TileCopiesForHeldSnapshotsAreCounted) {
+    const TimeBins time{0.5, 0.3, 9};
+    TransientFilm film(37, 21, time);  // 3 x 2 tiles
+    TileStaging staging;
+    const int64_t tiles = film.tileCount();
+    test::addRandomPass(film, 3, 1, &staging);
+    EXPECT_EQ(film.stats.stagedTiles.load(), tiles);
+    EXPECT_EQ(film.stats.copiedTiles.load(), 0);
+    {
+        const auto held = film.snapshot();
+        test::addRandomPass(film, 3, 2, &staging);
+        EXPECT_EQ(film.stats.copiedTiles.load(), tiles);
+    }
+    test::addRandomPass(film, 3, 3, &staging);
+    EXPECT_EQ(film.stats.stagedTiles.load(), 3 * tiles);
+    EXPECT_EQ(film.stats.copiedTiles.load(), tiles);
+    film.clear();
+    EXPECT_EQ(film.stats.stagedTiles.load(), 0);
+    EXPECT_EQ(film.stats.copiedTiles.load(), 0);
+}
+
 // Merging (checkpoints, films from other machines): the films of passes 1-3 and 4-6 merged are
 // the film of passes 1-6 to < 1e-12 relative in every sum (double sums: one extra rounding, ~1e-16),
 // with the pass counts and counters added. A snapshot held before the merge is unchanged.
