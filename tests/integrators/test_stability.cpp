@@ -1307,7 +1307,7 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
     all.push_back({Vec3(0.0, 0.0, -2.0), Vec3(0, 0, 1), 1e-300, P, 0.0, 0, 1});        // 1e-300 m
     all.push_back({Vec3(0.0, 0.0, -2.5), Vec3(0, 1, 0), 1.0, Color(0.0), 0.0, 0, 1});  // zero power
     all.push_back({Vec3(0.0, -0.5, -2.5), Vec3(0, 1, 0), 1.0, Color(1e-300), 0.0, 0, 1});  // denormal result
-    for (AccelBackend kind : {AccelBackend::Embree, AccelBackend::BruteForce}) {
+    for (AccelBackend kind : {AccelBackend::Embree, AccelBackend::BruteForce, AccelBackend::Bvh}) {
         std::vector<double> a, b;
         render(good, kind, a);
         render(all, kind, b);
