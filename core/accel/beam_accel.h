@@ -47,6 +47,13 @@ inline uint32_t beamPieceCount(double length, double radius) {
     return static_cast<uint32_t>(std::clamp(n, 1.0, 16.0));
 }
 
+// Memory of an accelerator per piece (beam piece or point), an upper estimate counted against the
+// photon map's memory limit before it is built (integrators/photon_beams.cpp). Our BVH: the pieces
+// twice (72 B each: stored in its order, and the previous order kept for the next build), their
+// regions (4), their boxes and the sorted copy (2 x 24), Morton codes and order with the radix
+// sort's scratch (2 x 12), nodes reserved at one per two pieces (144 B: 72); Embree's is smaller.
+inline constexpr uint64_t kAccelBytesPerPiece = 292;
+
 // An estimator's exact test of one candidate piece (false: its kernel cannot reach the segment).
 // A plain function and a context pointer, called from inside the traversal: no allocation, no
 // virtual call per candidate. A null `accept` accepts every candidate. The accelerator hands the

@@ -1,5 +1,6 @@
 #include "integrators/photon_beams.h"
 
+#include "accel/beam_accel.h"
 #include "base/error.h"
 #include "base/progressive.h"
 #include "integrators/time_kernel_schedule.h"
@@ -87,6 +88,21 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     BundlePlan bundles;
     const bool volumeInput = (needs.beams && !map_.beams.empty()) || (needs.points && !map_.points.empty());
     if (scene_.stages.beams && volumeInput) {
+        // The accelerator over the beams' pieces (or the points) counts against the same memory
+        // limit as the map itself, checked before it is built: a beam is up to 16 pieces.
+        uint64_t pieces = 0;
+        if (needs.beams)
+            for (const Beam& b : map_.beams) pieces += beamPieceCount(b.length, ps.beamRadius);
+        if (needs.points) pieces += map_.points.size();
+        const uint64_t need = storedMapBytes(map_) + pieces * kAccelBytesPerPiece;
+        if (pt.maxMapBytes > 0 && need > pt.maxMapBytes)
+            throw UserError("", 0, "render.photons_per_pass",
+                            "pass " + std::to_string(ctx.pass) + ": the photon map and its accelerator (" +
+                                std::to_string(pieces) + " beam pieces or points) would take " + humanBytes(need) +
+                                ", more than " + humanBytes(pt.maxMapBytes) +
+                                ", the memory limit (TPB_MAX_FILM_BYTES); lower photons_per_pass or "
+                                "render.max_depth, or raise the kernel radius (a beam is cut in pieces about 16 "
+                                "radii long)");
         ep.radius = ps.beamRadius;
         ep.timeKernel = volumeKernel;
         bundles = planBundles(scene_, ps.beamRadius);  // primary segments share queries (segment_bundle.h)

@@ -41,9 +41,10 @@ double openBeamLength(const Scene& scene, const Medium& m, double eta, double op
 uint64_t mapBytes(size_t beams, size_t photons, size_t points) {
     return beams * sizeof(Beam) + photons * sizeof(SurfacePhoton) + points * sizeof(VolumePhoton);
 }
-uint64_t mapBytes(const PhotonMap& m) { return mapBytes(m.beams.size(), m.photons.size(), m.points.size()); }
 
 }  // namespace
+
+uint64_t storedMapBytes(const PhotonMap& m) { return mapBytes(m.beams.size(), m.photons.size(), m.points.size()); }
 
 void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out) {
     Rng rng(s.seed, Stream::Photon, s.pass, static_cast<uint64_t>(index));
@@ -161,10 +162,10 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std:
         PhotonMap& part = parts[static_cast<size_t>(b)];
         const int64_t end = std::min(s.photons, (b + 1) * kBatch);
         for (int64_t i = b * kBatch; i < end; ++i) {
-            const uint64_t before = mapBytes(part);
+            const uint64_t before = storedMapBytes(part);
             tracePhoton(scene, s, i, part);
             if (s.maxMapBytes > 0) {
-                const uint64_t added = mapBytes(part) - before;
+                const uint64_t added = storedMapBytes(part) - before;
                 const uint64_t total = stored.fetch_add(added) + added;
                 if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
             }

@@ -103,6 +103,9 @@ struct PhotonPassParams {
 PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s,
                        const std::atomic<bool>* abort = nullptr);
 
+// Bytes the map's beams, surface photons and points take (what maxMapBytes limits).
+uint64_t storedMapBytes(const PhotonMap& m);
+
 // Traces photon `index` of the pass (deterministic given seed, pass, index). Appends to `out`.
 // Throws UserError if this photon alone stores more than s.maxMapBytes.
 void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out);

@@ -1087,6 +1087,45 @@ TEST(StabilityAlbedoOne, PhotonMapOverTheMemoryBudgetStopsTheRenderWithAMessage)
     expectFiniteFilm(ok.film(), "albedo-1 box within budget");
 }
 
+// The accelerator counts against the same memory limit as the photon map, before it is built: long
+// beams and a tiny kernel radius cut every beam into 16 pieces, whose index would take far more
+// than the beams themselves (kAccelBytesPerPiece). The pass stops with a message naming the
+// accelerator and the limit; with the limit raised the same scene renders.
+TEST(StabilityAlbedoOne, AcceleratorOverTheMemoryBudgetStopsTheRenderWithAMessage) {
+    const std::string json = R"({"version": 1,
+      "camera": {"position": [0, 0, 4.5], "look_at": [0, 0, 0], "fov": 60, "resolution": [8, 8]},
+      "film": {"start_m": 0, "bin_width_m": 1, "bins": 8},
+      "media": {"m": {"sigma_s": 0.05}}, "global_medium": "m",
+      "materials": {"wall": {"type": "diffuse", "albedo": 0.5}},
+      "shapes": [{"type": "box", "min": [-5, -5, -5], "max": [5, 5, 5], "material": "wall", "flip_normals": true}],
+      "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
+      "render": {"photons_per_pass": 2000, "max_depth": 4, "passes": 2, "seed": 8}})";
+    auto sc = sceneFrom(json);
+    RenderSettings ds = sc.settings;
+    ds.threads = 2;
+    ds.volumeEstimator = "beam2d";
+    ds.beamRadius0 = 0.001;           // pieces of 16 mm: beams of metres are cut in 16
+    ds.maxPhotonMapBytes = 4u << 20;  // the beams (~2000 x 4 x ~100 B) fit; 16 pieces each do not
+    Driver drv(*sc, ds, sc.time);
+    drv.start();
+    drv.wait();
+    ASSERT_TRUE(drv.failure());
+    EXPECT_THROW(std::rethrow_exception(drv.failure()), UserError);
+    const std::string msg = drv.failureMessage();
+    EXPECT_NE(msg.find("accelerator"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("render.photons_per_pass"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("4.00 MiB"), std::string::npos) << msg;
+    EXPECT_EQ(drv.completedPasses(), 0u);
+
+    ds.maxPhotonMapBytes = 256u << 20;
+    Driver ok(*sc, ds, sc.time);
+    ok.start();
+    ok.wait();
+    EXPECT_FALSE(ok.failure()) << ok.failureMessage();
+    EXPECT_EQ(ok.completedPasses(), 2u);
+    EXPECT_GT(ok.lastPass().beamPieces, 8 * ok.lastPass().beams);  // the case is what it says
+}
+
 // parallelFor rethrows a worker's exception on the calling thread after joining every worker, and
 // stops handing out work: it must never reach std::terminate.
 TEST(StabilityFaults, ParallelForRethrowsAWorkersExceptionOnTheCallingThread) {
