@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 namespace tpb {
@@ -57,7 +56,6 @@ void makePointPieces(const std::vector<VolumePhoton>& points, std::vector<Piece>
 
 BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
 
-
 class BruteForceBeams final : public BeamAccel {
 public:
     using BeamAccel::build;
@@ -100,19 +98,21 @@ public:
     void build(const std::vector<Beam>& beams, const BeamSupport& support, int) final {
         radius_ = support.radius;
         makePieces(beams, support.pieceRadius, pieces_);
-        setRegions();
         buildBvh();
+        setRegions();
     }
     void build(const std::vector<VolumePhoton>& points, double radius, int) final {
         radius_ = radius;
         makePointPieces(points, pieces_);
-        setRegions();
         buildBvh();
+        setRegions();
     }
     size_t pieceCount() const override { return pieces_.size(); }
 
 protected:
-    virtual void buildBvh() = 0;  // the hierarchy over pieces_ (replaces the previous one)
+    // The hierarchy over pieces_ (replaces the previous one; may reorder pieces_: the regions are
+    // taken after it).
+    virtual void buildBvh() = 0;
     // Piece i's box padded by the support radius (plus 1e-5 of it and 1e-6 of the distance from
     // the origin, for the float boxes), rounded outward to float.
     void paddedBox(size_t i, float lo[3], float hi[3]) const {
@@ -188,7 +188,7 @@ public:
     std::string name() const override { return "bvh"; }
 
 private:
-    // The hierarchy, then the pieces (and regions) stored in its order: a query's hits, reported
+    // The hierarchy, then the pieces stored in its order: a query's hits, reported
     // by position, are then read from nearby memory (the candidates' order does not matter: they
     // are sorted by (beam, piece), and a box query's hits are sorted by their user).
     void buildBvh() override {
@@ -199,7 +199,6 @@ private:
         sortedPieces_.resize(pieces_.size());
         for (size_t k = 0; k < order.size(); ++k) sortedPieces_[k] = pieces_[order[k]];
         pieces_.swap(sortedPieces_);
-        for (size_t k = 0; k < pieces_.size(); ++k) regions_[k] = pieces_[k].region;
     }
     std::vector<PieceBvh::Box> boxes_;
     std::vector<Piece> sortedPieces_;
@@ -209,7 +208,6 @@ private:
 class EmbreeBeams final : public IndexedPieces {
 public:
     ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
-
 
     using BeamAccel::candidates;
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,

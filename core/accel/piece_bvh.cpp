@@ -63,20 +63,31 @@ void PieceBvh::build(const std::vector<Box>& boxes) {
     for (size_t i = 0; i < n; ++i) sorted_[i] = boxes[order_[i]];
     nodes4_.clear();
     nodes4_.reserve(n / 2 + 1);
-    if (n == 1) {  // one leaf slot
+    if (n == 1) {  // a root with one leaf slot
         Node4 node{};
         node.slots = 1;
         node.count[0] = 1;
-        for (int a = 0; a < 3; ++a)
-            for (int j = 0; j < 4; ++j) {
-                node.lo[a][j] = j == 0 ? sorted_[0].lo[a] - 1e-6f * (1.0f + std::abs(sorted_[0].lo[a])) : 1.0f;
-                node.hi[a][j] = j == 0 ? sorted_[0].hi[a] + 1e-6f * (1.0f + std::abs(sorted_[0].hi[a])) : -1.0f;
-            }
+        for (int j = 0; j < 4; ++j) setSlot(node, j, j == 0 ? &sorted_[0] : nullptr);
         nodes4_.push_back(node);
         return;
     }
-    Bounds root;
+    Box root = emptyBox();
     buildNode(0, static_cast<uint32_t>(n), 0, root);
+}
+
+static_assert(sizeof(PieceBvh::Box) == 24, "kAccelBytesPerPiece (beam_accel.h) counts 24-byte boxes");
+
+void PieceBvh::setSlot(Node4& node, int j, const Box* box) {
+    static_assert(sizeof(Node4) == 144, "the header and kAccelBytesPerPiece (beam_accel.h) count 144-byte nodes");
+    for (int a = 0; a < 3; ++a) {
+        if (!box) {  // unused: a box no segment meets (lo > hi on every axis)
+            node.lo[a][j] = 1.0f;
+            node.hi[a][j] = -1.0f;
+            continue;
+        }
+        node.lo[a][j] = box->lo[a] - 1e-6f * (1.0f + std::abs(box->lo[a]));
+        node.hi[a][j] = box->hi[a] + 1e-6f * (1.0f + std::abs(box->hi[a]));
+    }
 }
 
 // Where the sorted range [begin, end) splits: where the highest bit in which its first and last
@@ -94,10 +105,8 @@ uint32_t PieceBvh::splitOf(uint32_t begin, uint32_t end) const {
 
 // The node over the sorted range [begin, end) (at least two boxes): its range split twice (the
 // binary LBVH's two levels at once) into up to four children; a child of one box, or at the depth
-// cap, is a leaf slot. Returns the node's index; `bounds` gets the range's box. Slot boxes are
-// padded by 1e-6 of their coordinates (+1e-6) so that the float slab test never rejects a box that
-// a leaf's exact test would accept.
-uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Bounds& bounds) {
+// cap, is a leaf slot. Returns the node's index; `bounds` gets the range's box.
+uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Box& bounds) {
     int ranges = 0;
     const uint32_t mid = splitOf(begin, end);
     uint32_t r[4][2];
@@ -117,30 +126,24 @@ uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Bounds& bo
     nodes4_.push_back({});
     Node4 node{};
     node.slots = ranges;
-    bounds = Bounds{};
+    bounds = emptyBox();
     for (int j = 0; j < 4; ++j) {
-        Bounds c;
-        if (j < ranges) {
-            const uint32_t b = r[j][0], e = r[j][1];
-            if (e - b == 1 || depth + 2 >= kMaxDepth) {  // a leaf slot
-                for (uint32_t k = b; k < e; ++k) c.grow(sorted_[k]);
-                node.child[j] = b;
-                node.count[j] = e - b;
-            } else {
-                node.child[j] = buildNode(b, e, depth + 2, c);
-                node.count[j] = 0;
-            }
-            bounds.grow(c);
+        if (j >= ranges) {
+            setSlot(node, j, nullptr);
+            continue;
         }
-        for (int a = 0; a < 3; ++a) {
-            if (j >= ranges) {  // unused: a box no segment meets (lo > hi on every axis)
-                node.lo[a][j] = 1.0f;
-                node.hi[a][j] = -1.0f;
-                continue;
-            }
-            node.lo[a][j] = c.lo[a] - 1e-6f * (1.0f + std::abs(c.lo[a]));
-            node.hi[a][j] = c.hi[a] + 1e-6f * (1.0f + std::abs(c.hi[a]));
+        Box c = emptyBox();
+        const uint32_t b = r[j][0], e = r[j][1];
+        if (e - b == 1 || depth + 2 >= kMaxDepth) {  // a leaf slot
+            for (uint32_t k = b; k < e; ++k) grow(c, sorted_[k]);
+            node.child[j] = b;
+            node.count[j] = e - b;
+        } else {
+            node.child[j] = buildNode(b, e, depth + 2, c);
+            node.count[j] = 0;
         }
+        grow(bounds, c);
+        setSlot(node, j, &c);
     }
     nodes4_[index] = node;
     return index;

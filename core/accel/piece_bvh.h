@@ -7,14 +7,16 @@
 // passes of an 11-bit radix sort); a range of the sorted boxes is split where the highest bit in
 // which its first and last codes differ changes (the middle when they are equal), two levels at a
 // time, so that a node has up to four children (their boxes side by side, tested at once), down to
-// single boxes. O(n) after the sort; 128-byte nodes in depth-first order. Issue 15: Embree's user-geometry build took 22 ms for the
-// default scene's 99k pieces (57 % of a 32x32 beam2d pass), and its traversal ~57 ns per box
-// reached, in calls through its callback.
+// single boxes. O(n) after the sort; 144-byte nodes in depth-first order. Issue 15: Embree's
+// user-geometry build took 22 ms for the default scene's 99k pieces (57 % of a 32x32 beam2d pass),
+// and its traversal ~57 ns per box reached, in calls through its callback.
 //
-// Query: the slab test in double against the stored float boxes (exact values), every node whose box
-// meets the segment [0, sMax] is opened. Boxes are stored as given: the caller pads them (outward
-// float rounding included) so that a box that meets the segment in exact arithmetic is reported;
-// the double slab test errs by ~1e-16 relative, far inside that padding.
+// Query: a node's four child boxes are slab-tested at once in float; those boxes are padded by
+// 1e-6 of their coordinates (+1e-6), far more than the float test's rounding, so a box that meets
+// the segment in exact arithmetic is never rejected. A child that is one box is reported when its
+// padded box passes; a leaf of several (only at the depth cap) tests each of its boxes in double
+// against the stored float values. The caller pads the boxes themselves (outward float rounding
+// included) for its own exact test.
 #pragma once
 #include "base/math.h"
 
@@ -120,23 +122,17 @@ private:
         uint32_t count[4];  // a leaf's boxes, 0 for an interior child
         int slots;          // children in use (1..4)
     };
-    struct Bounds {
-        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        void grow(const Box& b) {
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = std::min(lo[a], b.lo[a]);
-                hi[a] = std::max(hi[a], b.hi[a]);
-            }
+    static Box emptyBox() { return {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}}; }
+    static void grow(Box& into, const Box& b) {
+        for (int a = 0; a < 3; ++a) {
+            into.lo[a] = std::min(into.lo[a], b.lo[a]);
+            into.hi[a] = std::max(into.hi[a], b.hi[a]);
         }
-        void grow(const Bounds& b) {
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = std::min(lo[a], b.lo[a]);
-                hi[a] = std::max(hi[a], b.hi[a]);
-            }
-        }
-    };
+    }
+    // Child slot j of `node`: its box padded for the float test, or (`box` null) an unused slot.
+    static void setSlot(Node4& node, int j, const Box* box);
     uint32_t splitOf(uint32_t begin, uint32_t end) const;
-    uint32_t buildNode(uint32_t begin, uint32_t end, int depth, Bounds& bounds);
+    uint32_t buildNode(uint32_t begin, uint32_t end, int depth, Box& bounds);
 
     std::vector<Node4> nodes4_;
     std::vector<uint32_t> order_;  // box indices in Morton order (the positions queries report)

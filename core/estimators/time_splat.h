@@ -32,7 +32,8 @@ struct TimeBins {
     // calls it four times per estimate), always the same answer: q = (t - start) invWidth is within
     // 3.4e-16 |q| of the division's quotient (three roundings), so when q lies farther than
     // 1e-15 (1 + |q|) from every integer both have the same floor; otherwise (q within rounding of
-    // a bin boundary, huge, NaN or infinite) it divides (tests/estimators/test_time_splat.cpp).
+    // a bin boundary, huge, NaN or infinite) it divides (TimeSplat.BinByReciprocalIsTheBinByDivision in
+    // tests/estimators/test_beam2d.cpp).
     TPB_HOT_INLINE int binOf(double t, double invWidth) const {
         const double q = (t - startOpl) * invWidth;
         const double k = std::floor(q);

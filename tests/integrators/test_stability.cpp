@@ -1041,6 +1041,41 @@ TEST(StabilityAlbedoOne, ClosedBoxFurnace) {
     }
 }
 
+namespace {
+
+// Renders with `ds` and expects the pass to stop with a UserError that names render.photons_per_pass,
+// the memory limit of 4 MiB and `what`, before any pass completed; returns its message.
+std::string expectMemoryStop(const test::TestScene& sc, const RenderSettings& ds, const std::string& what) {
+    Driver drv(*sc, ds, sc.time);
+    drv.start();
+    drv.wait();
+    EXPECT_TRUE(drv.failure());
+    if (!drv.failure()) return "";
+    EXPECT_THROW(std::rethrow_exception(drv.failure()), UserError);
+    const std::string msg = drv.failureMessage();
+    for (const std::string& part : {std::string("render.photons_per_pass"), std::string("4.00 MiB"), what})
+        EXPECT_NE(msg.find(part), std::string::npos) << msg;
+    EXPECT_EQ(drv.completedPasses(), 0u);
+    EXPECT_FALSE(drv.running());
+    std::vector<float> img;
+    drv.film().steadyImage(img);
+    for (float v : img) EXPECT_EQ(v, 0.0f);
+    return msg;
+}
+
+// Renders with `ds` and expects every pass to complete, with a finite film; returns the last pass's stats.
+PassStats expectRenders(const test::TestScene& sc, const RenderSettings& ds, uint64_t passes) {
+    Driver ok(*sc, ds, sc.time);
+    ok.start();
+    ok.wait();
+    EXPECT_FALSE(ok.failure()) << ok.failureMessage();
+    EXPECT_EQ(ok.completedPasses(), passes);
+    expectFiniteFilm(ok.film(), "within the memory budget");
+    return ok.lastPass();
+}
+
+}  // namespace
+
 // A pass that cannot be done (the photon map of an albedo-1 box with a huge max_depth outgrows the
 // memory budget) must not take the process down: the photon tracer throws UserError on a worker
 // thread, parallelFor carries it to the driver thread, the driver records it and stops, and the
@@ -1058,33 +1093,15 @@ TEST(StabilityAlbedoOne, PhotonMapOverTheMemoryBudgetStopsTheRenderWithAMessage)
     RenderSettings ds = sc.settings;
     ds.threads = 2;
     ds.maxPhotonMapBytes = 4u << 20;  // 4 MiB: about 40k beams, while one photon alone would store 1e8
-    Driver drv(*sc, ds, sc.time);
     const double t0 = nowSec();
-    drv.start();
-    drv.wait();
+    expectMemoryStop(sc, ds, "max_depth");
     EXPECT_LT(nowSec() - t0, 30.0);
-    ASSERT_TRUE(drv.failure());
-    EXPECT_THROW(std::rethrow_exception(drv.failure()), UserError);
-    const std::string msg = drv.failureMessage();
-    EXPECT_NE(msg.find("render.photons_per_pass"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("max_depth"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("4.00 MiB"), std::string::npos) << msg;
-    EXPECT_EQ(drv.completedPasses(), 0u);
-    EXPECT_FALSE(drv.running());
-    std::vector<float> img;
-    drv.film().steadyImage(img);
-    for (float v : img) ASSERT_EQ(v, 0.0f);
 
     // Within the budget the same scene renders: max_depth 48 stores at most 2 x 48 events per photon
     // (2000 x 96 x ~100 B = 19 MB).
     ds.maxDepth = 48;
     ds.maxPhotonMapBytes = 64u << 20;
-    Driver ok(*sc, ds, sc.time);
-    ok.start();
-    ok.wait();
-    EXPECT_FALSE(ok.failure()) << ok.failureMessage();
-    EXPECT_EQ(ok.completedPasses(), 3u);
-    expectFiniteFilm(ok.film(), "albedo-1 box within budget");
+    expectRenders(sc, ds, 3);
 }
 
 // The accelerator counts against the same memory limit as the photon map, before it is built: long
@@ -1106,24 +1123,11 @@ TEST(StabilityAlbedoOne, AcceleratorOverTheMemoryBudgetStopsTheRenderWithAMessag
     ds.volumeEstimator = "beam2d";
     ds.beamRadius0 = 0.001;           // pieces of 16 mm: beams of metres are cut in 16
     ds.maxPhotonMapBytes = 4u << 20;  // the beams (~2000 x 4 x ~100 B) fit; 16 pieces each do not
-    Driver drv(*sc, ds, sc.time);
-    drv.start();
-    drv.wait();
-    ASSERT_TRUE(drv.failure());
-    EXPECT_THROW(std::rethrow_exception(drv.failure()), UserError);
-    const std::string msg = drv.failureMessage();
-    EXPECT_NE(msg.find("accelerator"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("render.photons_per_pass"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("4.00 MiB"), std::string::npos) << msg;
-    EXPECT_EQ(drv.completedPasses(), 0u);
+    expectMemoryStop(sc, ds, "accelerator");
 
     ds.maxPhotonMapBytes = 256u << 20;
-    Driver ok(*sc, ds, sc.time);
-    ok.start();
-    ok.wait();
-    EXPECT_FALSE(ok.failure()) << ok.failureMessage();
-    EXPECT_EQ(ok.completedPasses(), 2u);
-    EXPECT_GT(ok.lastPass().beamPieces, 8 * ok.lastPass().beams);  // the case is what it says
+    const PassStats last = expectRenders(sc, ds, 2);
+    EXPECT_GT(last.beamPieces, 8 * last.beams);  // the case is what it says: many pieces per beam
 }
 
 // parallelFor rethrows a worker's exception on the calling thread after joining every worker, and
