@@ -5,6 +5,7 @@
 #include "accel/piece_bvh.h"
 
 #include "base/error.h"
+#include "base/parallel.h"
 #include "scene/embree_device.h"
 
 #include <embree3/rtcore.h>
@@ -34,6 +35,12 @@ struct Piece {
     int region;
 };
 
+// Piece k of the n of beam `b` (every backend cuts the beams with these expressions: the same pieces).
+Piece beamPiece(const Beam& beam, uint32_t b, uint32_t k, uint32_t n) {
+    return {beam.origin, beam.dir, beam.length * k / n, k + 1 == n ? beam.length : beam.length * (k + 1) / n,
+            b, k, beam.region};
+}
+
 void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece>& pieces) {
     pieces.clear();
     size_t n = 0;
@@ -41,18 +48,45 @@ void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece
     pieces.reserve(n);
     for (uint32_t b = 0; b < beams.size(); ++b) {
         const uint32_t n = beamPieceCount(beams[b].length, radius);
-        for (uint32_t k = 0; k < n; ++k)
-            pieces.push_back({beams[b].origin, beams[b].dir, beams[b].length * k / n,
-                              k + 1 == n ? beams[b].length : beams[b].length * (k + 1) / n, b, k, beams[b].region});
+        for (uint32_t k = 0; k < n; ++k) pieces.push_back(beamPiece(beams[b], b, k, n));
     }
 }
 
 // Points as zero-length pieces: the axis is the point itself (direction 0, sbLo = sbHi = 0).
+Piece pointPiece(const VolumePhoton& point, uint32_t k) { return {point.position, Vec3(0.0), 0.0, 0.0, k, 0, point.region}; }
+
 void makePointPieces(const std::vector<VolumePhoton>& points, std::vector<Piece>& pieces) {
     pieces.clear();
     pieces.reserve(points.size());
-    for (uint32_t k = 0; k < points.size(); ++k) pieces.push_back({points[k].position, Vec3(0.0), 0.0, 0.0, k, 0, points[k].region});
+    for (uint32_t k = 0; k < points.size(); ++k) pieces.push_back(pointPiece(points[k], k));
 }
+
+// Piece p's box padded by the support radius (plus 1e-5 of it and 1e-6 of the distance from the
+// origin, for the float boxes), rounded outward to float.
+TPB_HOT_INLINE void paddedBox(const Piece& p, double radius, float lo[3], float hi[3]) {
+    const Vec3 a = p.origin + p.sbLo * p.dir, e = p.origin + p.sbHi * p.dir;
+    const double pad = radius * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
+    const Vec3 l = glm::min(a, e) - pad, h = glm::max(a, e) + pad;
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = nextFloat(static_cast<float>(l[k]), false);
+        hi[k] = nextFloat(static_cast<float>(h[k]), true);
+    }
+}
+
+// f(begin, end) over [0, n) in chunks, on `threads` threads when there is enough to share.
+template <class F>
+void forChunks(size_t n, int threads, const F& f) {
+    constexpr size_t kChunk = size_t(1) << 14;
+    const size_t chunks = (n + kChunk - 1) / kChunk;
+    if (threads <= 1 || chunks <= 1) {
+        f(size_t(0), n);
+        return;
+    }
+    parallelFor(static_cast<int64_t>(chunks), threads,
+                [&](int64_t c, int) { f(static_cast<size_t>(c) * kChunk, std::min(n, static_cast<size_t>(c + 1) * kChunk)); });
+}
+
+static_assert(sizeof(Piece) == 80, "kAccelBytesPerPiece (beam_accel.h) counts 80-byte pieces");
 
 BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
 
@@ -95,36 +129,9 @@ private:
 class IndexedPieces : public BeamAccel {
 public:
     using BeamAccel::build;
-    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) final {
-        radius_ = support.radius;
-        makePieces(beams, support.pieceRadius, pieces_);
-        buildBvh();
-        setRegions();
-    }
-    void build(const std::vector<VolumePhoton>& points, double radius, int) final {
-        radius_ = radius;
-        makePointPieces(points, pieces_);
-        buildBvh();
-        setRegions();
-    }
     size_t pieceCount() const override { return pieces_.size(); }
 
 protected:
-    // The hierarchy over pieces_ (replaces the previous one; may reorder pieces_: the regions are
-    // taken after it).
-    virtual void buildBvh() = 0;
-    // Piece i's box padded by the support radius (plus 1e-5 of it and 1e-6 of the distance from
-    // the origin, for the float boxes), rounded outward to float.
-    void paddedBox(size_t i, float lo[3], float hi[3]) const {
-        const Piece& p = pieces_[i];
-        const Vec3 a = p.origin + p.sbLo * p.dir, e = p.origin + p.sbHi * p.dir;
-        const double pad = radius_ * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
-        const Vec3 l = glm::min(a, e) - pad, h = glm::max(a, e) + pad;
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = nextFloat(static_cast<float>(l[k]), false);
-            hi[k] = nextFloat(static_cast<float>(h[k]), true);
-        }
-    }
     // The pieces and axes of a box query's hits `ids`, appended in one loop over arrays sized once
     // (not nine push_backs per candidate inside the traversal).
     void copyHits(const std::vector<uint32_t>& ids, std::vector<BeamPiece>& out, PieceAxes& axes) const {
@@ -150,15 +157,14 @@ protected:
     // never drops a piece the estimator's double test would accept.
     static double paddedEnd(double sMax) { return std::isfinite(sMax) ? sMax * (1.0 + 1e-5) + 1e-5 : sMax; }
 
-    double radius_ = 0.0;
-    std::vector<Piece> pieces_;
-    std::vector<int> regions_;  // pieces_[i].region, contiguous
-
-private:
     void setRegions() {
         regions_.resize(pieces_.size());
         for (size_t i = 0; i < pieces_.size(); ++i) regions_[i] = pieces_[i].region;
     }
+
+    double radius_ = 0.0;
+    std::vector<Piece> pieces_;
+    std::vector<int> regions_;  // pieces_[i].region, contiguous
 };
 
 // Our own hierarchy (accel/piece_bvh.h): built in a few ms, traversed without a callback per box.
@@ -187,21 +193,64 @@ public:
     }
     std::string name() const override { return "bvh"; }
 
+    void build(const std::vector<Beam>& beams, const BeamSupport& support, int threads) override {
+        radius_ = support.radius;
+        const size_t nb = beams.size();
+        first_.resize(nb + 1);
+        first_[0] = 0;
+        for (size_t b = 0; b < nb; ++b) first_[b + 1] = first_[b] + beamPieceCount(beams[b].length, support.pieceRadius);
+        const size_t n = first_[nb];
+        boxes_.resize(n);
+        beamOf_.resize(n);
+        forChunks(nb, threads, [&](size_t b0, size_t b1) {
+            for (size_t b = b0; b < b1; ++b) {
+                const uint32_t count = static_cast<uint32_t>(first_[b + 1] - first_[b]);
+                for (uint32_t k = 0; k < count; ++k) {
+                    const size_t i = first_[b] + k;
+                    paddedBox(beamPiece(beams[b], static_cast<uint32_t>(b), k, count), radius_, boxes_[i].lo, boxes_[i].hi);
+                    beamOf_[i] = static_cast<uint32_t>(b);
+                }
+            }
+        });
+        storeInOrder(n, threads, [&](uint32_t i) {
+            const uint32_t b = beamOf_[i];
+            return beamPiece(beams[b], b, static_cast<uint32_t>(i - first_[b]), static_cast<uint32_t>(first_[b + 1] - first_[b]));
+        });
+    }
+    void build(const std::vector<VolumePhoton>& points, double radius, int threads) override {
+        radius_ = radius;
+        const size_t n = points.size();
+        boxes_.resize(n);
+        forChunks(n, threads, [&](size_t i0, size_t i1) {
+            for (size_t i = i0; i < i1; ++i)
+                paddedBox(pointPiece(points[i], static_cast<uint32_t>(i)), radius_, boxes_[i].lo, boxes_[i].hi);
+        });
+        storeInOrder(n, threads, [&](uint32_t i) { return pointPiece(points[i], i); });
+    }
+
 private:
-    // The hierarchy, then the pieces stored in its order: a query's hits, reported
-    // by position, are then read from nearby memory (the candidates' order does not matter: they
-    // are sorted by (beam, piece), and a box query's hits are sorted by their user).
-    void buildBvh() override {
-        boxes_.resize(pieces_.size());
-        for (size_t i = 0; i < pieces_.size(); ++i) paddedBox(i, boxes_[i].lo, boxes_[i].hi);
+    // The hierarchy over boxes_ (piece i's padded box, in the input's order), then the pieces
+    // stored in its order, each made again from its beam or point by pieceOf(i) (cheaper than
+    // moving 80-byte pieces): a query's hits, reported by position, are then read from nearby
+    // memory (the candidates' order does not matter: they are sorted by (beam, piece), and a box
+    // query's hits by their user).
+    template <class PieceOf>
+    void storeInOrder(size_t n, int threads, const PieceOf& pieceOf) {
         bvh_.build(boxes_);
         const std::vector<uint32_t>& order = bvh_.order();
-        sortedPieces_.resize(pieces_.size());
-        for (size_t k = 0; k < order.size(); ++k) sortedPieces_[k] = pieces_[order[k]];
-        pieces_.swap(sortedPieces_);
+        pieces_.resize(n);
+        regions_.resize(n);
+        forChunks(n, threads, [&](size_t k0, size_t k1) {
+            for (size_t k = k0; k < k1; ++k) {
+                pieces_[k] = pieceOf(order[k]);
+                regions_[k] = pieces_[k].region;
+            }
+        });
     }
-    std::vector<PieceBvh::Box> boxes_;
-    std::vector<Piece> sortedPieces_;
+
+    std::vector<PieceBvh::Box> boxes_;  // in the input's order
+    std::vector<size_t> first_;         // beam b's pieces are [first_[b], first_[b + 1]) in the input's order
+    std::vector<uint32_t> beamOf_;      // the beam of piece i (input order)
     PieceBvh bvh_;
 };
 
@@ -226,6 +275,18 @@ public:
         copyHits(ids, out, axes);
     }
     std::string name() const override { return "embree"; }
+    void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
+        radius_ = support.radius;
+        makePieces(beams, support.pieceRadius, pieces_);
+        buildScene();
+        setRegions();
+    }
+    void build(const std::vector<VolumePhoton>& points, double radius, int) override {
+        radius_ = radius;
+        makePointPieces(points, pieces_);
+        buildScene();
+        setRegions();
+    }
 
 private:
     struct Context {
@@ -269,7 +330,7 @@ private:
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
         const auto* self = static_cast<const EmbreeBeams*>(args->geometryUserPtr);
         float lo[3], hi[3];
-        self->paddedBox(args->primID, lo, hi);
+        paddedBox(self->pieces_[args->primID], self->radius_, lo, hi);
         RTCBounds* out = args->bounds_o;
         out->lower_x = lo[0];
         out->lower_y = lo[1];
@@ -298,7 +359,7 @@ private:
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}
 
     // Embree's BVH over pieces_ (replaces the previous one).
-    void buildBvh() override {
+    void buildScene() {
         if (scene_) rtcReleaseScene(scene_);
         scene_ = nullptr;
         try {

@@ -49,10 +49,12 @@ inline uint32_t beamPieceCount(double length, double radius) {
 
 // Memory of an accelerator per piece (beam piece or point), an upper estimate counted against the
 // photon map's memory limit before it is built (integrators/photon_beams.cpp). Our BVH: the pieces
-// twice (72 B each: stored in its order, and the previous order kept for the next build), their
-// regions (4), their boxes and the sorted copy (2 x 24), Morton codes and order with the radix
-// sort's scratch (2 x 12), nodes reserved at one per two pieces (144 B: 72); Embree's is smaller.
-inline constexpr uint64_t kAccelBytesPerPiece = 292;
+// in its order (80 B) and their regions (4), their boxes and the sorted copy (2 x 24), the sort keys
+// and their radix scratch (2 x 8), the order (4), each piece's beam (4) and each beam's first piece
+// (8 per beam, at most 8 per piece), and the nodes (144 B each; a node has two to four children, so
+// there are fewer nodes than pieces: about one per three on the shipped scenes, the bound counted
+// here); Embree's is smaller.
+inline constexpr uint64_t kAccelBytesPerPiece = 308;
 
 // An estimator's exact test of one candidate piece (false: its kernel cannot reach the segment).
 // A plain function and a context pointer, called from inside the traversal: no allocation, no

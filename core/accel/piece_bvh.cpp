@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace tpb {
 
@@ -22,6 +23,7 @@ uint64_t spread3(uint64_t x) {
 void PieceBvh::build(const std::vector<Box>& boxes) {
     const size_t n = boxes.size();
     order_.resize(n);
+    nodeCount_ = 0;  // an empty hierarchy until the nodes are built (no box: none)
     if (n == 0) return;
     // Morton codes of the centres over their bounds (a flat axis maps to 0).
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -33,7 +35,11 @@ void PieceBvh::build(const std::vector<Box>& boxes) {
         }
     double scale[3];
     for (int a = 0; a < 3; ++a) scale[a] = hi[a] > lo[a] ? 2047.0 / (static_cast<double>(hi[a]) - lo[a]) : 0.0;
-    codes_.resize(n);
+    // Sort keys: the code above the box's index (31 bits), so that one array is sorted and the
+    // index comes with it; LSD radix sort of the code's 33 bits, 11 per pass: stable, so equal
+    // codes keep index order.
+    if (n >= (size_t(1) << 31)) throw std::length_error("PieceBvh: more than 2^31 boxes");
+    keys_.resize(n);
     for (size_t i = 0; i < n; ++i) {
         uint64_t code = 0;
         for (int a = 0; a < 3; ++a) {
@@ -41,34 +47,34 @@ void PieceBvh::build(const std::vector<Box>& boxes) {
             const double q = std::clamp((c - lo[a]) * scale[a], 0.0, 2047.0);  // NaN -> 0 below
             code |= spread3(static_cast<uint64_t>(q >= 0.0 ? q : 0.0)) << a;
         }
-        codes_[i] = code;
-        order_[i] = static_cast<uint32_t>(i);
+        keys_[i] = (code << kIndexBits) | i;
     }
-    // LSD radix sort of (code, index), 11 bits per pass: stable, so equal codes keep index order.
-    scratchCodes_.resize(n);
-    scratchOrder_.resize(n);
-    for (int shift = 0; shift < 33; shift += 11) {
+    scratchKeys_.resize(n);
+    for (int shift = kIndexBits; shift < kIndexBits + 33; shift += 11) {
         uint32_t count[2049] = {};
-        for (size_t i = 0; i < n; ++i) ++count[((codes_[i] >> shift) & 0x7ffu) + 1];
+        for (size_t i = 0; i < n; ++i) ++count[((keys_[i] >> shift) & 0x7ffu) + 1];
         for (int b = 0; b < 2048; ++b) count[b + 1] += count[b];
-        for (size_t i = 0; i < n; ++i) {
-            const uint32_t slot = count[(codes_[i] >> shift) & 0x7ffu]++;
-            scratchCodes_[slot] = codes_[i];
-            scratchOrder_[slot] = order_[i];
-        }
-        codes_.swap(scratchCodes_);
-        order_.swap(scratchOrder_);
+        for (size_t i = 0; i < n; ++i) scratchKeys_[count[(keys_[i] >> shift) & 0x7ffu]++] = keys_[i];
+        keys_.swap(scratchKeys_);
     }
+    for (size_t i = 0; i < n; ++i) order_[i] = static_cast<uint32_t>(keys_[i] & kIndexMask);
     sorted_.resize(n);
     for (size_t i = 0; i < n; ++i) sorted_[i] = boxes[order_[i]];
-    nodes4_.clear();
-    nodes4_.reserve(n / 2 + 1);
+    // Every node has at least two children (a range of two or more boxes splits into two non-empty
+    // halves), so n - 1 nodes suffice (one for a single box). Not value-initialised: buildNode sets
+    // every field.
+    if (n > nodeCapacity_) {
+        nodes_.reset(new Node4[n]);
+        nodeCapacity_ = n;
+    }
     if (n == 1) {  // a root with one leaf slot
-        Node4 node{};
+        Node4& node = nodes_[nodeCount_++];
         node.slots = 1;
-        node.count[0] = 1;
-        for (int j = 0; j < 4; ++j) setSlot(node, j, j == 0 ? &sorted_[0] : nullptr);
-        nodes4_.push_back(node);
+        for (int j = 0; j < 4; ++j) {
+            node.child[j] = 0;
+            node.count[j] = j == 0 ? 1 : 0;
+            setSlot(node, j, j == 0 ? &sorted_[0] : nullptr);
+        }
         return;
     }
     Box root = emptyBox();
@@ -93,14 +99,14 @@ void PieceBvh::setSlot(Node4& node, int j, const Box* box) {
 // Where the sorted range [begin, end) splits: where the highest bit in which its first and last
 // codes differ turns on (one place, the codes being sorted), or the middle when they are equal.
 uint32_t PieceBvh::splitOf(uint32_t begin, uint32_t end) const {
-    const uint64_t first = codes_[begin], last = codes_[end - 1];
+    const uint64_t first = keys_[begin] >> kIndexBits, last = keys_[end - 1] >> kIndexBits;
     if (first == last) return begin + (end - begin) / 2;
     const int bit = 63 - __builtin_clzll(first ^ last);
-    const uint64_t mask = ~uint64_t(0) << bit;  // the shared prefix and the bit
-    const uint64_t target = last & mask;
-    return static_cast<uint32_t>(std::lower_bound(codes_.begin() + begin, codes_.begin() + end, target,
-                                                  [mask](uint64_t c, uint64_t t) { return (c & mask) < t; }) -
-                                 codes_.begin());
+    const uint64_t mask = ~uint64_t(0) << (bit + kIndexBits);  // the shared prefix and the bit, in keys
+    const uint64_t target = (last << kIndexBits) & mask;
+    return static_cast<uint32_t>(std::lower_bound(keys_.begin() + begin, keys_.begin() + end, target,
+                                                  [mask](uint64_t k, uint64_t t) { return (k & mask) < t; }) -
+                                 keys_.begin());
 }
 
 // The node over the sorted range [begin, end) (at least two boxes): its range split twice (the
@@ -122,13 +128,13 @@ uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Box& bound
             r[ranges++][1] = e;
         }
     }
-    const uint32_t index = static_cast<uint32_t>(nodes4_.size());
-    nodes4_.push_back({});
-    Node4 node{};
+    const uint32_t index = static_cast<uint32_t>(nodeCount_++);
+    Node4& node = nodes_[index];  // written in place (the array never moves during a build)
     node.slots = ranges;
     bounds = emptyBox();
     for (int j = 0; j < 4; ++j) {
         if (j >= ranges) {
+            node.child[j] = node.count[j] = 0;
             setSlot(node, j, nullptr);
             continue;
         }
@@ -145,7 +151,6 @@ uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Box& bound
         grow(bounds, c);
         setSlot(node, j, &c);
     }
-    nodes4_[index] = node;
     return index;
 }
 

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 namespace tpb {
@@ -44,14 +45,14 @@ public:
     void build(const std::vector<Box>& boxes);
     const std::vector<uint32_t>& order() const { return order_; }
     size_t size() const { return order_.size(); }
-    size_t nodeCount() const { return nodes4_.size(); }
+    size_t nodeCount() const { return nodeCount_; }
 
     // Calls visit(k) once for each box (at position k of order()) that the segment o + s d,
     // s in [0, sMax], meets (and possibly for boxes it passes within rounding of), in an
     // unspecified order. sMax may be inf.
     template <class Visit>
     void forEachCrossed(const Vec3& o, const Vec3& d, double sMax, Visit&& visit) const {
-        if (nodes4_.empty()) return;
+        if (nodeCount_ == 0) return;
         // A zero (or tiny) direction component: the slab holds the whole segment or none of it; a
         // huge finite inverse gives that answer without a branch per node ((lo - o) * big is
         // +-huge, or 0 when o lies on the plane, which counts as inside).
@@ -80,7 +81,7 @@ public:
         int top = 0;
         uint32_t n = 0;
         while (true) {
-            const Node4& node = nodes4_[n];
+            const Node4& node = nodes_[n];
             V4 tNear = V4{}, tFar = tMax4;
             for (int a = 0; a < 3; ++a) {
                 V4 lo, hi;
@@ -91,6 +92,8 @@ public:
                 tFar = vmin(tFar, vmax(t0, t1));
             }
             const auto hit = tNear <= tFar;
+            // Interior children are pushed last slot first, so that the first (the next node in
+            // the depth-first array) is visited next, and fetched ahead.
             for (int j = 0; j < node.slots; ++j) {
                 if (!hit[j]) continue;
                 if (node.count[j] == 0) {
@@ -134,11 +137,15 @@ private:
     uint32_t splitOf(uint32_t begin, uint32_t end) const;
     uint32_t buildNode(uint32_t begin, uint32_t end, int depth, Box& bounds);
 
-    std::vector<Node4> nodes4_;
+    // A sort key: the Morton code (33 bits) above the box's index (kIndexBits).
+    static constexpr int kIndexBits = 31;
+    static constexpr uint64_t kIndexMask = (uint64_t(1) << kIndexBits) - 1;
+
+    std::unique_ptr<Node4[]> nodes_;  // depth-first, the root first; kept (and grown) across builds
+    size_t nodeCount_ = 0, nodeCapacity_ = 0;
     std::vector<uint32_t> order_;  // box indices in Morton order (the positions queries report)
     std::vector<Box> sorted_;      // the boxes in that order (a leaf's boxes are contiguous)
-    std::vector<uint64_t> codes_, scratchCodes_;
-    std::vector<uint32_t> scratchOrder_;
+    std::vector<uint64_t> keys_, scratchKeys_;  // sort keys, sorted after build()
 };
 
 }  // namespace tpb

@@ -44,10 +44,14 @@ struct Stats {
 
 // Every box the segment meets is reported exactly once; every reported box lies within `slack`
 // (relative to the scene's size) of the segment.
-Stats check(const std::vector<PieceBvh::Box>& boxes, Rng& rng, int queries) {
-    PieceBvh bvh;
+// `reuse`: a hierarchy built before (over other boxes) to rebuild, instead of a new one.
+Stats check(const std::vector<PieceBvh::Box>& boxes, Rng& rng, int queries, PieceBvh* reuse = nullptr) {
+    PieceBvh fresh;
+    PieceBvh& bvh = reuse ? *reuse : fresh;
     bvh.build(boxes);
     EXPECT_EQ(bvh.size(), boxes.size());
+    // The memory estimate (kAccelBytesPerPiece, accel/beam_accel.h) counts a node per box.
+    EXPECT_LE(bvh.nodeCount(), std::max<size_t>(boxes.size(), 1));
     Stats st;
     for (int q = 0; q < queries; ++q) {
         Vec3 o(4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0);
@@ -137,4 +141,26 @@ TEST(PieceBvh, EmptyAndSingleBox) {
     EXPECT_EQ(calls, 1);  // ends before the box
     const Stats st = check(one, rng, 200);
     EXPECT_EQ(st.queries, 200u);
+}
+
+// A hierarchy is rebuilt every pass over the same storage (grown, never shrunk): a smaller set
+// after a larger one, then none, then a larger one again, each answered as if built fresh.
+TEST(PieceBvh, RebuiltOverDifferentSetsAnswersForTheLastOne) {
+    Rng rng(53, Stream::Test, 0, 0);
+    const auto cloud = [&](int n) {
+        std::vector<PieceBvh::Box> boxes;
+        for (int i = 0; i < n; ++i)
+            boxes.push_back(box(Vec3(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0),
+                                Vec3(0.1 * rng.uniform(), 0.1 * rng.uniform(), 0.1 * rng.uniform())));
+        return boxes;
+    };
+    PieceBvh bvh;
+    for (const int n : {2000, 300, 0, 1, 4000}) {
+        const std::vector<PieceBvh::Box> boxes = cloud(n);
+        const Stats st = check(boxes, rng, 80, &bvh);
+        EXPECT_EQ(st.queries, 80u) << n << " boxes";
+        if (n >= 2000) {
+            EXPECT_GT(st.exact, 80u) << n << " boxes";  // not vacuous
+        }
+    }
 }

@@ -3,7 +3,8 @@
 // pass 1's kernel radius:
 //   BM_BeamAccelBuild:      BeamAccel::build over the beams (accel/beam_accel.h), the accelerator
 //                           kept across iterations as the estimators keep it (buffers reused);
-//                           Arg: backend (0 Embree, 1 brute force, 2 our BVH). items/s = beams indexed.
+//                           Args: backend (0 Embree, 1 brute force, 2 our BVH), threads (our BVH's
+//                           build shares its per-piece loops). items/s = beams indexed.
 //   BM_EstimatorPrepare:    VolumeEstimator::prepare (the accelerator build over its input);
 //                           Arg: 0 beam2d (beams), 1 point3d (volume photons).
 //   BM_BeamAccelCandidates: Embree candidates() for the first segment of camera rays (the camera
@@ -83,7 +84,7 @@ void BM_BeamAccelBuild(benchmark::State& state) {
     const AccelBackend kind = backendOf(state.range(0));
     const std::unique_ptr<BeamAccel> accel = BeamAccel::create(kind);
     for (auto _ : state) {
-        accel->build(map.beams, passOneRadius(), 1);
+        accel->build(map.beams, passOneRadius(), static_cast<int>(state.range(1)));
         benchmark::ClobberMemory();
     }
     state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(map.beams.size()));
@@ -91,7 +92,14 @@ void BM_BeamAccelBuild(benchmark::State& state) {
     state.counters["pieces"] = static_cast<double>(accel->pieceCount());
     state.SetLabel(accel->name());
 }
-BENCHMARK(BM_BeamAccelBuild)->Arg(0)->Arg(1)->Arg(2)->ArgName("backend")->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_BeamAccelBuild)
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Args({2, 1})
+    ->Args({2, 2})
+    ->ArgNames({"backend", "threads"})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 
 void BM_EstimatorPrepare(benchmark::State& state) {
     const PreparedRender& p = bench::defaultScene();
