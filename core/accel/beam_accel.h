@@ -42,19 +42,20 @@ struct BeamPiece {
 // balance between the BVH's build time (grows with pieces) and the candidates a query tests (grows
 // with loose boxes); measured on point_medium / cornell_medium at 96x96 (s/pass, 8r/64: 1.56/0.86,
 // 16r/16: 0.70/0.86, 32r/8: 0.64/0.92).
+inline constexpr uint32_t kMaxPiecesPerBeam = 16;
 inline uint32_t beamPieceCount(double length, double radius) {
     const double n = std::ceil(length / (16.0 * std::max(radius, 1e-12)));
-    return static_cast<uint32_t>(std::clamp(n, 1.0, 16.0));
+    return static_cast<uint32_t>(std::clamp(n, 1.0, static_cast<double>(kMaxPiecesPerBeam)));
 }
 
 // Memory of an accelerator per piece (beam piece or point), an upper estimate counted against the
 // photon map's memory limit before it is built (integrators/photon_beams.cpp). Our BVH: the pieces
 // in its order (80 B) and their regions (4), their boxes and the sorted copy (2 x 24), the sort keys
 // and their radix scratch (2 x 8), the order (4), each piece's beam (4) and each beam's first piece
-// (8 per beam, at most 8 per piece), and the nodes (144 B each; a node has two to four children, so
+// (8 per beam, at most 8 per piece), and the nodes (128 B each; a node has two to four children, so
 // there are fewer nodes than pieces: about one per three on the shipped scenes, the bound counted
 // here); Embree's is smaller.
-inline constexpr uint64_t kAccelBytesPerPiece = 308;
+inline constexpr uint64_t kAccelBytesPerPiece = 292;
 
 // An estimator's exact test of one candidate piece (false: its kernel cannot reach the segment).
 // A plain function and a context pointer, called from inside the traversal: no allocation, no

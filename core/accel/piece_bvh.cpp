@@ -24,6 +24,7 @@ void PieceBvh::build(const std::vector<Box>& boxes) {
     const size_t n = boxes.size();
     order_.resize(n);
     nodeCount_ = 0;  // an empty hierarchy until the nodes are built (no box: none)
+    leaves_.clear();
     if (n == 0) return;
     // Morton codes of the centres over their bounds (a flat axis maps to 0).
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -69,10 +70,10 @@ void PieceBvh::build(const std::vector<Box>& boxes) {
     }
     if (n == 1) {  // a root with one leaf slot
         Node4& node = nodes_[nodeCount_++];
-        node.slots = 1;
+        node.interior = node.several = 0;
+        node.single = 1;
         for (int j = 0; j < 4; ++j) {
             node.child[j] = 0;
-            node.count[j] = j == 0 ? 1 : 0;
             setSlot(node, j, j == 0 ? &sorted_[0] : nullptr);
         }
         return;
@@ -84,7 +85,7 @@ void PieceBvh::build(const std::vector<Box>& boxes) {
 static_assert(sizeof(PieceBvh::Box) == 24, "kAccelBytesPerPiece (beam_accel.h) counts 24-byte boxes");
 
 void PieceBvh::setSlot(Node4& node, int j, const Box* box) {
-    static_assert(sizeof(Node4) == 144, "the header and kAccelBytesPerPiece (beam_accel.h) count 144-byte nodes");
+    static_assert(sizeof(Node4) == 128, "the header and kAccelBytesPerPiece (beam_accel.h) count 128-byte nodes");
     for (int a = 0; a < 3; ++a) {
         if (!box) {  // unused: a box no segment meets (lo > hi on every axis)
             node.lo[a][j] = 1.0f;
@@ -130,11 +131,11 @@ uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Box& bound
     }
     const uint32_t index = static_cast<uint32_t>(nodeCount_++);
     Node4& node = nodes_[index];  // written in place (the array never moves during a build)
-    node.slots = ranges;
+    node.interior = node.single = node.several = 0;
     bounds = emptyBox();
     for (int j = 0; j < 4; ++j) {
         if (j >= ranges) {
-            node.child[j] = node.count[j] = 0;
+            node.child[j] = 0;
             setSlot(node, j, nullptr);
             continue;
         }
@@ -142,11 +143,17 @@ uint32_t PieceBvh::buildNode(uint32_t begin, uint32_t end, int depth, Box& bound
         const uint32_t b = r[j][0], e = r[j][1];
         if (e - b == 1 || depth + 2 >= kMaxDepth) {  // a leaf slot
             for (uint32_t k = b; k < e; ++k) grow(c, sorted_[k]);
-            node.child[j] = b;
-            node.count[j] = e - b;
+            if (e - b == 1) {
+                node.child[j] = b;
+                node.single |= static_cast<uint8_t>(1u << j);
+            } else {
+                node.child[j] = static_cast<uint32_t>(leaves_.size());
+                leaves_.push_back({b, e - b});
+                node.several |= static_cast<uint8_t>(1u << j);
+            }
         } else {
             node.child[j] = buildNode(b, e, depth + 2, c);
-            node.count[j] = 0;
+            node.interior |= static_cast<uint8_t>(1u << j);
         }
         grow(bounds, c);
         setSlot(node, j, &c);

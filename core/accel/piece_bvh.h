@@ -7,9 +7,11 @@
 // passes of an 11-bit radix sort); a range of the sorted boxes is split where the highest bit in
 // which its first and last codes differ changes (the middle when they are equal), two levels at a
 // time, so that a node has up to four children (their boxes side by side, tested at once), down to
-// single boxes. O(n) after the sort; 144-byte nodes in depth-first order. Issue 15: Embree's
-// user-geometry build took 22 ms for the default scene's 99k pieces (57 % of a 32x32 beam2d pass),
-// and its traversal ~57 ns per box reached, in calls through its callback.
+// single boxes. O(n) after the sort; 128-byte nodes (two cache lines) in depth-first order, with a
+// mask per kind of child (interior, one box, several) so that a query branches per child it meets,
+// not per slot. Issue 15: Embree's user-geometry build took 22 ms for the default scene's 99k
+// pieces (57 % of a 32x32 beam2d pass), and its traversal ~57 ns per box reached, in calls through
+// its callback.
 //
 // Query: a node's four child boxes are slab-tested at once in float; those boxes are padded by
 // 1e-6 of their coordinates (+1e-6), far more than the float test's rounding, so a box that meets
@@ -92,21 +94,20 @@ public:
                 tFar = vmin(tFar, vmax(t0, t1));
             }
             const auto hit = tNear <= tFar;
-            // Interior children are pushed last slot first, so that the first (the next node in
-            // the depth-first array) is visited next, and fetched ahead.
-            for (int j = 0; j < node.slots; ++j) {
-                if (!hit[j]) continue;
-                if (node.count[j] == 0) {
-                    stack[top++] = node.child[j];
-                    continue;
-                }
-                if (node.count[j] == 1) {  // one box: the slot's (padded) box was its test
-                    visit(node.child[j]);
-                    continue;
-                }
-                for (uint32_t k = node.child[j]; k < node.child[j] + node.count[j]; ++k)
+            unsigned met = 0;  // the slots whose box the segment meets (an unused slot never does)
+            for (int j = 0; j < 4; ++j) met |= (hit[j] ? 1u : 0u) << j;
+            // One-box leaves: the slot's (padded) box was the box's test.
+            for (unsigned m = met & node.single; m; m &= m - 1) visit(node.child[__builtin_ctz(m)]);
+            // Leaves of several boxes (only at the depth cap): each box in double.
+            for (unsigned m = met & node.several; m; m &= m - 1) {
+                const Leaf& leaf = leaves_[node.child[__builtin_ctz(m)]];
+                for (uint32_t k = leaf.first; k < leaf.first + leaf.count; ++k)
                     if (crosses(sorted_[k])) visit(k);
             }
+            // Interior children, the last slot pushed first: the first (the next node in the
+            // depth-first array) is visited next.
+            for (unsigned m = met & node.interior; m; m &= ~(1u << (31 - __builtin_clz(m))))
+                stack[top++] = node.child[31 - __builtin_clz(m)];
             if (top == 0) return;
             n = stack[--top];
         }
@@ -118,12 +119,16 @@ private:
     static V4 vmax(V4 a, V4 b) { return a > b ? a : b; }
     // A node: up to four children, their boxes side by side (one vector per axis and side: the
     // four slab tests at once).
-    struct Node4 {
-        alignas(16) float lo[3][4];
-        alignas(16) float hi[3][4];
-        uint32_t child[4];  // a leaf's first box in order_, or an interior child's node
-        uint32_t count[4];  // a leaf's boxes, 0 for an interior child
-        int slots;          // children in use (1..4)
+    // Two cache lines.
+    struct alignas(64) Node4 {
+        float lo[3][4];
+        float hi[3][4];
+        // Per slot: an interior child's node, a one-box leaf's box (its position in order_), or a
+        // leaf of several boxes' entry in leaves_.
+        uint32_t child[4];
+        // Slot masks (bit j: slot j): interior children, leaves of one box, leaves of several; an
+        // unused slot is in none.
+        uint8_t interior, single, several;
     };
     static Box emptyBox() { return {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}}; }
     static void grow(Box& into, const Box& b) {
@@ -145,6 +150,10 @@ private:
     size_t nodeCount_ = 0, nodeCapacity_ = 0;
     std::vector<uint32_t> order_;  // box indices in Morton order (the positions queries report)
     std::vector<Box> sorted_;      // the boxes in that order (a leaf's boxes are contiguous)
+    struct Leaf {
+        uint32_t first, count;  // positions [first, first + count) in order_
+    };
+    std::vector<Leaf> leaves_;  // the leaves of several boxes (at the depth cap)
     std::vector<uint64_t> keys_, scratchKeys_;  // sort keys, sorted after build()
 };
 

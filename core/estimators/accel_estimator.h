@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -97,14 +98,23 @@ protected:
             }
             OverlapBatch& ob = scratch.overlaps;
             rayBeamOverlaps(q.origin, q.axis, q.length, fat, q.radius + q.slack, ob);
-            // Sort the kept ones by (beam, piece) and keep one per piece (sortBeamPieces' order).
-            std::vector<std::pair<uint64_t, uint32_t>>& keys = scratch.keys;
-            keys.clear();
-            for (const uint32_t i : ob.hits) keys.push_back({beamPieceKey(box[i]), i});
+            // Sort the kept ones by (beam, piece) and keep one per piece (sortBeamPieces' order):
+            // one 64-bit key each, (beam, piece) above the index i in the box list, which orders
+            // as the pair would (32 bits of beam, 4 of piece, kIndexBits of i).
+            constexpr int kIndexBits = 28;
+            static_assert(kMaxPiecesPerBeam <= 16, "a piece's number takes 4 bits of the sort key");
+            if (box.size() >= (size_t(1) << kIndexBits))
+                throw std::length_error("sharedCylinderCandidates: more box candidates than a sort key holds");
+            std::vector<uint64_t>& keys = scratch.keys;
+            keys.resize(ob.hits.size());
+            for (size_t k = 0; k < ob.hits.size(); ++k) {
+                const BeamPiece& p = box[ob.hits[k]];
+                keys[k] = ((static_cast<uint64_t>(p.beam) << 4 | p.piece) << kIndexBits) | ob.hits[k];
+            }
             std::sort(keys.begin(), keys.end());
             for (size_t k = 0; k < keys.size(); ++k) {
-                if (k > 0 && keys[k].first == keys[k - 1].first) continue;
-                const uint32_t i = keys[k].second;
+                if (k > 0 && (keys[k] >> kIndexBits) == (keys[k - 1] >> kIndexBits)) continue;
+                const uint32_t i = static_cast<uint32_t>(keys[k] & ((uint64_t(1) << kIndexBits) - 1));
                 bundle.pieces.push_back(box[i]);
                 bundle.axes.push(Vec3(fat.ox[i], fat.oy[i], fat.oz[i]), Vec3(fat.dx[i], fat.dy[i], fat.dz[i]),
                                  box[i].sbLo, box[i].sbHi);

@@ -83,7 +83,7 @@ struct EstimatorScratch {
     SegmentBundle bundle;           // the block of pixels being rendered (segment_bundle.h)
     OverlapBatch overlaps;          // one segment against the block's pieces (overlap_batch.h)
     PieceAxes boxAxes;              // a shared query's box candidates, for its fat test
-    std::vector<std::pair<uint64_t, uint32_t>> keys;  // their (beam, piece) keys, to sort the kept ones
+    std::vector<uint64_t> keys;  // the kept ones' (beam, piece) keys above their index, to sort them
 };
 
 // Per-pass parameters of an estimator.

@@ -22,7 +22,7 @@ struct Ray1 {
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
     !defined(__SANITIZE_THREAD__)
-#define TPB_OVERLAP_CLONES __attribute__((target_clones("avx2", "default")))
+#define TPB_OVERLAP_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
 #else
 #define TPB_OVERLAP_CLONES
 #endif
