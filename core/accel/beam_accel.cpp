@@ -73,17 +73,10 @@ TPB_HOT_INLINE void paddedBox(const Piece& p, double radius, float lo[3], float 
     }
 }
 
-// f(begin, end) over [0, n) in chunks, on `threads` threads when there is enough to share.
+// The per-piece loops of a build, shared among the pass's threads.
 template <class F>
 void forChunks(size_t n, int threads, const F& f) {
-    constexpr size_t kChunk = size_t(1) << 14;
-    const size_t chunks = (n + kChunk - 1) / kChunk;
-    if (threads <= 1 || chunks <= 1) {
-        f(size_t(0), n);
-        return;
-    }
-    parallelFor(static_cast<int64_t>(chunks), threads,
-                [&](int64_t c, int) { f(static_cast<size_t>(c) * kChunk, std::min(n, static_cast<size_t>(c + 1) * kChunk)); });
+    parallelChunks(n, threads, size_t(1) << 14, f);
 }
 
 static_assert(sizeof(Piece) == 80, "kAccelBytesPerPiece (beam_accel.h) counts 80-byte pieces");
@@ -236,7 +229,7 @@ private:
     // query's hits by their user).
     template <class PieceOf>
     void storeInOrder(size_t n, int threads, const PieceOf& pieceOf) {
-        bvh_.build(boxes_);
+        bvh_.build(boxes_, threads);
         const std::vector<uint32_t>& order = bvh_.order();
         pieces_.resize(n);
         regions_.resize(n);

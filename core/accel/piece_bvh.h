@@ -44,7 +44,9 @@ public:
     // Replaces the hierarchy by one over `boxes`. Queries report a box by its position in the
     // hierarchy's order, order()[position] being its index in `boxes`: a caller that stores its
     // items in that order reads the items of a query's neighbouring hits from neighbouring memory.
-    void build(const std::vector<Box>& boxes);
+    // `threads`: the per-box loops and the root's subtrees are shared among that many threads
+    // (the same hierarchy, answering the same queries, for any number).
+    void build(const std::vector<Box>& boxes, int threads = 1);
     const std::vector<uint32_t>& order() const { return order_; }
     size_t size() const { return order_.size(); }
     size_t nodeCount() const { return nodeCount_; }
@@ -140,7 +142,22 @@ private:
     // Child slot j of `node`: its box padded for the float test, or (`box` null) an unused slot.
     static void setSlot(Node4& node, int j, const Box* box);
     uint32_t splitOf(uint32_t begin, uint32_t end) const;
-    uint32_t buildNode(uint32_t begin, uint32_t end, int depth, Box& bounds);
+    struct Split {
+        int ranges = 0;
+        uint32_t r[4][2];  // [begin, end) of each child's range
+    };
+    struct Leaf;
+    // Where a (sub)tree's build writes: its next node, and the leaves of several boxes.
+    struct Builder {
+        uint32_t next;
+        std::vector<Leaf>* leaves;
+    };
+    Split splitRange(uint32_t begin, uint32_t end, int depth) const;
+    static bool isLeaf(const Split& s, int j, int depth);
+    static void beginNode(Node4& node);
+    void finishNode(Node4& node, const Split& s, int depth, const Box (&childBox)[4], Builder& builder,
+                    Box& bounds) const;
+    uint32_t buildNode(uint32_t begin, uint32_t end, int depth, Box& bounds, Builder& builder);
 
     // A sort key: the Morton code (33 bits) above the box's index (kIndexBits).
     static constexpr int kIndexBits = 31;

@@ -54,4 +54,18 @@ inline void parallelFor(int64_t n, int threads, const std::function<void(int64_t
     if (failure) std::rethrow_exception(failure);
 }
 
+// f(begin, end) over [0, n) in chunks of `chunk` items, on up to `threads` threads (on the calling
+// thread alone when there is one chunk or one thread): for loops whose items are independent.
+template <class F>
+void parallelChunks(size_t n, int threads, size_t chunk, const F& f) {
+    const size_t chunks = (n + chunk - 1) / chunk;
+    if (threads <= 1 || chunks <= 1) {
+        f(size_t(0), n);
+        return;
+    }
+    parallelFor(static_cast<int64_t>(chunks), threads, [&](int64_t c, int) {
+        f(static_cast<size_t>(c) * chunk, std::min(n, static_cast<size_t>(c + 1) * chunk));
+    });
+}
+
 }  // namespace tpb

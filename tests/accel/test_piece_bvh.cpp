@@ -2,6 +2,7 @@
 // from the segment is, against a brute-force slab test in long double; on random boxes, flat and
 // point-like ones, many identical ones (equal Morton codes: the depth cap), axis-parallel segments
 // (zero direction components), segments that start on a box's face, and unbounded ones.
+#include <algorithm>
 #include "accel/piece_bvh.h"
 #include "base/rng.h"
 
@@ -45,10 +46,11 @@ struct Stats {
 // Every box the segment meets is reported exactly once; every reported box lies within `slack`
 // (relative to the scene's size) of the segment.
 // `reuse`: a hierarchy built before (over other boxes) to rebuild, instead of a new one.
-Stats check(const std::vector<PieceBvh::Box>& boxes, Rng& rng, int queries, PieceBvh* reuse = nullptr) {
+Stats check(const std::vector<PieceBvh::Box>& boxes, Rng& rng, int queries, PieceBvh* reuse = nullptr,
+            int threads = 1) {
     PieceBvh fresh;
     PieceBvh& bvh = reuse ? *reuse : fresh;
-    bvh.build(boxes);
+    bvh.build(boxes, threads);
     EXPECT_EQ(bvh.size(), boxes.size());
     // The memory estimate (kAccelBytesPerPiece, accel/beam_accel.h) counts a node per box.
     EXPECT_LE(bvh.nodeCount(), std::max<size_t>(boxes.size(), 1));
@@ -163,4 +165,33 @@ TEST(PieceBvh, RebuiltOverDifferentSetsAnswersForTheLastOne) {
             EXPECT_GT(st.exact, 80u) << n << " boxes";  // not vacuous
         }
     }
+}
+
+// Large sets are built with the root's subtrees on several threads, each in its own stretch of the
+// node array: the same hierarchy order and the same answers as one thread's build.
+TEST(PieceBvh, BuiltOnTwoThreadsAnswersTheSame) {
+    Rng rng(59, Stream::Test, 0, 0);
+    std::vector<PieceBvh::Box> boxes;
+    for (int i = 0; i < 40000; ++i)
+        boxes.push_back(box(Vec3(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0),
+                            Vec3(0.02 * rng.uniform(), 0.02 * rng.uniform(), 0.02 * rng.uniform())));
+    // and a clump of equal centres (split at the middle once their codes are exhausted)
+    for (int i = 0; i < 3000; ++i) boxes.push_back(box(Vec3(0.3, 0.3, 0.3), Vec3(0.01)));
+    PieceBvh one, two;
+    one.build(boxes, 1);
+    two.build(boxes, 2);
+    EXPECT_EQ(one.order(), two.order());
+    for (int q = 0; q < 200; ++q) {
+        const Vec3 o(4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0);
+        const Vec3 d = q % 10 == 0 ? glm::normalize(Vec3(0.3) - o) : randomUnit(rng);  // some through the clump
+        std::vector<uint32_t> a, b;
+        one.forEachCrossed(o, d, kInf, [&](uint32_t k) { a.push_back(k); });
+        two.forEachCrossed(o, d, kInf, [&](uint32_t k) { b.push_back(k); });
+        std::sort(a.begin(), a.end());
+        std::sort(b.begin(), b.end());
+        ASSERT_EQ(a, b) << "query " << q;
+    }
+    const Stats st = check(boxes, rng, 60, nullptr, 2);  // and against the exact slab test
+    EXPECT_EQ(st.queries, 60u);
+    EXPECT_GT(st.exact, 3000u);
 }
