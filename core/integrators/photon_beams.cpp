@@ -65,7 +65,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     pt.filmEndOpl = ctx.time->endOpl();
     pt.threads = ctx.threads;
     pt.maxMapBytes = settings_.maxPhotonMapBytes > 0 ? settings_.maxPhotonMapBytes : maxFilmBytes();
-    map_ = tracePhotons(scene_, pt, ctx.abort);
+    map_ = tracer_.trace(scene_, pt, ctx.abort);
     if (ctx.abort && ctx.abort->load()) return false;
     ps.photons = map_.emitted;
     ps.beams = static_cast<int64_t>(map_.beams.size());

@@ -152,21 +152,35 @@ void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
     }
 }
 
-PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std::atomic<bool>* abort) {
-    // Fixed batches so the output order does not depend on the number of threads.
+PhotonMap PhotonTracer::trace(const Scene& scene, const PhotonPassParams& s, const std::atomic<bool>* abort) {
     constexpr int64_t kBatch = 1024;
+    // The memory guard's running total is shared by the threads: each batch adds its bytes every
+    // kGuardEvery photons (and at its end), not per photon, and checks the total with its own
+    // unreported bytes at every photon.
+    constexpr int64_t kGuardEvery = 64;
     const int64_t batches = (s.photons + kBatch - 1) / kBatch;
-    std::vector<PhotonMap> parts(static_cast<size_t>(batches));
+    parts_.resize(static_cast<size_t>(batches));
+    for (PhotonMap& p : parts_) {
+        p.beams.clear();
+        p.photons.clear();
+        p.points.clear();
+        p.emitted = p.rejected = p.regionOverflows = 0;
+        p.emittedFlux = p.cutFlux = Color(0.0);
+    }
     std::atomic<uint64_t> stored{0};  // bytes of all batches so far, for the memory guard
     parallelFor(batches, s.threads, [&](int64_t b, int) {
-        PhotonMap& part = parts[static_cast<size_t>(b)];
+        PhotonMap& part = parts_[static_cast<size_t>(b)];
         const int64_t end = std::min(s.photons, (b + 1) * kBatch);
+        uint64_t reported = 0;  // of this batch's bytes, those added to `stored`
         for (int64_t i = b * kBatch; i < end; ++i) {
-            const uint64_t before = storedMapBytes(part);
             tracePhoton(scene, s, i, part);
             if (s.maxMapBytes > 0) {
-                const uint64_t added = storedMapBytes(part) - before;
-                const uint64_t total = stored.fetch_add(added) + added;
+                const uint64_t mine = storedMapBytes(part);
+                uint64_t total = stored.load(std::memory_order_relaxed) + (mine - reported);
+                if ((i - b * kBatch) % kGuardEvery == kGuardEvery - 1 || i + 1 == end) {
+                    total = stored.fetch_add(mine - reported) + (mine - reported);
+                    reported = mine;
+                }
                 if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
             }
         }
@@ -174,11 +188,11 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std:
     }, abort);
     PhotonMap all;
     size_t nb = 0, np = 0, nv = 0;
-    for (const PhotonMap& p : parts) { nb += p.beams.size(); np += p.photons.size(); nv += p.points.size(); }
+    for (const PhotonMap& p : parts_) { nb += p.beams.size(); np += p.photons.size(); nv += p.points.size(); }
     all.beams.reserve(nb);
     all.photons.reserve(np);
     all.points.reserve(nv);
-    for (PhotonMap& p : parts) {
+    for (PhotonMap& p : parts_) {
         all.beams.insert(all.beams.end(), p.beams.begin(), p.beams.end());
         all.photons.insert(all.photons.end(), p.photons.begin(), p.photons.end());
         all.points.insert(all.points.end(), p.points.begin(), p.points.end());
@@ -189,6 +203,10 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std:
         all.regionOverflows += p.regionOverflows;
     }
     return all;
+}
+
+PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std::atomic<bool>* abort) {
+    return PhotonTracer().trace(scene, s, abort);
 }
 
 }  // namespace tpb

@@ -1,6 +1,6 @@
-// Photon tracing (tracePhotons, photons/photon_tracer.h) on the default scene
+// Photon tracing (PhotonTracer, photons/photon_tracer.h) on the default scene
 // (scenes/cornell_medium.json as the CLI loads it, bench_scene.h): one photon pass with the scene's
-// photons per pass, pass 1, one thread. Arg: what the pass stores besides the surface photons,
+// photons per pass, pass 1, one thread, the tracer kept across iterations as the renderer keeps it. Arg: what the pass stores besides the surface photons,
 //   0: beams (beam1d / beam2d, the default estimator),
 //   1: volume photons (point2d / point3d, the scene's estimator),
 //   2: both.
@@ -18,9 +18,10 @@ void BM_TracePhotons(benchmark::State& state) {
     const int mode = static_cast<int>(state.range(0));
     const PhotonPassParams pt = bench::photonPassParams(p, mode != 1, mode != 0);
     PhotonMap map;
+    PhotonTracer tracer;
     int64_t emitted = 0;
     for (auto _ : state) {
-        map = tracePhotons(*p.scene, pt);
+        map = tracer.trace(*p.scene, pt);
         emitted += map.emitted;
         benchmark::DoNotOptimize(map.beams.data());
         benchmark::DoNotOptimize(map.points.data());
