@@ -2,11 +2,11 @@
 // cylinder) run over a whole list of candidate pieces at once: the pieces a block of pixels shares
 // (segment_bundle.h) are stored as a structure of arrays, and one camera segment is tested against
 // all of them in a loop the compiler vectorises (two doubles per SSE2 instruction, four in the AVX2
-// clone the loader picks on CPUs that have it: GCC target_clones).
+// clone, eight in the AVX-512 one, the loader picking the widest the CPU has: GCC target_clones).
 //
 // The batch computes, lane by lane, exactly the operations of the scalar rayBeamOverlap in the same
-// order (no FMA contraction, no reassociation: the file is built with -ffp-contract=off, and
-// neither -ffast-math nor FMA-enabled targets are used), with every branch replaced by a select, so
+// order (no FMA contraction, no reassociation: the file is built with -ffp-contract=off and
+// without -ffast-math, so no clone fuses a multiply and an add), with every branch replaced by a select, so
 // its answers - which pieces overlap and their intervals - are the scalar test's bit for bit
 // (tests/estimators/test_overlap_batch.cpp checks that on random and degenerate configurations).
 #pragma once

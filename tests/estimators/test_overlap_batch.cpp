@@ -2,8 +2,9 @@
 // (beam2d.h) it must reproduce bit for bit: which pieces overlap, and for those the interval, the
 // projection sb0 and the cosine. On random segments and pieces around a kernel's scale, and on the
 // degenerate cases the scalar code branches on (parallel and perpendicular axes, a segment ending
-// inside the kernel, a piece ending inside it, grazing). The loader runs the AVX2 clone of the kernel
-// on CPUs that have it and the SSE2 one elsewhere; this test checks whichever one this CPU runs.
+// inside the kernel, a piece ending inside it, grazing). The loader runs the AVX-512 or AVX2 clone
+// of the kernel on CPUs that have them and the SSE2 one elsewhere; this test checks whichever one
+// this CPU runs.
 #include "estimators/overlap_batch.h"
 
 #include "base/rng.h"
