@@ -18,7 +18,9 @@
 // the segment in exact arithmetic is never rejected. A child that is one box is reported when its
 // padded box passes; a leaf of several (only at the depth cap) tests each of its boxes in double
 // against the stored float values. The caller pads the boxes themselves (outward float rounding
-// included) for its own exact test.
+// included) for its own exact test. The nodes to visit are queued first in first out, each
+// prefetched when queued: breadth-first, a query has many node fetches in flight instead of
+// waiting on one after another (BM_BeamAccelCandidates 5-10 % faster than depth-first).
 #pragma once
 #include "base/math.h"
 
@@ -35,8 +37,6 @@ class PieceBvh {
 public:
     // The binary splits' depth cap (33 Morton bits, then halving runs of equal codes: enough for
     // 2^27 boxes with one centre): a range that deep becomes one leaf, however many boxes it has.
-    // A node descends two binary levels and leaves at most three siblings pending, so the
-    // traversal's stack never holds more than 3 kMaxDepth / 2 + 4 entries.
     static constexpr int kMaxDepth = 60;
     struct Box {
         float lo[3], hi[3];
@@ -81,8 +81,24 @@ public:
             }
             return tNear <= tFar;
         };
-        uint32_t stack[3 * kMaxDepth / 2 + 8];
-        int top = 0;
+        // The nodes still to visit, first in first out: a node is fetched ahead when it is queued
+        // and visited only after the ones queued before it, so that the traversal does not wait on
+        // one node's fetch after another (the order of the reported boxes does not matter).
+        // (The thread's queue, or one of this call's own when a visit queries again.)
+        thread_local std::vector<uint32_t> threadQueue;
+        thread_local bool threadQueueInUse = false;
+        std::vector<uint32_t> ownQueue;
+        const bool nested = threadQueueInUse;
+        std::vector<uint32_t>& queue = nested ? ownQueue : threadQueue;
+        struct Release {
+            bool nested;
+            ~Release() {
+                if (!nested) threadQueueInUse = false;
+            }
+        } release{nested};
+        threadQueueInUse = true;
+        queue.clear();
+        size_t head = 0;
         uint32_t n = 0;
         while (true) {
             const Node4& node = nodes_[n];
@@ -98,6 +114,14 @@ public:
             const auto hit = tNear <= tFar;
             unsigned met = 0;  // the slots whose box the segment meets (an unused slot never does)
             for (int j = 0; j < 4; ++j) met |= (hit[j] ? 1u : 0u) << j;
+            // Interior children: queued, and fetched ahead.
+            for (unsigned m = met & node.interior; m; m &= m - 1) {
+                const uint32_t c = node.child[__builtin_ctz(m)];
+                const char* line = reinterpret_cast<const char*>(&nodes_[c]);
+                __builtin_prefetch(line);
+                __builtin_prefetch(line + 64);
+                queue.push_back(c);
+            }
             // One-box leaves: the slot's (padded) box was the box's test.
             for (unsigned m = met & node.single; m; m &= m - 1) visit(node.child[__builtin_ctz(m)]);
             // Leaves of several boxes (only at the depth cap): each box in double.
@@ -106,12 +130,8 @@ public:
                 for (uint32_t k = leaf.first; k < leaf.first + leaf.count; ++k)
                     if (crosses(sorted_[k])) visit(k);
             }
-            // Interior children, the last slot pushed first: the first (the next node in the
-            // depth-first array) is visited next.
-            for (unsigned m = met & node.interior; m; m &= ~(1u << (31 - __builtin_clz(m))))
-                stack[top++] = node.child[31 - __builtin_clz(m)];
-            if (top == 0) return;
-            n = stack[--top];
+            if (head == queue.size()) return;
+            n = queue[head++];
         }
     }
 

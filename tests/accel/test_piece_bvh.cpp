@@ -195,3 +195,28 @@ TEST(PieceBvh, BuiltOnTwoThreadsAnswersTheSame) {
     EXPECT_EQ(st.queries, 60u);
     EXPECT_GT(st.exact, 3000u);
 }
+
+// A visit may query the hierarchy again (the traversal's queue is then the nested call's own):
+// the outer query still reports each of its boxes once.
+TEST(PieceBvh, AVisitThatQueriesAgainLeavesTheOuterQueryWhole) {
+    Rng rng(61, Stream::Test, 0, 0);
+    std::vector<PieceBvh::Box> boxes;
+    for (int i = 0; i < 2000; ++i)
+        boxes.push_back(box(Vec3(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0),
+                            Vec3(0.2 * rng.uniform(), 0.2 * rng.uniform(), 0.2 * rng.uniform())));
+    PieceBvh bvh;
+    bvh.build(boxes);
+    const Vec3 o(-2.0, 0.1, 0.2), d = glm::normalize(Vec3(1.0, 0.05, -0.1));
+    std::vector<uint32_t> plain, outer;
+    bvh.forEachCrossed(o, d, kInf, [&](uint32_t k) { plain.push_back(k); });
+    size_t inner = 0;
+    bvh.forEachCrossed(o, d, kInf, [&](uint32_t k) {
+        outer.push_back(k);
+        bvh.forEachCrossed(Vec3(0.0, -2.0, 0.0), Vec3(0.0, 1.0, 0.0), kInf, [&](uint32_t) { ++inner; });
+    });
+    std::sort(plain.begin(), plain.end());
+    std::sort(outer.begin(), outer.end());
+    EXPECT_GT(plain.size(), 5u);
+    EXPECT_EQ(plain, outer);
+    EXPECT_GT(inner, 0u);
+}
