@@ -27,7 +27,7 @@ void sortBeamPieces(std::vector<BeamPiece>& hits, size_t from) {
 
 namespace {
 
-// A piece with its beam's axis and region, contiguous (one memory access per candidate).
+// A piece with its beam's axis and region, as made from its beam or point.
 struct Piece {
     Vec3 origin, dir;  // of the beam
     double sbLo, sbHi;
@@ -79,9 +79,21 @@ void forChunks(size_t n, int threads, const F& f) {
     parallelChunks(n, threads, size_t(1) << 14, f);
 }
 
-static_assert(sizeof(Piece) == 80, "kAccelBytesPerPiece (beam_accel.h) counts 80-byte pieces");
 
 BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
+
+// What a hierarchy keeps of a piece, in three arrays: its axis and range in one cache line (what
+// the box and the candidate test read; an 80-byte Piece straddled two), its (beam, piece) (read for
+// the candidates kept) and its region (read for every box a query reaches).
+struct alignas(64) PieceAxis {
+    Vec3 origin, dir;
+    double sbLo, sbHi;
+};
+struct PieceId {
+    uint32_t beam, piece;
+};
+static_assert(sizeof(PieceAxis) == 64 && sizeof(PieceId) == 8,
+              "kAccelBytesPerPiece (beam_accel.h) counts 64 + 8 bytes per stored piece");
 
 class BruteForceBeams final : public BeamAccel {
 public:
@@ -98,7 +110,7 @@ public:
     void candidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out,
                     const CandidateTest& test) const override {
         for (const Piece& p : pieces_)
-            if (p.region == region && test(candidate(p), p.origin, p.dir)) out.push_back(candidate(p));  // already in (beam, piece) order
+            if (p.region == region && test(p.sbLo, p.sbHi, p.origin, p.dir)) out.push_back(candidate(p));  // already in (beam, piece) order
     }
     void boxCandidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out,
                        PieceAxes& axes) const override {
@@ -122,9 +134,20 @@ private:
 class IndexedPieces : public BeamAccel {
 public:
     using BeamAccel::build;
-    size_t pieceCount() const override { return pieces_.size(); }
+    size_t pieceCount() const override { return axes_.size(); }
 
 protected:
+    void resizeStorage(size_t n) {
+        axes_.resize(n);
+        ids_.resize(n);
+        regions_.resize(n);
+    }
+    void store(size_t k, const Piece& p) {
+        axes_[k] = {p.origin, p.dir, p.sbLo, p.sbHi};
+        ids_[k] = {p.beam, p.piece};
+        regions_[k] = p.region;
+    }
+    BeamPiece candidate(size_t k) const { return {ids_[k].beam, ids_[k].piece, axes_[k].sbLo, axes_[k].sbHi}; }
     // The pieces and axes of a box query's hits `ids`, appended in one loop over arrays sized once
     // (not nine push_backs per candidate inside the traversal).
     void copyHits(const std::vector<uint32_t>& ids, std::vector<BeamPiece>& out, PieceAxes& axes) const {
@@ -133,9 +156,9 @@ protected:
         for (std::vector<double>* v : {&axes.ox, &axes.oy, &axes.oz, &axes.dx, &axes.dy, &axes.dz, &axes.lo, &axes.hi})
             v->resize(base + n);
         for (size_t k = 0; k < n; ++k) {
-            const Piece& p = pieces_[ids[k]];
+            const PieceAxis& p = axes_[ids[k]];
             const size_t i = base + k;
-            out[i] = candidate(p);
+            out[i] = candidate(ids[k]);
             axes.ox[i] = p.origin.x;
             axes.oy[i] = p.origin.y;
             axes.oz[i] = p.origin.z;
@@ -150,14 +173,10 @@ protected:
     // never drops a piece the estimator's double test would accept.
     static double paddedEnd(double sMax) { return std::isfinite(sMax) ? sMax * (1.0 + 1e-5) + 1e-5 : sMax; }
 
-    void setRegions() {
-        regions_.resize(pieces_.size());
-        for (size_t i = 0; i < pieces_.size(); ++i) regions_[i] = pieces_[i].region;
-    }
-
     double radius_ = 0.0;
-    std::vector<Piece> pieces_;
-    std::vector<int> regions_;  // pieces_[i].region, contiguous
+    std::vector<PieceAxis> axes_;
+    std::vector<PieceId> ids_;
+    std::vector<int> regions_;
 };
 
 // Our own hierarchy (accel/piece_bvh.h): built in a few ms, traversed without a callback per box.
@@ -169,9 +188,8 @@ public:
         const size_t from = hits.size();
         bvh_.forEachCrossed(o, d, paddedEnd(sMax), [&](uint32_t i) TPB_HOT_LAMBDA {
             if (regions_[i] != region) return;
-            const Piece& p = pieces_[i];
-            const BeamPiece c = candidate(p);
-            if (test(c, p.origin, p.dir)) hits.push_back(c);
+            const PieceAxis& p = axes_[i];
+            if (test(p.sbLo, p.sbHi, p.origin, p.dir)) hits.push_back(candidate(i));
         });
         sortBeamPieces(hits, from);
     }
@@ -231,13 +249,9 @@ private:
     void storeInOrder(size_t n, int threads, const PieceOf& pieceOf) {
         bvh_.build(boxes_, threads);
         const std::vector<uint32_t>& order = bvh_.order();
-        pieces_.resize(n);
-        regions_.resize(n);
+        resizeStorage(n);
         forChunks(n, threads, [&](size_t k0, size_t k1) {
-            for (size_t k = k0; k < k1; ++k) {
-                pieces_[k] = pieceOf(order[k]);
-                regions_[k] = pieces_[k].region;
-            }
+            for (size_t k = k0; k < k1; ++k) store(k, pieceOf(order[k]));
         });
     }
 
@@ -270,15 +284,15 @@ public:
     std::string name() const override { return "embree"; }
     void build(const std::vector<Beam>& beams, const BeamSupport& support, int) override {
         radius_ = support.radius;
-        makePieces(beams, support.pieceRadius, pieces_);
-        buildScene();
-        setRegions();
+        std::vector<Piece> made;
+        makePieces(beams, support.pieceRadius, made);
+        storeMade(made);
     }
     void build(const std::vector<VolumePhoton>& points, double radius, int) override {
         radius_ = radius;
-        makePointPieces(points, pieces_);
-        buildScene();
-        setRegions();
+        std::vector<Piece> made;
+        makePointPieces(points, made);
+        storeMade(made);
     }
 
 private:
@@ -294,7 +308,7 @@ private:
     // Visits every piece whose padded box the segment crosses (intersectFn).
     void traverse(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
                   const CandidateTest* test, std::vector<uint32_t>* ids) const {
-        if (pieces_.empty() || !scene_) return;
+        if (axes_.empty() || !scene_) return;
         Context ctx;
         rtcInitIntersectContext(&ctx.base);
         ctx.self = this;
@@ -323,7 +337,8 @@ private:
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
         const auto* self = static_cast<const EmbreeBeams*>(args->geometryUserPtr);
         float lo[3], hi[3];
-        paddedBox(self->pieces_[args->primID], self->radius_, lo, hi);
+        const PieceAxis& a = self->axes_[args->primID];
+        paddedBox({a.origin, a.dir, a.sbLo, a.sbHi, 0, 0, 0}, self->radius_, lo, hi);
         RTCBounds* out = args->bounds_o;
         out->lower_x = lo[0];
         out->lower_y = lo[1];
@@ -344,9 +359,8 @@ private:
             ctx->ids->push_back(args->primID);
             return;
         }
-        const Piece& p = ctx->self->pieces_[args->primID];
-        const BeamPiece c = candidate(p);
-        if ((*ctx->test)(c, p.origin, p.dir)) ctx->hits->push_back(c);
+        const PieceAxis& p = ctx->self->axes_[args->primID];
+        if ((*ctx->test)(p.sbLo, p.sbHi, p.origin, p.dir)) ctx->hits->push_back(ctx->self->candidate(args->primID));
         // No hit is reported to Embree: traversal goes on and visits every candidate piece.
     }
     static void occludedFn(const RTCOccludedFunctionNArguments*) {}
@@ -362,7 +376,7 @@ private:
             rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
             RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
             checkEmbree("creating the photon-beam geometry");
-            rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(pieces_.size()));
+            rtcSetGeometryUserPrimitiveCount(g, static_cast<unsigned>(axes_.size()));
             rtcSetGeometryUserData(g, this);
             rtcSetGeometryBoundsFunction(g, &EmbreeBeams::boundsFn, this);
             rtcSetGeometryIntersectFunction(g, &EmbreeBeams::intersectFn);
@@ -377,6 +391,13 @@ private:
             scene_ = nullptr;  // candidates() then finds nothing rather than query a broken scene
             throw;
         }
+    }
+
+    // The pieces in the input's (beam, piece) order, stored, then Embree's BVH over them.
+    void storeMade(const std::vector<Piece>& made) {
+        resizeStorage(made.size());
+        for (size_t k = 0; k < made.size(); ++k) store(k, made[k]);
+        buildScene();
     }
 
     RTCScene scene_ = nullptr;

@@ -50,24 +50,25 @@ inline uint32_t beamPieceCount(double length, double radius) {
 
 // Memory of an accelerator per piece (beam piece or point), an upper estimate counted against the
 // photon map's memory limit before it is built (integrators/photon_beams.cpp). Our BVH: the pieces
-// in its order (80 B) and their regions (4), their boxes and the sorted copy (2 x 24), the sort keys
-// and their radix scratch (2 x 8), the order (4), each piece's beam (4) and each beam's first piece
-// (8 per beam, at most 8 per piece), and the nodes (128 B each; a node has two to four children, so
-// there are fewer nodes than pieces: about one per three on the shipped scenes, the bound counted
-// here); Embree's is smaller.
-inline constexpr uint64_t kAccelBytesPerPiece = 292;
+// in its order (axis and range 64 B, beam and piece numbers 8, region 4), their boxes and the
+// sorted copy (2 x 24), the sort keys and their radix scratch (2 x 8), the order (4), each piece's
+// beam (4) and each beam's first piece (8 per beam, at most 8 per piece), and the nodes (128 B
+// each; a node has two to four children, so there are fewer nodes than pieces: about one per three
+// on the shipped scenes, the bound counted here); Embree's is smaller.
+inline constexpr uint64_t kAccelBytesPerPiece = 284;
 
 // An estimator's exact test of one candidate piece (false: its kernel cannot reach the segment).
 // A plain function and a context pointer, called from inside the traversal: no allocation, no
 // virtual call per candidate. A null `accept` accepts every candidate. The accelerator hands the
-// piece's axis from its own contiguous copy (`origin`, unit `dir` of the beam; for a point, the
-// point and dir 0): the same values as the Beam's, so the test needs no load of the beam (a cache
-// miss per candidate, most of which it rejects).
+// piece's range [sbLo, sbHi] and axis from its own contiguous copy (`origin`, unit `dir` of the
+// beam; for a point, the point, dir 0 and the range [0, 0]): the same values as the Beam's, so the
+// test needs no load of the beam (a cache miss per candidate, most of which it rejects), nor of
+// the piece's numbers (read only for the pieces it keeps).
 struct CandidateTest {
-    bool (*accept)(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) = nullptr;
+    bool (*accept)(const void* context, double sbLo, double sbHi, const Vec3& origin, const Vec3& dir) = nullptr;
     const void* context = nullptr;
-    bool operator()(const BeamPiece& p, const Vec3& origin, const Vec3& dir) const {
-        return !accept || accept(context, p, origin, dir);
+    bool operator()(double sbLo, double sbHi, const Vec3& origin, const Vec3& dir) const {
+        return !accept || accept(context, sbLo, sbHi, origin, dir);
     }
 };
 

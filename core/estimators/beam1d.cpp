@@ -39,12 +39,12 @@ namespace {
 struct ClosestApproachTest {
     const Ray& ray;
     double sMax, radius;
-    static bool accept(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
+    static bool accept(const void* context, double sbLo, double sbHi, const Vec3& origin, const Vec3& dir) {
         const auto& t = *static_cast<const ClosestApproachTest*>(context);
         const std::optional<ClosestApproach> ca = closestApproach(t.ray.o, t.ray.d, origin, dir);
-        if (!ca || ca->sinTheta < parallelSinThreshold(t.radius, t.sMax, piece.sbHi)) return true;
-        return std::abs(ca->distance) < t.radius && ca->sr >= 0.0 && ca->sr <= t.sMax && ca->sb >= piece.sbLo &&
-               ca->sb <= piece.sbHi;
+        if (!ca || ca->sinTheta < parallelSinThreshold(t.radius, t.sMax, sbHi)) return true;
+        return std::abs(ca->distance) < t.radius && ca->sr >= 0.0 && ca->sr <= t.sMax && ca->sb >= sbLo &&
+               ca->sb <= sbHi;
     }
 };
 }  // namespace

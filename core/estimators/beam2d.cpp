@@ -126,10 +126,10 @@ namespace {
 struct CylinderTest {
     const Ray& ray;
     double sMax, radius;
-    static bool accept(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
+    static bool accept(const void* context, double sbLo, double sbHi, const Vec3& origin, const Vec3& dir) {
         const auto& t = *static_cast<const CylinderTest*>(context);
         RayBeamOverlap o;
-        return rayBeamOverlap(t.ray.o, t.ray.d, t.sMax, origin, dir, piece.sbLo, piece.sbHi, t.radius, o);
+        return rayBeamOverlap(t.ray.o, t.ray.d, t.sMax, origin, dir, sbLo, sbHi, t.radius, o);
     }
 };
 

@@ -26,7 +26,7 @@ namespace {
 struct PointKernelTest {
     const Ray& ray;
     double sMax, radius;
-    static bool accept(const void* context, const BeamPiece&, const Vec3& point, const Vec3&) {
+    static bool accept(const void* context, double, double, const Vec3& point, const Vec3&) {
         const auto& t = *static_cast<const PointKernelTest*>(context);
         return rayPointDisc(t.ray.o, t.ray.d, t.sMax, point, t.radius).has_value();
     }

@@ -36,7 +36,7 @@ namespace {
 struct PointKernelTest {
     const Ray& ray;
     double sMax, radius;
-    static bool accept(const void* context, const BeamPiece&, const Vec3& point, const Vec3&) {
+    static bool accept(const void* context, double, double, const Vec3& point, const Vec3&) {
         const auto& t = *static_cast<const PointKernelTest*>(context);
         return rayPointChord(t.ray.o, t.ray.d, t.sMax, point, t.radius).has_value();
     }
@@ -44,7 +44,7 @@ struct PointKernelTest {
 
 // The fat test of segment_bundle.h: is the point within r + slack of the block's axis (a segment
 // within slack of the axis can then pass within r of it)?
-bool acceptFatBall(const void* context, const BeamPiece&, const Vec3& point, const Vec3&) {
+bool acceptFatBall(const void* context, double, double, const Vec3& point, const Vec3&) {
     const auto& q = *static_cast<const AccelVolumeEstimator::BundleQuery*>(context);
     return rayPointChord(q.origin, q.axis, q.length, point, q.radius + q.slack).has_value();
 }

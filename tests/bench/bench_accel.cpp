@@ -121,10 +121,10 @@ BENCHMARK(BM_EstimatorPrepare)->Arg(0)->Arg(1)->ArgName("estimator")->Unit(bench
 struct CylinderTest {
     const CameraSegment& seg;
     double radius;
-    static bool accept(const void* context, const BeamPiece& piece, const Vec3& origin, const Vec3& dir) {
+    static bool accept(const void* context, double sbLo, double sbHi, const Vec3& origin, const Vec3& dir) {
         const auto& t = *static_cast<const CylinderTest*>(context);
         RayBeamOverlap o;
-        return rayBeamOverlap(t.seg.ray.o, t.seg.ray.d, t.seg.sMax, origin, dir, piece.sbLo, piece.sbHi, t.radius, o);
+        return rayBeamOverlap(t.seg.ray.o, t.seg.ray.d, t.seg.sMax, origin, dir, sbLo, sbHi, t.radius, o);
     }
 };
 
