@@ -111,9 +111,11 @@ public:
                 tNear = vmax(tNear, vmin(t0, t1));
                 tFar = vmin(tFar, vmax(t0, t1));
             }
-            const auto hit = tNear <= tFar;
-            unsigned met = 0;  // the slots whose box the segment meets (an unused slot never does)
-            for (int j = 0; j < 4; ++j) met |= (hit[j] ? 1u : 0u) << j;
+            // The slots whose box the segment meets (an unused slot never does). Compared lane by
+            // lane: the mask built from the vector comparison's lanes was miscompiled by GCC 12
+            // under -O1 with UBSan (children lost; tests/accel/test_piece_bvh.cpp caught it).
+            unsigned met = 0;
+            for (int j = 0; j < 4; ++j) met |= (tNear[j] <= tFar[j] ? 1u : 0u) << j;
             // Interior children: queued, and fetched ahead.
             for (unsigned m = met & node.interior; m; m &= m - 1) {
                 const uint32_t c = node.child[__builtin_ctz(m)];
