@@ -61,9 +61,24 @@ void makePointPieces(const std::vector<VolumePhoton>& points, std::vector<Piece>
     for (uint32_t k = 0; k < points.size(); ++k) pieces.push_back(pointPiece(points[k], k));
 }
 
-// Piece p's box padded by the support radius (plus 1e-5 of it and 1e-6 of the distance from the
-// origin, for the float boxes), rounded outward to float.
-TPB_HOT_INLINE void paddedBox(const Piece& p, double radius, float lo[3], float hi[3]) {
+// What a hierarchy keeps of a piece, in three arrays: its axis and range in one cache line (what
+// the box and the candidate test read; an 80-byte Piece straddled two), its (beam, piece) (read for
+// the candidates kept) and its region (read for every box a query reaches).
+struct alignas(64) PieceAxis {
+    Vec3 origin, dir;
+    double sbLo, sbHi;
+};
+struct PieceId {
+    uint32_t beam, piece;
+};
+static_assert(sizeof(PieceAxis) == 64 && sizeof(PieceId) == 8,
+              "kAccelBytesPerPiece (beam_accel.h) counts 64 + 8 bytes per stored piece");
+
+PieceAxis axisOf(const Piece& p) { return {p.origin, p.dir, p.sbLo, p.sbHi}; }
+
+// The box of piece axis p padded by the support radius (plus 1e-5 of it and 1e-6 of the distance
+// from the origin, for the float boxes), rounded outward to float.
+TPB_HOT_INLINE void paddedBox(const PieceAxis& p, double radius, float lo[3], float hi[3]) {
     const Vec3 a = p.origin + p.sbLo * p.dir, e = p.origin + p.sbHi * p.dir;
     const double pad = radius * (1.0 + 1e-5) + 1e-6 * (1.0 + glm::length(a));
     const Vec3 l = glm::min(a, e) - pad, h = glm::max(a, e) + pad;
@@ -79,21 +94,8 @@ void forChunks(size_t n, int threads, const F& f) {
     parallelChunks(n, threads, size_t(1) << 14, f);
 }
 
-
 BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
 
-// What a hierarchy keeps of a piece, in three arrays: its axis and range in one cache line (what
-// the box and the candidate test read; an 80-byte Piece straddled two), its (beam, piece) (read for
-// the candidates kept) and its region (read for every box a query reaches).
-struct alignas(64) PieceAxis {
-    Vec3 origin, dir;
-    double sbLo, sbHi;
-};
-struct PieceId {
-    uint32_t beam, piece;
-};
-static_assert(sizeof(PieceAxis) == 64 && sizeof(PieceId) == 8,
-              "kAccelBytesPerPiece (beam_accel.h) counts 64 + 8 bytes per stored piece");
 
 class BruteForceBeams final : public BeamAccel {
 public:
@@ -143,7 +145,7 @@ protected:
         regions_.resize(n);
     }
     void store(size_t k, const Piece& p) {
-        axes_[k] = {p.origin, p.dir, p.sbLo, p.sbHi};
+        axes_[k] = axisOf(p);
         ids_[k] = {p.beam, p.piece};
         regions_[k] = p.region;
     }
@@ -218,7 +220,8 @@ public:
                 const uint32_t count = static_cast<uint32_t>(first_[b + 1] - first_[b]);
                 for (uint32_t k = 0; k < count; ++k) {
                     const size_t i = first_[b] + k;
-                    paddedBox(beamPiece(beams[b], static_cast<uint32_t>(b), k, count), radius_, boxes_[i].lo, boxes_[i].hi);
+                    paddedBox(axisOf(beamPiece(beams[b], static_cast<uint32_t>(b), k, count)), radius_, boxes_[i].lo,
+                              boxes_[i].hi);
                     beamOf_[i] = static_cast<uint32_t>(b);
                 }
             }
@@ -234,7 +237,7 @@ public:
         boxes_.resize(n);
         forChunks(n, threads, [&](size_t i0, size_t i1) {
             for (size_t i = i0; i < i1; ++i)
-                paddedBox(pointPiece(points[i], static_cast<uint32_t>(i)), radius_, boxes_[i].lo, boxes_[i].hi);
+                paddedBox(axisOf(pointPiece(points[i], static_cast<uint32_t>(i))), radius_, boxes_[i].lo, boxes_[i].hi);
         });
         storeInOrder(n, threads, [&](uint32_t i) { return pointPiece(points[i], i); });
     }
@@ -337,8 +340,7 @@ private:
     static void boundsFn(const RTCBoundsFunctionArguments* args) {
         const auto* self = static_cast<const EmbreeBeams*>(args->geometryUserPtr);
         float lo[3], hi[3];
-        const PieceAxis& a = self->axes_[args->primID];
-        paddedBox({a.origin, a.dir, a.sbLo, a.sbHi, 0, 0, 0}, self->radius_, lo, hi);
+        paddedBox(self->axes_[args->primID], self->radius_, lo, hi);
         RTCBounds* out = args->bounds_o;
         out->lower_x = lo[0];
         out->lower_y = lo[1];

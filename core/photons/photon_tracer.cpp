@@ -160,13 +160,7 @@ PhotonMap PhotonTracer::trace(const Scene& scene, const PhotonPassParams& s, con
     constexpr int64_t kGuardEvery = 64;
     const int64_t batches = (s.photons + kBatch - 1) / kBatch;
     parts_.resize(static_cast<size_t>(batches));
-    for (PhotonMap& p : parts_) {
-        p.beams.clear();
-        p.photons.clear();
-        p.points.clear();
-        p.emitted = p.rejected = p.regionOverflows = 0;
-        p.emittedFlux = p.cutFlux = Color(0.0);
-    }
+    for (PhotonMap& p : parts_) p.clear();
     std::atomic<uint64_t> stored{0};  // bytes of all batches so far, for the memory guard
     parallelFor(batches, s.threads, [&](int64_t b, int) {
         PhotonMap& part = parts_[static_cast<size_t>(b)];

@@ -73,6 +73,14 @@ struct PhotonMap {
     Color emittedFlux{0.0};    // W: the flux the pass's photons started with (estimates the lights' power)
     Color cutFlux{0.0};        // W: flux still carried at the end of long beams cut in an unbounded medium
     int64_t regionOverflows = 0;   // photons ended because their region stack was full (RegionStack)
+    // Empty, keeping the arrays' capacity (PhotonTracer reuses its batches' maps).
+    void clear() {
+        beams.clear();
+        photons.clear();
+        points.clear();
+        emitted = rejected = regionOverflows = 0;
+        emittedFlux = cutFlux = Color(0.0);
+    }
 };
 
 // The arguments of one photon pass (not a settings copy: the photon-beams integrator fills them
