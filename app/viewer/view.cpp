@@ -27,13 +27,50 @@ namespace tpb::app {
 namespace {
 
 std::string gGlfwError;
-std::atomic<bool> gInterrupted{false};
+std::atomic<int> gCloseSignal{0};  // the signal that closed the window, 0 = none
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler only touches lock-free atomics");
 
 void onGlfwError(int code, const char* msg) {
     gGlfwError = msg ? msg : "GLFW error " + std::to_string(code);
 }
 
-void onSigint(int) { gInterrupted = true; }
+// Ctrl-C, SIGTERM and SIGHUP (a closed terminal) close the window like its close button: the
+// export or checkpoint being written is finished (~Viewer). After a hangup SIGPIPE is ignored (a
+// message to the closed terminal's pipe must not kill the viewer); a second hangup changes nothing.
+extern "C" void onCloseSignal(int sig) {
+    if (sig == SIGHUP) {
+        struct sigaction ignore {};
+        ignore.sa_handler = SIG_IGN;
+        sigaction(SIGPIPE, &ignore, nullptr);
+    }
+    int none = 0;
+    gCloseSignal.compare_exchange_strong(none, sig);
+}
+
+// Installs onCloseSignal for its lifetime (a hangup ignored under nohup stays ignored) and restores
+// the previous dispositions.
+class CloseSignals {
+public:
+    CloseSignals() {
+        gCloseSignal = 0;
+        struct sigaction sa {};
+        sa.sa_handler = onCloseSignal;
+        sigemptyset(&sa.sa_mask);
+        for (int i = 0; i < 4; ++i) sigaction(kSignals[i], nullptr, &previous_[i]);
+        sigaction(SIGINT, &sa, nullptr);
+        sigaction(SIGTERM, &sa, nullptr);
+        if (previous_[2].sa_handler != SIG_IGN) sigaction(SIGHUP, &sa, nullptr);
+    }
+    ~CloseSignals() {
+        for (int i = 0; i < 4; ++i) sigaction(kSignals[i], &previous_[i], nullptr);
+    }
+    CloseSignals(const CloseSignals&) = delete;
+    CloseSignals& operator=(const CloseSignals&) = delete;
+
+private:
+    static constexpr int kSignals[4] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
+    struct sigaction previous_[4];
+};
 
 // Key presses (and auto-repeats), recorded by a GLFW key callback: ImGui 1.86 samples key states
 // once per frame, so a press and release between two frames would be lost. ImGui chains to it.
@@ -297,7 +334,7 @@ void Viewer::run() {
     const bool shot = !opt_.screenshot.empty();
     double last = glfwGetTime();
     int extraFrames = 3;  // after an event, draw a few frames so ImGui settles
-    while (!glfwWindowShouldClose(window_) && !gInterrupted) {
+    while (!glfwWindowShouldClose(window_) && gCloseSignal.load() == 0) {
         const bool busyDriver = driver_->running() && !driver_->paused();
         const bool animate =
             shot || st_.playing || export_.busy() || profileJob_.valid() || binEnergyJob_.valid() || !frameComplete_;
@@ -413,18 +450,16 @@ void runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::
 
     GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + prepared.source.path, !shot);
     ImGuiSession gui(window.get());
-    gInterrupted = false;
-    std::signal(SIGINT, onSigint);  // Ctrl-C closes the window like the close button
-    try {
+    const CloseSignals signals;  // Ctrl-C, SIGTERM, SIGHUP close the window like the close button
+    {
         Viewer viewer(prepared, ds, o, window.get(), resumePath);
         std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n", prepared.source.path.c_str());
         std::fflush(stdout);
         viewer.run();
-    } catch (...) {
-        std::signal(SIGINT, SIG_DFL);
-        throw;
     }
-    std::signal(SIGINT, SIG_DFL);
+    // As `tpb render`: 0 after Ctrl-C, 128 + the signal after SIGTERM (143) or SIGHUP (129).
+    const int sig = gCloseSignal.load();
+    if ((sig == SIGTERM || sig == SIGHUP) && exitCode() == 0) exitCode() = 128 + sig;
     // ~Viewer stopped the driver; ~ImGuiSession and ~GlfwWindow now release ImGui and the window.
 }
 

@@ -1,0 +1,180 @@
+// Work that must never be lost (issue 33, items 1-3 and 7): the built `tpb` binary (TPB_BINARY, or
+// $TPB_TEST_BINARY to see a test fail on an older build) is run into temp folders and stopped by the
+// signals a user's session sends; its outputs and checkpoint must survive, be verified before they
+// get their final name, and every failure must name its file and end with a non-zero exit code.
+#include "support/temp_dir.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Proc {
+    int code = -1;   // exit code, -1 when killed by a signal
+    int signal = 0;  // terminating signal, 0 when it exited
+    bool timedOut = false;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::ostringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+const char* tpbBinary() {
+    const char* e = std::getenv("TPB_TEST_BINARY");
+    return e && *e ? e : TPB_BINARY;
+}
+
+// Starts tpb with `args`, stdout/stderr to files in `dir`; `env` entries "NAME=value" replace or add.
+pid_t spawnTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env = {}) {
+    std::vector<std::string> argv{tpbBinary()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> cargv;
+    for (std::string& a : argv) cargv.push_back(a.data());
+    cargv.push_back(nullptr);
+    std::vector<std::string> envs;
+    for (char** e = environ; *e; ++e) {
+        const std::string kv(*e);
+        bool replaced = false;
+        for (const std::string& x : env) replaced |= kv.compare(0, x.find('=') + 1, x, 0, x.find('=') + 1) == 0;
+        if (!replaced) envs.push_back(kv);
+    }
+    envs.insert(envs.end(), env.begin(), env.end());
+    std::vector<char*> cenv;
+    for (std::string& e : envs) cenv.push_back(e.data());
+    cenv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, (dir / "stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 2, (dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid = -1;
+    const int rc = posix_spawn(&pid, cargv[0], &fa, nullptr, cargv.data(), cenv.data());
+    posix_spawn_file_actions_destroy(&fa);
+    EXPECT_EQ(rc, 0) << std::strerror(rc);
+    return rc == 0 ? pid : -1;
+}
+
+Proc waitTpb(pid_t pid, const fs::path& dir, double timeoutSec) {
+    Proc p;
+    int status = 0;
+    const double t0 = now();
+    for (;;) {
+        if (waitpid(pid, &status, WNOHANG) == pid) break;
+        if (now() - t0 > timeoutSec) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+            p.timedOut = true;
+            break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (WIFEXITED(status)) p.code = WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) p.signal = WTERMSIG(status);
+    p.out = slurp(dir / "stdout.txt");
+    p.err = slurp(dir / "stderr.txt");
+    return p;
+}
+
+Proc runTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env = {},
+            double timeoutSec = 120.0) {
+    const pid_t pid = spawnTpb(args, dir, env);
+    if (pid < 0) return {};
+    return waitTpb(pid, dir, timeoutSec);
+}
+
+// Polls `file` until it contains `text` (true), the process has ended or `timeoutSec` passed.
+bool waitForText(const fs::path& file, const std::string& text, pid_t pid, double timeoutSec) {
+    const double t0 = now();
+    while (now() - t0 < timeoutSec) {
+        if (slurp(file).find(text) != std::string::npos) return true;
+        siginfo_t info{};
+        if (waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == pid)
+            return false;  // ended (left to be reaped by waitTpb)
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    return false;
+}
+
+// A closed box in fog with the camera and a point light inside: 16x16 px.
+std::string boxScene(int bins, const std::string& render) {
+    return "{\"version\": 1,\n"
+           " \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"fov\": 60, \"resolution\": [16, 16]},\n"
+           " \"film\": {\"bins\": " + std::to_string(bins) + "},\n"
+           " \"media\": {\"fog\": {\"sigma_s\": 0.5, \"sigma_a\": 0.05}}, \"global_medium\": \"fog\",\n"
+           " \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},\n"
+           " \"shapes\": [{\"type\": \"box\", \"min\": [-1, 0, -1], \"max\": [1, 1, 1], \"material\": \"white\", "
+           "\"flip_normals\": true}],\n"
+           " \"lights\": [{\"type\": \"point\", \"position\": [0, 0.8, 0], \"power\": 5}],\n"
+           " \"render\": " + render + "}\n";
+}
+
+class CliSafety : public ::testing::Test {
+protected:
+    void SetUp() override {
+        tmp_ = std::make_unique<tpb::test::TempDir>(
+            "safety_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        dir_ = tmp_->path();
+    }
+    fs::path write(const std::string& name, const std::string& text) {
+        const fs::path p = dir_ / name;
+        fs::create_directories(p.parent_path());
+        std::ofstream(p, std::ios::binary) << text;
+        return p;
+    }
+    std::unique_ptr<tpb::test::TempDir> tmp_;
+    fs::path dir_;
+};
+
+}  // namespace
+
+// Item 2: a closed terminal or ssh session (SIGHUP, here sent twice as a shell and the kernel both
+// send it) stops the render like SIGTERM: the finished passes and the checkpoint are written, exit
+// 129. Before, the default disposition killed the process and every pass was lost.
+TEST_F(CliSafety, SighupWritesTheFinishedPassesAndTheCheckpoint) {
+    const fs::path scene = write("scene.json", boxScene(8, "{\"photons_per_pass\": 20000, \"passes\": 100000, \"seed\": 1}"));
+    const fs::path out = dir_ / "out";
+    const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2", "--strip", "0"}, dir_);
+    ASSERT_GT(pid, 0);
+    ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "pass 1:", pid, 60.0)) << slurp(dir_ / "stderr.txt");
+    kill(pid, SIGHUP);
+    kill(pid, SIGHUP);  // a second hangup does not quit at once (it is not a second Ctrl-C)
+    const Proc p = waitTpb(pid, dir_, 120.0);
+    EXPECT_FALSE(p.timedOut);
+    EXPECT_EQ(p.signal, 0) << "killed by the hangup: the finished passes are lost\n" << p.err;
+    EXPECT_EQ(p.code, 129) << p.err;
+    EXPECT_NE(p.err.find("interrupted by SIGHUP (the terminal was closed): writing the "), std::string::npos) << p.err;
+    ASSERT_TRUE(fs::exists(out / "summary.json")) << p.err;
+    const nlohmann::json summary = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_GE(summary["passes"].get<int>(), 1);
+    EXPECT_EQ(summary["outputs"]["frames_written"].get<int>(), 8);
+    EXPECT_TRUE(fs::exists(out / "checkpoint.tpbck")) << p.err;
+    EXPECT_NE(p.err.find("checkpoint (interrupted): "), std::string::npos) << p.err;
+}
