@@ -8,6 +8,7 @@
 #include "estimators/estimator_names.h"
 #include "film/film_view.h"
 #include "film/picture_export.h"
+#include "render/checkpoint.h"
 #include "render/time_range.h"
 
 #include "cli/commands.h"
@@ -469,6 +470,36 @@ std::vector<std::string> removeOutputs(const fs::path& dir, const PreviousOutput
     return removed;
 }
 
+bool listed(const std::vector<std::string>& names, const std::string& name) {
+    return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+// Throws a UserError when the folder holds a checkpoint that this run would remove (the previous
+// run's manifest lists it) or could overwrite (this run lists it), unless kept or replaced on request.
+void refuseToLoseCheckpoint(const std::string& dir, const std::string& command, const OutputFiles& outputs,
+                            const PreviousOutputs& prev) {
+    const fs::path path = fs::path(dir) / kCheckpointFile;
+    std::error_code ec;
+    if (outputs.replaceCheckpoint || listed(outputs.keep, kCheckpointFile) || !fs::is_regular_file(path, ec)) return;
+    const bool removes = prev.files.count(kCheckpointFile) > 0, overwrites = listed(outputs.files, kCheckpointFile);
+    if (!removes && !overwrites) return;
+    std::string what;
+    try {
+        const CheckpointInfo info = readCheckpointInfo(path.string());
+        what = "holds the checkpoint of an earlier render (" + std::to_string(info.passes) + " passes of " +
+               info.scene + ", written " + info.created + ")";
+    } catch (const UserError& e) {
+        what = "holds a checkpoint that cannot be read (" + std::string(e.what()) + ")";
+    }
+    throw UserError(path.string(), 0, "",
+                    what + ", which this tpb " + command + " would " + (removes ? "remove" : "overwrite") +
+                        "; a checkpoint is never discarded silently: " +
+                        (outputs.checkpointAdvice.empty() ? "" : outputs.checkpointAdvice + ", ") +
+                        "give this run another folder with -o" +
+                        (command == "render" ? ", or add --overwrite-checkpoint to discard it"
+                                             : ", or move the checkpoint out of the folder"));
+}
+
 }  // namespace
 
 OutputFolder::OutputFolder(const std::string& dir, const std::string& command, const OutputFiles& outputs)
@@ -504,6 +535,13 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& command, c
 
     PreviousOutputs prev = previousOutputs(dir);
     for (const std::string& k : outputs.keep) prev.files.erase(k);  // a resume's checkpoint (cli/resume.h)
+    try {
+        refuseToLoseCheckpoint(dir, command, outputs, prev);
+    } catch (...) {
+        ::close(lockFd_);  // (no destructor runs for a constructor that throws)
+        lockFd_ = -1;
+        throw;
+    }
     removed_ = removeOutputs(dir, prev);
 
     nlohmann::json m;

@@ -65,7 +65,10 @@ int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film);
 // files its manifest (<dir>/.tpb-manifest.json) lists, or, for a folder written before manifests
 // existed, what its summary.json lists. Files tpb did not write are never touched. The new run's
 // files are recorded in the manifest before any of them is written, so that a run that dies while
-// writing still leaves them listed for the next one.
+// writing still leaves them listed for the next one. A checkpoint (checkpoint.tpbck: hours of
+// render) that the run would remove or overwrite is never touched silently: the constructor refuses
+// with a UserError naming it, its passes and the ways forward, unless it is in `keep` or
+// `replaceCheckpoint` is set.
 struct OutputFiles {
     std::vector<std::string> files;  // relative to the folder
     std::string framesDir;           // "" = no frames; else frame_NNNNN.exr for bins first..last step
@@ -73,6 +76,10 @@ struct OutputFiles {
     // Files of the previous run that stay even when its manifest lists them (the checkpoint a
     // resume reads, until the resumed render replaces it).
     std::vector<std::string> keep;
+    bool replaceCheckpoint = false;  // the user said so (tpb render --overwrite-checkpoint)
+    // The ways forward the refusal names after "another folder with -o" (e.g. "continue it with
+    // `tpb render --resume DIR`"), or "".
+    std::string checkpointAdvice;
 };
 class OutputFolder {
 public:

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <climits>
 #include <filesystem>
 #include <optional>
@@ -42,6 +43,7 @@ struct RenderCmd {
     bool checkpoint = false;       // --checkpoint: one when the render ends
     double checkpointEveryMin = 0.0;  // --checkpoint-every: and every that many minutes
     bool noCheckpoint = false;     // --no-checkpoint: none when Ctrl-C or SIGTERM stops the render
+    bool overwriteCheckpoint = false;  // --overwrite-checkpoint: an earlier render's checkpoint in -o may go
     bool npy = false, mp4 = false, falseColour = false, noSrgb = false;
     double fps = 24.0, videoEv = 0.0;
     int contactSheet = 0;
@@ -183,10 +185,14 @@ void run(RenderCmd& c) {
     if (c.method != "pt" && !(c.noCheckpoint && !resume)) files.files.push_back(kCheckpointFile);
     std::error_code ec;
     if (resume && std::filesystem::equivalent(resume->path, checkpointPath, ec)) files.keep.push_back(kCheckpointFile);
+    files.replaceCheckpoint = c.overwriteCheckpoint;
+    files.checkpointAdvice = "continue that render with `tpb render --resume " + c.out + "`";
     const OutputFolder folder(c.out, "render", files);
     if (!c.quiet && !folder.removed().empty())
         std::printf("removed %zu files of an earlier render in %s (listed in its manifest)\n", folder.removed().size(),
                     c.out.c_str());
+    if (std::find(folder.removed().begin(), folder.removed().end(), kCheckpointFile) != folder.removed().end())
+        std::fprintf(stderr, "note: removed the earlier render's %s (--overwrite-checkpoint)\n", checkpointPath.c_str());
 
     // Geometry/camera check before any photon is traced.
     const std::vector<float> preview = renderPreview(*scene, ds.threads);
@@ -373,6 +379,9 @@ void registerRender(CLI::App& app) {
                     "Also write the checkpoint every MIN minutes (between passes)")
         ->check(flags::number(0.0, 1e9, true, "minutes"))
         ->type_name("MIN");
+    cmd->add_flag("--overwrite-checkpoint", c->overwriteCheckpoint,
+                  "Allow this render to remove or replace the checkpoint of an earlier render in the output folder "
+                  "(refused otherwise: resume it with --resume, or use another -o)");
     cmd->add_flag("--no-checkpoint", c->noCheckpoint,
                   "Write no checkpoint when Ctrl-C or SIGTERM stops the render (written by default then)");
     cmd->callback([c, out, cmd] {

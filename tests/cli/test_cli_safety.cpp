@@ -178,3 +178,65 @@ TEST_F(CliSafety, SighupWritesTheFinishedPassesAndTheCheckpoint) {
     EXPECT_TRUE(fs::exists(out / "checkpoint.tpbck")) << p.err;
     EXPECT_NE(p.err.find("checkpoint (interrupted): "), std::string::npos) << p.err;
 }
+
+// Item 1: a new render into a folder removed the earlier render's checkpoint with its other outputs
+// ("removed 39 files of an earlier render"), even a --preview. Now it is refused (exit 2, nothing
+// touched) with the checkpoint's passes and the ways forward; --resume still finds it, and only
+// --overwrite-checkpoint lets it go.
+TEST_F(CliSafety, NewRenderIntoAFolderWithACheckpointIsRefusedAndTheCheckpointKept) {
+    const fs::path scene = write("scene.json", boxScene(8, "{\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}"));
+    const fs::path out = dir_ / "out";
+    const std::vector<std::string> base{"render", scene.string(), "-o", out.string(), "--strip", "0"};
+    auto with = [&](std::vector<std::string> extra) {
+        std::vector<std::string> a = base;
+        a.insert(a.end(), extra.begin(), extra.end());
+        return a;
+    };
+    Proc p = runTpb(with({"--checkpoint", "-q"}), dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    const std::string checkpoint = slurp(out / "checkpoint.tpbck");
+    const std::string steady = slurp(out / "steady.exr");
+    ASSERT_FALSE(checkpoint.empty());
+
+    for (const std::vector<std::string>& extra : {std::vector<std::string>{"--preview"},
+                                                  std::vector<std::string>{"--no-checkpoint", "--passes", "1"},
+                                                  std::vector<std::string>{"--method", "pt", "--passes", "1"}}) {
+        SCOPED_TRACE(extra[0]);
+        p = runTpb(with(extra), dir_);
+        EXPECT_EQ(p.code, 2) << p.err;
+        EXPECT_NE(p.err.find("error: " + (out / "checkpoint.tpbck").string() +
+                             ": holds the checkpoint of an earlier render (2 passes of "),
+                  std::string::npos)
+            << p.err;
+        EXPECT_NE(p.err.find("which this tpb render would remove; a checkpoint is never discarded silently: continue "
+                             "that render with `tpb render --resume " + out.string() + "`, give this run another "
+                             "folder with -o, or add --overwrite-checkpoint to discard it"),
+                  std::string::npos)
+            << p.err;
+        EXPECT_EQ(p.out.find("removed "), std::string::npos) << p.out;
+        EXPECT_TRUE(slurp(out / "checkpoint.tpbck") == checkpoint) << "the checkpoint was removed or changed";
+        EXPECT_TRUE(slurp(out / "steady.exr") == steady) << "nothing of the earlier render may be touched";
+    }
+    // The way forward the message names works: the checkpoint is there to resume.
+    p = runTpb({"render", "--resume", out.string(), "--passes", "3", "--strip", "0", "-q"}, dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["passes"].get<int>(), 3);
+
+    // A checkpoint the manifest does not list (copied in, or saved by the viewer) would be
+    // overwritten by the next checkpoint of a new render: refused too.
+    const fs::path other = dir_ / "other";
+    fs::create_directories(other);
+    fs::copy_file(out / "checkpoint.tpbck", other / "checkpoint.tpbck");
+    p = runTpb({"render", scene.string(), "-o", other.string(), "--no-frames", "--strip", "0", "-q"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("which this tpb render would overwrite"), std::string::npos) << p.err;
+
+    // Asked for explicitly: the earlier checkpoint goes, and the render says so.
+    p = runTpb(with({"--preview", "--overwrite-checkpoint"}), dir_);
+    EXPECT_EQ(p.code, 0) << p.err;
+    EXPECT_FALSE(fs::exists(out / "checkpoint.tpbck"));
+    EXPECT_NE(p.err.find("note: removed the earlier render's " + (out / "checkpoint.tpbck").string() +
+                         " (--overwrite-checkpoint)"),
+              std::string::npos)
+        << p.err;
+}
