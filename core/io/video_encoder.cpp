@@ -4,6 +4,7 @@
 #include "io/atomic_file.h"
 
 #include <cerrno>
+#include <cstdint>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -56,7 +57,87 @@ bool writeAll(int fd, const unsigned char* p, size_t n) {
     return ok;
 }
 
+// One ISO BMFF box header read at `at`: its type and total size (0 when unreadable).
+struct Box {
+    char type[5] = {};
+    uint64_t size = 0, header = 0;
+};
+Box readBox(int fd, uint64_t at, uint64_t end) {
+    Box b;
+    unsigned char h[16];
+    if (end - at < 8 || ::pread(fd, h, 8, static_cast<off_t>(at)) != 8) return b;
+    std::memcpy(b.type, h + 4, 4);
+    const auto be = [&](int i, int n) {
+        uint64_t v = 0;
+        for (int k = 0; k < n; ++k) v = (v << 8) | h[i + k];
+        return v;
+    };
+    b.size = be(0, 4);
+    b.header = 8;
+    if (b.size == 1) {  // 64-bit size after the type
+        if (end - at < 16 || ::pread(fd, h + 8, 8, static_cast<off_t>(at + 8)) != 8) return Box{};
+        b.size = be(8, 8);
+        b.header = 16;
+    } else if (b.size == 0) {  // "to the end of the file"
+        b.size = end - at;
+    }
+    if (b.size < b.header || b.size > end - at) b.size = 0;
+    return b;
+}
+
+// The sample count of the first track's sample size table (moov/trak/mdia/minf/stbl/stsz), -1 if absent.
+int64_t sampleCount(int fd, uint64_t from, uint64_t end) {
+    for (uint64_t at = from; at < end;) {
+        const Box b = readBox(fd, at, end);
+        if (b.size == 0) return -1;
+        const std::string type(b.type);
+        if (type == "trak" || type == "mdia" || type == "minf" || type == "stbl")
+            return sampleCount(fd, at + b.header, at + b.size);
+        if (type == "stsz") {  // version/flags (4), sample_size (4), sample_count (4)
+            unsigned char c[4];
+            if (b.size < b.header + 12 || ::pread(fd, c, 4, static_cast<off_t>(at + b.header + 8)) != 4) return -1;
+            return (int64_t(c[0]) << 24) | (int64_t(c[1]) << 16) | (int64_t(c[2]) << 8) | int64_t(c[3]);
+        }
+        at += b.size;
+    }
+    return -1;
+}
+
 }  // namespace
+
+std::string mp4Problem(const std::string& path, int frames) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return std::string("it cannot be opened: ") + std::strerror(errno);
+    struct stat st {};
+    const uint64_t end = ::fstat(fd, &st) == 0 ? static_cast<uint64_t>(st.st_size) : 0;
+    std::string problem;
+    bool moov = false, mdat = false;
+    int64_t samples = -1;
+    for (uint64_t at = 0; at < end && problem.empty();) {
+        const Box b = readBox(fd, at, end);
+        if (b.size == 0) {
+            problem = "it is cut short: a box at byte " + std::to_string(at) + " of " + std::to_string(end) +
+                      " runs past the end of the file";
+            break;
+        }
+        const std::string type(b.type);
+        if (at == 0 && type != "ftyp") problem = "it does not start with an MP4 header (ftyp)";
+        if (type == "mdat") mdat = true;
+        if (type == "moov") {
+            moov = true;
+            samples = sampleCount(fd, at + b.header, at + b.size);
+        }
+        at += b.size;
+    }
+    ::close(fd);
+    if (!problem.empty()) return problem;
+    if (end == 0) return "it is empty";
+    if (!mdat) return "it holds no video data (no mdat box)";
+    if (!moov) return "its index (the moov box, written last) is missing: ffmpeg did not finish it";
+    if (samples != frames)
+        return "it indexes " + std::to_string(samples) + " frames of the " + std::to_string(frames) + " sent";
+    return "";
+}
 
 std::string findExecutable(const std::string& name) {
     const char* path = std::getenv("PATH");
@@ -197,6 +278,17 @@ void VideoEncoder::finish() {
                             (WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
                                                : "killed by signal " + std::to_string(WTERMSIG(status))) +
                             "): " + stderrTail() + " (nothing was written under this name)");
+    }
+    // ffmpeg can exit with 0 after failing to write its trailer (a full disk): the file is checked
+    // before it gets its final name.
+    const std::string problem = mp4Problem(tmp_, frames_);
+    if (!problem.empty()) {
+        ::unlink(tmp_.c_str());
+        const std::string said = stderrTail();
+        throw UserError(path_, 0, "",
+                        "ffmpeg exited with 0 but the video it wrote is not playable: " + problem +
+                            (said == "(ffmpeg printed nothing)" ? "" : "; ffmpeg said: " + said) +
+                            " (a full disk? nothing was written under this name)");
     }
     if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
         const int err = errno;

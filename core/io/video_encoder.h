@@ -2,7 +2,8 @@
 // ffmpeg. Frames go to ffmpeg's stdin as raw rgb24 (`-f rawvideo -pix_fmt rgb24 -s WxH -r FPS -i -
 // -c:v libx264 -pix_fmt yuv420p`); an odd width or height is padded with black to an even one
 // (yuv420p needs even dimensions). The video is written to "<path>.tmp-<pid>" (atomic_file.h's
-// name) and renamed to `path` only after ffmpeg exited with 0, so a failed, cancelled or
+// name) and renamed to `path` only after ffmpeg exited with 0 and the file was checked (mp4Problem:
+// ffmpeg exits with 0 even when a full disk cut its trailer), so a failed, cancelled or
 // interrupted encoding never leaves a half-written .mp4. ffmpeg runs in its own process group: a
 // Ctrl-C at the terminal reaches tpb only, which decides (abort() kills ffmpeg and removes the
 // temporary file).
@@ -18,6 +19,12 @@ std::string findExecutable(const std::string& name);
 // install ffmpeg, or drop <flag>" naming the flag or button that asked for it.
 std::string requireFfmpeg(const std::string& flag);
 
+// Why the MP4 file at `path` is not a complete video of `frames` frames, or "" when it is: its
+// top-level boxes must tile the file exactly (ftyp first, then mdat and moov), and the track's
+// sample size table (moov/trak/mdia/minf/stbl/stsz) must count `frames` samples. Reads box
+// headers and a few bytes only (no decoding).
+std::string mp4Problem(const std::string& path, int frames);
+
 class VideoEncoder {
 public:
     // Starts ffmpeg for frames of width x height at `fps` frames per second. Throws UserError
@@ -31,8 +38,9 @@ public:
     // One frame, width*height*3 bytes (rgb24, top row first). Throws UserError (with the tail
     // of ffmpeg's stderr) when ffmpeg has stopped reading.
     void addFrame(const unsigned char* rgb);
-    // Closes ffmpeg's input, waits for it and renames the video into place. Throws UserError with
-    // the exit status and the tail of ffmpeg's stderr when ffmpeg failed (nothing is left).
+    // Closes ffmpeg's input, waits for it, checks the file (mp4Problem) and renames the video into
+    // place. Throws UserError naming the file, with the exit status or the problem found and the
+    // tail of ffmpeg's stderr, when ffmpeg failed (nothing is left).
     void finish();
     // Kills ffmpeg, waits for it, removes the temporary file.
     void abort();

@@ -240,3 +240,38 @@ TEST_F(CliSafety, NewRenderIntoAFolderWithACheckpointIsRefusedAndTheCheckpointKe
               std::string::npos)
         << p.err;
 }
+
+// Item 3: on a full disk ffmpeg exits with 0 after failing to write its trailer; tpb renamed the
+// truncated, unplayable transient.mp4 into place (and then blamed summary.json). A fake ffmpeg on
+// PATH does what ffmpeg does then: reads every frame, writes the start of an MP4 without its index,
+// says so on stderr and exits 0. The file must be checked before it gets its final name, and the
+// error must name transient.mp4.
+TEST_F(CliSafety, VideoThatFfmpegLeftIncompleteIsRefusedAndNamed) {
+    const fs::path scene = write("scene.json", boxScene(8, "{\"photons_per_pass\": 2000, \"passes\": 1, \"seed\": 1}"));
+    const fs::path fake = write("fakebin/ffmpeg",
+                                "#!/bin/sh\n"
+                                "for a; do last=$a; done\n"
+                                "cat >/dev/null\n"
+                                "printf '\\000\\000\\000\\030ftypisom\\000\\000\\002\\000isomiso2\\000\\000\\020\\000mdat' "
+                                ">\"$last\"\n"
+                                "echo \"[mp4 @ 0x1] Error writing trailer of $last: No space left on device\" >&2\n"
+                                "exit 0\n");
+    fs::permissions(fake, fs::perms::owner_all);
+    const fs::path out = dir_ / "out";
+    const std::string path = "PATH=" + (dir_ / "fakebin").string() + ":" + std::getenv("PATH");
+    const Proc p = runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--mp4"}, dir_,
+                          {path});
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("error: " + (out / "transient.mp4").string() +
+                         ": ffmpeg exited with 0 but the video it wrote is not playable: it is cut short"),
+              std::string::npos)
+        << p.err;
+    EXPECT_NE(p.err.find("No space left on device"), std::string::npos) << p.err;  // what ffmpeg said
+    EXPECT_EQ(p.err.find("summary.json:"), std::string::npos) << p.err;
+    EXPECT_FALSE(fs::exists(out / "transient.mp4"));
+    for (const auto& e : fs::directory_iterator(out))
+        EXPECT_EQ(e.path().filename().string().find(".tmp-"), std::string::npos) << e.path();
+    const nlohmann::json summary = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_NE(summary["outputs"]["error"].get<std::string>().find("transient.mp4"), std::string::npos);
+    for (const auto& f : summary["outputs"]["files"]) EXPECT_NE(f.get<std::string>(), "transient.mp4");
+}
