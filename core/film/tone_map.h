@@ -1,8 +1,9 @@
 // Display mapping of linear radiance to 8-bit colour: exposure, sRGB encoding, a false-colour map
 // of log luminance, and the automatic exposure. One implementation for every picture tpb makes
 // from a film on the CPU (the MP4 and the contact sheet, app/cli and the viewer's exports); the
-// viewer's screen does the same mapping on the GPU (shaders/display.frag: keep the two in step,
-// tests/film/test_tone_map.cpp checks this file's values).
+// viewer's screen does the same mapping on the GPU (shaders/display.frag: keep the two in step;
+// tests/film/test_picture_export.cpp checks this file's values, tests/viewer/test_viewer.cpp the
+// screen's pixels against them, in sRGB and false colour).
 #pragma once
 #include <cstddef>
 #include <cstdint>

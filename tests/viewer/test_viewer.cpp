@@ -3,6 +3,7 @@
 // the EXRs that --export writes through the Export buttons' code path), against an independent
 // `tpb render` of the same scene, seed, passes and threads, and across the time-axis and emission
 // toggles. Skipped only when xvfb-run is missing or cannot start an X server.
+#include "film/tone_map.h"
 #include "io/image_io.h"
 #include "render/render_settings.h"
 
@@ -28,6 +29,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <cstdio>
@@ -35,6 +37,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -168,11 +171,15 @@ std::map<std::string, Rect> parseControls(const std::string& out, const std::str
     return m;
 }
 
-// What display.frag + an 8-bit framebuffer make of a linear value.
-int expected8(float v, double ev) {
-    double c = std::clamp(static_cast<double>(v) * std::exp2(ev), 0.0, 1.0);
-    c = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
-    return static_cast<int>(std::lround(255.0 * c));
+// What the CPU tone map (core/film/tone_map.h, used by every exported picture) makes of a film
+// pixel: the screen (shaders/display.frag on the GPU) must show the same bytes within rounding.
+std::array<int, 3> cpuToneMap(const float* rgb, double ev, bool falseColor) {
+    tpb::ToneMap tm;
+    tm.exposureEv = static_cast<float>(ev);
+    tm.falseColor = falseColor;
+    unsigned char out[3];
+    tpb::toneMapPixel(rgb, tm, out);
+    return {out[0], out[1], out[2]};
 }
 
 // Screenshot pixel at the centre of film pixel (x, y).
@@ -180,6 +187,30 @@ const unsigned char* cell(const Image8& shot, const Area& a, int x, int y) {
     const int sx = static_cast<int>(std::floor(a.x + (x + 0.5) * a.zoom));
     const int sy = static_cast<int>(std::floor(a.y + (y + 0.5) * a.zoom));
     return shot.at(std::clamp(sx, 0, shot.w - 1), std::clamp(sy, 0, shot.h - 1));
+}
+
+// How many film pixels the screenshot shows as the CPU tone map says (each channel within 3 of 255:
+// 8-bit rounding and the GPU's float), and how many distinct colours the CPU map gives them.
+struct ToneMatch {
+    int close = 0, total = 0, distinct = 0;
+};
+
+ToneMatch matchToneMap(const Image8& shot, const Area& a, const Exr& film, bool falseColor) {
+    ToneMatch m;
+    std::set<std::array<int, 3>> colours;
+    for (int y = 0; y < kFilm; ++y)
+        for (int x = 0; x < kFilm; ++x) {
+            if (std::abs(x - kFilm / 2) <= 1 && std::abs(y - kFilm / 2) <= 1) continue;  // selection marker
+            const unsigned char* p = cell(shot, a, x, y);
+            const std::array<int, 3> want = cpuToneMap(&film.rgb[(static_cast<size_t>(y) * kFilm + x) * 3], a.ev, falseColor);
+            colours.insert(want);
+            bool ok = true;
+            for (int c = 0; c < 3; ++c) ok &= std::abs(static_cast<int>(p[c]) - want[c]) <= 3;
+            m.close += ok;
+            ++m.total;
+        }
+    m.distinct = static_cast<int>(colours.size());
+    return m;
 }
 
 // Max relative difference between two images of the same size (scaled by the larger magnitude,
@@ -348,7 +379,7 @@ protected:
 
 // The viewer exits 0 after N passes with a PNG of the whole window, and its image area shows the
 // frame: where the independent render's frame has energy the screenshot is not black, and every
-// film pixel is shown with the reported exposure + sRGB (within 8-bit rounding), so the display
+// film pixel is shown as the CPU tone map (exposure + sRGB) makes it, within 8-bit rounding, so the display
 // chain (upload, shader, FBO, ImGui) neither moves, flips nor distorts pixels.
 TEST_F(ViewerTest, ScreenshotShowsTheRenderedFrame) {
     const Mode& m = kModes[0];
@@ -376,7 +407,7 @@ TEST_F(ViewerTest, ScreenshotShowsTheRenderedFrame) {
         for (int x = 0; x < kFilm; ++x) peak = std::max(peak, ref.lum(x, y));
     ASSERT_GT(peak, 0.0f) << "the reference frame is black: bad test scene";
 
-    int lit = 0, litBlack = 0, close = 0, total = 0;
+    int lit = 0, litBlack = 0;
     for (int y = 0; y < kFilm; ++y)
         for (int x = 0; x < kFilm; ++x) {
             if (std::abs(x - kFilm / 2) <= 1 && std::abs(y - kFilm / 2) <= 1) continue;  // selection marker
@@ -385,15 +416,29 @@ TEST_F(ViewerTest, ScreenshotShowsTheRenderedFrame) {
                 ++lit;
                 if (std::max({p[0], p[1], p[2]}) <= 8) ++litBlack;
             }
-            const float* v = &ref.rgb[(static_cast<size_t>(y) * kFilm + x) * 3];
-            bool ok = true;
-            for (int c = 0; c < 3; ++c) ok &= std::abs(static_cast<int>(p[c]) - expected8(v[c], a.ev)) <= 3;
-            close += ok;
-            ++total;
         }
     EXPECT_GT(lit, kFilm * kFilm / 10) << "too few lit pixels to judge";
     EXPECT_EQ(litBlack, 0) << "pixels with energy shown black";
-    EXPECT_GE(close, total * 99 / 100) << close << " of " << total << " pixels match exposure+sRGB of the film";
+    const ToneMatch t = matchToneMap(img, a, ref, false);
+    EXPECT_GE(t.close, t.total * 99 / 100) << t.close << " of " << t.total << " pixels match the CPU tone map (sRGB)";
+}
+
+// The screen in false colour shows what the exports' CPU false-colour map makes of the film (the
+// shader and core/film/tone_map.cpp are two codes of one mapping). Not vacuous: the frame's pixels
+// span several colours of the ramp (a one-colour picture could match a wrong ramp by chance).
+TEST_F(ViewerTest, FalseColourScreenMatchesTheCpuToneMap) {
+    const Mode& m = kModes[0];
+    const Proc r = viewRun("false_colour", kRenderArgs + m.flags + " --bin " + std::to_string(bin()) +
+                                               " --after-passes 2 --click 'Display/False colour'");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const Area a = parseArea(r.out);
+    ASSERT_TRUE(a.ok) << r.out;
+    ASSERT_EQ(a.bin, bin());
+    const Exr ref = readExrFile(reference(m) / "frames" / frameName(bin()));
+    ASSERT_EQ(ref.w, kFilm);
+    const ToneMatch t = matchToneMap(shotOf("false_colour"), a, ref, true);
+    EXPECT_GE(t.distinct, 20) << "too few distinct false colours to judge";
+    EXPECT_GE(t.close, t.total * 99 / 100) << t.close << " of " << t.total << " pixels match the CPU false-colour map";
 }
 
 // --export goes through the Export buttons' code path; the EXRs must hold exactly the film that an
