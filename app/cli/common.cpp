@@ -323,6 +323,42 @@ int64_t replaceNonFiniteNumbers(nlohmann::json& j) {
     return n;
 }
 
+void checkTimeResponseFitsFilm(const std::string& pulse, const std::string& sensor, const TimeBins& time) {
+    const TimeResponse p = *parsePulse(pulse), s = *parseSensor(sensor), both = *parseSensor(sensor, p);
+    const double span = responseSpanBins(both, time.binWidth);
+    if (span <= kMaxResponseBins) return;
+    // The spans add (time_response.cpp, support()) and grow linearly with each width, and inversely
+    // with the bin width: the widest pulse (sensor) that fits beside the other, the most bins that fit.
+    const double pulseSpan = responseSpanBins(p, time.binWidth), sensorSpan = responseSpanBins(s, time.binWidth);
+    const auto ns = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.3g", v);
+        return std::string(b);
+    };
+    std::string what, narrower;
+    if (pulseSpan > kMaxResponseBins || sensorSpan <= 0.0) {
+        what = "--pulse " + pulse;
+        if (sensorSpan < kMaxResponseBins)
+            narrower = "a --pulse narrower than " +
+                       ns(p.pulseWidth / kC_m_per_ns * (kMaxResponseBins - sensorSpan) / pulseSpan) + " ns";
+    } else if (sensorSpan > kMaxResponseBins || pulseSpan <= 0.0) {
+        what = "--sensor " + sensor;
+        if (pulseSpan < kMaxResponseBins)
+            narrower = "a --sensor narrower than " +
+                       ns(s.sensorWidth / kC_m_per_ns * (kMaxResponseBins - pulseSpan) / sensorSpan) + " ns";
+    } else {
+        what = "--pulse " + pulse + " with --sensor " + sensor;
+        narrower = "a narrower --pulse or --sensor";
+    }
+    const double fewerBins = std::floor(time.bins * (kMaxResponseBins / span));
+    const std::string wider = fewerBins >= 1.0 ? "wider bins (--bins " + std::to_string(static_cast<long long>(fewerBins)) +
+                                                     " or fewer, or a longer film time range)"
+                                               : "wider bins (a longer film time range with fewer --bins)";
+    throw UserError(what + " spans " + ns(span) + " bins of this film (bins of " + ns(time.binWidth / kC_m_per_ns) +
+                    " ns); the limit is 1048576 (2^20) bins, beyond which the response's weights are rounding "
+                    "noise: use " + wider + (narrower.empty() ? "" : ", or " + narrower));
+}
+
 int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film) {
     const int64_t n = film.stats.overflowedPixels.load();
     if (n > 0)
@@ -702,6 +738,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
     // A first signal during the export stops it after the frame in progress. If the render was
     // already interrupted, the flag is set: the export runs to the end, and a second signal quits.
     const std::atomic<bool>* cancel = interrupted() ? nullptr : &interruptFlag();
+    bool internal = false;  // the export failed on a bug (exit code 1), not on the user's input or disk
     try {
         if (!r.noFrames) {
             const double t0 = nowSec();
@@ -727,9 +764,13 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
             rep.kept.push_back("strip.png");
         }
         writePictureOutputs(*snap, r, rep, cancel, tty);
-    } catch (const UserError& e) {
+    } catch (const std::exception& e) {
+        // A user error (a full disk, ...) or a bug: either way the finished film's steady image and
+        // summary stay, with the frames written so far, and the summary says what failed.
         if (tty) std::fprintf(stderr, "\n");
-        rep.error = e.what();
+        const bool user = dynamic_cast<const UserError*>(&e) != nullptr;
+        rep.error = user ? e.what() : std::string("internal error while writing the outputs: ") + e.what();
+        internal = !user;
         if (rep.framesWritten > 0 && rep.framesWritten < rep.framesExpected) rep.kept.push_back("frames/ (partial)");
     }
     if (rep.interrupted && rep.framesWritten > 0 && rep.framesWritten < rep.framesExpected)
@@ -745,7 +786,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         for (const std::string& k : rep.kept) kept += (kept.empty() ? "" : ", ") + k;
         std::fprintf(stderr, "error: %s\nkept in %s (complete files only): %s; %d of %d frames\n", rep.error.c_str(),
                      r.out.c_str(), kept.c_str(), rep.framesWritten, rep.framesExpected);
-        exitCode() = rep.interrupted ? 128 + interruptSignal() : kExitUserError;
+        exitCode() = rep.interrupted ? 128 + interruptSignal() : internal ? 1 : kExitUserError;
     }
     return rep;
 }

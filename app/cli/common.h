@@ -53,6 +53,11 @@ PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, 
 // The same with the overrides as values (a resume: the checkpoint's flags, cli/resume.h).
 PreparedRender loadAndBuild(const std::string& path, const SettingsOverrides& ov, const LoadOptions& lo = {});
 
+// Refuses (UserError) a --pulse / --sensor whose kernel spans more than kMaxResponseBins of the
+// film's bins (film/time_response.h), naming the flag and the fix; called once the time axis is
+// known (after the pilot), before any pass or file.
+void checkTimeResponseFitsFilm(const std::string& pulse, const std::string& sensor, const TimeBins& time);
+
 // Warns on stderr when the film dropped pixel sums that would have overflowed its floats
 // (FilmStats::overflowedPixels), naming the fix; returns that count.
 int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film);

@@ -159,7 +159,8 @@ void run(RenderCmd& c) {
     opt.mode = (ds.emission == EmissionMode::Continuous || c.continuous) && !c.delta
                    ? EmissionMode::Continuous : EmissionMode::Delta;
     opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
-    opt.response = *parseSensor(c.sensor, *parsePulse(c.pulse));  // (checked when parsed)
+    opt.response = *parseSensor(c.sensor, *parsePulse(c.pulse));  // (each checked when parsed)
+    checkTimeResponseFitsFilm(c.pulse, c.sensor, prepared.time);   // against the bins: before any pass or file
     opt.step = c.frameStep;
     PathTracedRenderRequest outputs;
     outputs.out = c.out;

@@ -35,11 +35,13 @@ void run(const ViewCmd& c) {
         const ResumeSource src = findCheckpoint(c.resume);
         view.flags = resumeOverrides(src.info.overrides, c.ov.settings());
         PreparedRender prepared = prepareResume(src, c.scene, c.ov.settings());
+        checkTimeResponseFitsFilm(view.pulse, view.sensor, prepared.time);
         if (view.exportFolder.empty()) view.exportFolder = std::filesystem::path(src.path).parent_path().string();
         runViewer(prepared, view, src.path);
         return;
     }
     PreparedRender prepared = loadAndBuild(c.scene, c.ov);
+    checkTimeResponseFitsFilm(view.pulse, view.sensor, prepared.time);  // before the window opens
     // The integrator the viewer's Driver runs (checked by the flag's IsMember when parsed).
     prepared.settings.method = *parseMethod(c.method);
     prepared.settings.samplesPerPixel = c.spp;

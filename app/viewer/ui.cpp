@@ -442,9 +442,13 @@ void Viewer::drawTimeResponse() {
     }
     r.pulseWidth = r.pulse == PulseShape::Delta ? 0.0 : st_.pulseNs * kC_m_per_ns;
     r.sensorWidth = r.sensor == SensorShape::Ideal ? 0.0 : st_.sensorNs * kC_m_per_ns;
-    // Wider than kMaxResponseBins bins is not a kernel (binKernel refuses it): keep the last one.
-    if ((r.pulseWidth + r.sensorWidth) * 50.0 > kMaxResponseBins * time_.binWidth) {
-        status_ = "pulse/sensor width too large for this film's bins: not applied";
+    // A span wider than kMaxResponseBins bins is refused (time_response.h; binKernel would throw):
+    // keep the last response and say why.
+    if (const double span = responseSpanBins(r, time_.binWidth); !(span <= kMaxResponseBins)) {
+        char b[200];
+        std::snprintf(b, sizeof b, "pulse/sensor not applied: it spans %.3g bins of this film, the limit is 2^20; "
+                      "narrow it (or render with fewer --bins)", span);
+        status_ = b;
         return;
     }
     if (!(r == st_.response)) {

@@ -107,15 +107,21 @@ double responseG(const TimeResponse& r, double t) {
     return 0.0;
 }
 
+double responseSpanBins(const TimeResponse& r, double binWidth) {
+    double lo = 0.0, hi = 0.0;
+    support(r, lo, hi);
+    return (hi - lo) / binWidth;
+}
+
 BinKernel binKernel(const TimeResponse& r, double binWidth) {
     BinKernel k;
     if (r.identity()) return k;
     if ((r.pulse != PulseShape::Delta && !(r.pulseWidth > 0.0)) || (r.sensor != SensorShape::Ideal && !(r.sensorWidth > 0.0)))
         throw std::invalid_argument("binKernel: a pulse or sensor width must be > 0");
+    if (!(responseSpanBins(r, binWidth) <= kMaxResponseBins))
+        throw std::invalid_argument("binKernel: the pulse and sensor span more than 2^20 bins");
     double lo = 0.0, hi = 0.0;
     support(r, lo, hi);
-    if ((hi - lo) / binWidth > kMaxResponseBins)
-        throw std::invalid_argument("binKernel: the pulse and sensor span more than 2^20 bins");
     const int mlo = static_cast<int>(std::floor(lo / binWidth)) - 1, mhi = static_cast<int>(std::ceil(hi / binWidth)) + 1;
     std::vector<double> G(static_cast<size_t>(mhi - mlo + 3));
     for (int m = mlo - 1; m <= mhi + 1; ++m) G[static_cast<size_t>(m - mlo + 1)] = responseG(r, m * binWidth);

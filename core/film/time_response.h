@@ -62,8 +62,15 @@ struct BinKernel {
     std::vector<double> w{1.0};
     bool identity() const { return lo == 0 && w.size() == 1 && w[0] == 1.0; }
 };
-// Widths above kMaxResponseBins bins are refused (std::invalid_argument: the CLI checks first).
+// Why a limit: each weight is a second difference of G, which grows like the response's width w
+// while W_m ~ D/w, so G's rounding (1e-16 relative) costs each weight about 1e-16 (w/D)^2: up to
+// ~1e-6 at a span of 2^20 bins, the whole weight beyond ~2^30 (and the kernel's time and memory
+// grow with w/D).
+// binKernel refuses a wider span (std::invalid_argument); `tpb render` and `tpb view` check it with
+// responseSpanBins once the film's time axis is known, before any pass.
 inline constexpr double kMaxResponseBins = 1 << 20;
+// The span of h = p * s that the kernel covers (both shapes' reach), in bins of width binWidth.
+double responseSpanBins(const TimeResponse& r, double binWidth);
 BinKernel binKernel(const TimeResponse& r, double binWidth);
 // G of the combined h at t (m of OPL), as above; exposed for the tests.
 double responseG(const TimeResponse& r, double t);

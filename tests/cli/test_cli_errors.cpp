@@ -681,6 +681,40 @@ TEST_F(CliErrors, FlagErrorsLeaveNoFileBehind) {
     }
 }
 
+// Issue 33 item 4: a --pulse / --sensor spanning more than 2^20 of the film's bins was accepted,
+// rendered, and failed at the first frame with "internal error" (exit 1, frames lost). It is refused
+// once the time axis is known, before any pass or file, naming the flag, its span in bins, the
+// limit and the fix; by --method pt and by `tpb view` (before its window opens) too.
+TEST_F(CliErrors, TimeResponseWiderThanTheKernelLimitIsRefusedBeforeAnyPass) {
+    const fs::path scene = write("scene.json", insideScene());
+    const std::string out = (dir_ / "out").string();
+    const struct { std::vector<std::string> args; const char* text; } cases[] = {
+        {{"render", scene.string(), "-o", out, "--passes", "1", "--pulse", "square:1e9"}, "error: --pulse square:1e9 spans "},
+        {{"render", scene.string(), "-o", out, "--passes", "1", "--sensor", "exp:1e9"}, "error: --sensor exp:1e9 spans "},
+        {{"render", scene.string(), "-o", out, "--method", "pt", "--passes", "1", "--sensor", "exp:1e9"},
+         "error: --sensor exp:1e9 spans "},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.args.back());
+        const Proc p = runTpb(c.args, dir_, {}, 60.0);
+        EXPECT_EQ(p.code, 2) << p.err;
+        EXPECT_EQ(fromErrorLine(p.err).rfind(c.text, 0), 0u) << p.err;
+        EXPECT_NE(p.err.find("the limit is 1048576 (2^20) bins"), std::string::npos) << p.err;
+        EXPECT_NE(p.err.find("use wider bins"), std::string::npos) << p.err;
+        EXPECT_NE(p.err.find("narrower than"), std::string::npos) << p.err;
+        EXPECT_EQ(p.err.find("internal error"), std::string::npos) << p.err;
+        EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written, not even preview.exr";
+    }
+    if (runTpb({"view", "--help"}, dir_).code == 0) {  // built with the viewer (a screenshot run ends by itself)
+        const Proc v = runTpb({"view", scene.string(), "--pulse", "square:1e9", "--screenshot", (dir_ / "shot.png").string(),
+                               "--after-passes", "1"},
+                              dir_, {}, 60.0);
+        EXPECT_EQ(v.code, 2) << v.err;
+        EXPECT_EQ(fromErrorLine(v.err).rfind("error: --pulse square:1e9 spans ", 0), 0u) << v.err;
+        EXPECT_FALSE(fs::exists(dir_ / "shot.png"));
+    }
+}
+
 // Item 12: --frame-step 0 and --spp 0 said "not in range 0.000000 to 1797...(309 digits)".
 TEST_F(CliErrors, FrameStepZeroSaysTheRangeInAFewWords) {
     const fs::path scene = write("scene.json", insideScene());
