@@ -8,6 +8,7 @@
 #include "estimators/estimator_names.h"
 #include "film/film_view.h"
 #include "film/picture_export.h"
+#include "io/folder_lock.h"
 #include "render/checkpoint.h"
 #include "render/time_range.h"
 
@@ -25,8 +26,6 @@
 #include <limits>
 #include <set>
 #include <sstream>
-#include <fcntl.h>
-#include <sys/file.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -375,7 +374,6 @@ int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film) {
 
 namespace {
 
-constexpr const char* kLockName = ".tpb.lock";
 constexpr const char* kManifestName = ".tpb-manifest.json";
 
 // A path the manifest may name: relative, inside the folder (no "..", not absolute).
@@ -539,45 +537,10 @@ void refuseToLoseCheckpoint(const std::string& dir, const std::string& command, 
 }  // namespace
 
 OutputFolder::OutputFolder(const std::string& dir, const std::string& command, const OutputFiles& outputs)
-    : dir_(dir) {
-    ensureWritableDir(dir);
-    const fs::path lockPath = fs::path(dir) / kLockName;
-    lockFd_ = ::open(lockPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (lockFd_ < 0)
-        throw UserError(dir, 0, "", std::string("cannot create the lock file ") + kLockName + ": " +
-                                        std::strerror(errno) + "; choose another folder with -o");
-    if (::flock(lockFd_, LOCK_EX | LOCK_NB) != 0) {
-        const int err = errno;
-        if (err == EWOULDBLOCK) {
-            char buf[256] = {};
-            const ssize_t n = ::pread(lockFd_, buf, sizeof buf - 1, 0);
-            std::string holder = n > 0 ? std::string(buf, static_cast<size_t>(n)) : std::string();
-            while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
-            ::close(lockFd_);
-            lockFd_ = -1;
-            throw UserError(dir, 0, "",
-                            "another tpb run (" + (holder.empty() ? std::string("unknown process") : holder) +
-                                ") is writing into this folder; two runs in one folder would mix their files: wait "
-                                "for it to end, or give this one another folder with -o");
-        }
-        // A file system without locks (some network mounts): go on, but say what is not detected.
-        std::fprintf(stderr, "warning: %s: cannot lock the folder (%s): a second run into it would not be detected\n",
-                     dir.c_str(), std::strerror(err));
-    }
-    const std::string holder = "tpb " + command + ", pid " + std::to_string(::getpid()) + "\n";
-    if (::ftruncate(lockFd_, 0) == 0) {
-        [[maybe_unused]] const ssize_t n = ::pwrite(lockFd_, holder.data(), holder.size(), 0);
-    }
-
+    : dir_(dir), lock_(FolderLock::acquire(dir, "tpb " + command)) {
     PreviousOutputs prev = previousOutputs(dir);
     for (const std::string& k : outputs.keep) prev.files.erase(k);  // a resume's checkpoint (cli/resume.h)
-    try {
-        refuseToLoseCheckpoint(dir, command, outputs, prev);
-    } catch (...) {
-        ::close(lockFd_);  // (no destructor runs for a constructor that throws)
-        lockFd_ = -1;
-        throw;
-    }
+    refuseToLoseCheckpoint(dir, command, outputs, prev);
     removed_ = removeOutputs(dir, prev);
 
     nlohmann::json m;
@@ -591,9 +554,7 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& command, c
     writeTextFile((fs::path(dir) / kManifestName).string(), m.dump(2) + "\n");
 }
 
-OutputFolder::~OutputFolder() {
-    if (lockFd_ >= 0) ::close(lockFd_);  // releases the lock; the file stays (unlinking it would race)
-}
+OutputFolder::~OutputFolder() = default;  // releases the lock (lock_)
 
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     OutputFiles f;

@@ -19,6 +19,9 @@
 namespace CLI {
 class App;
 }
+namespace tpb {
+class FolderLock;
+}
 
 namespace tpb::app {
 
@@ -64,9 +67,9 @@ int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film);
 
 // ---- the output folder ------------------------------------------------------------------------
 // A folder one tpb run writes into (render, converge). The constructor creates it if needed, takes
-// an exclusive lock (flock on <dir>/.tpb.lock: the kernel releases it when the process ends, a
-// crash included; a second run into the same folder is refused with a UserError naming the other
-// process and the fix), then removes the outputs of the previous run into the folder: exactly the
+// an exclusive lock (io/folder_lock.h: flock on <dir>/.tpb.lock, released by the kernel when the
+// process ends, a crash included; a second run into the same folder, or the viewer exporting into
+// it, is refused with a UserError naming the other process and the fix), then removes the outputs of the previous run into the folder: exactly the
 // files its manifest (<dir>/.tpb-manifest.json) lists, or, for a folder written before manifests
 // existed, what its summary.json lists. Files tpb did not write are never touched. The new run's
 // files are recorded in the manifest before any of them is written, so that a run that dies while
@@ -98,7 +101,7 @@ public:
 
 private:
     std::string dir_;
-    int lockFd_ = -1;
+    std::shared_ptr<FolderLock> lock_;  // io/folder_lock.h
     std::vector<std::string> removed_;
 };
 

@@ -223,18 +223,21 @@ void run(RenderCmd& c) {
                             ? "; the pass limit is reached already: give --passes N (the total) to render more"
                             : "");
     }
-    std::string checkpointWritten;
+    std::string checkpointWritten, checkpointError;  // the last write's path, or why it failed
     const auto writeCheckpointNow = [&](const char* when) {
         try {
             const double t = nowSec();
             saveCheckpoint(checkpointPath, prepared, flags, drv);
             checkpointWritten = checkpointPath;
+            checkpointError.clear();
             if (!c.quiet)
                 std::fprintf(stderr, "%scheckpoint (%s): %llu passes written to %s in %.2f s\n",
                              isatty(STDERR_FILENO) ? "\r" : "", when,
                              static_cast<unsigned long long>(drv.history().size()), checkpointPath.c_str(), nowSec() - t);
         } catch (const UserError& e) {
-            std::fprintf(stderr, "warning: no checkpoint written: %s\n", e.what());
+            // A periodic one is retried at the next period and at the end; the last one decides.
+            checkpointError = e.what();
+            std::fprintf(stderr, "warning: no checkpoint written (%s): %s\n", when, e.what());
         }
     };
     double lastCheckpoint = nowSec();
@@ -309,6 +312,12 @@ void run(RenderCmd& c) {
                      "overlap\n",
                      static_cast<long long>(regionOverflows));
     const double outside = checkEnergyInsideFilm(prepared, drv.film(), opt.axis);
+    if (!checkpointError.empty()) {
+        // The outputs are written, but the render cannot be resumed: a failure, even after a signal.
+        std::fprintf(stderr, "error: the checkpoint was not written: %s; the outputs are written, but this render "
+                             "cannot be resumed\n", checkpointError.c_str());
+        exitCode() = kExitUserError;
+    }
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     const int frames = rep.framesWritten;
     if (!c.quiet) {

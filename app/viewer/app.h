@@ -14,6 +14,7 @@
 
 #include <imgui.h>
 
+#include <functional>
 #include <future>
 #include <memory>
 #include <optional>
@@ -124,6 +125,10 @@ public:
            const std::string& resumePath = "");
     ~Viewer();  // stops the driver and joins the helper threads (GL objects go with the members)
     void run();
+    // After the window closed: an export or checkpoint in progress (or asked for) is finished, with
+    // its progress on stderr; a new Ctrl-C/SIGTERM (closeSignals() grows) cancels the export. What
+    // was written, and what was not, is printed.
+    void finishBeforeClosing(const std::function<int()>& closeSignals);
 
 private:
     // session (data.cpp)
@@ -205,8 +210,12 @@ private:
     // Checkpoints: the one to resume from at the first start, and the one being written (the
     // driver stays paused until it is on disk).
     std::string resumePath_;
+    // The checkpoints this viewer resumed from or wrote: the only ones "Save checkpoint" overwrites
+    // (another render's checkpoint in the export folder is refused, never replaced silently).
+    std::vector<std::string> ownCheckpoints_;
     enum class CheckpointStage { Idle, WaitingForPassEnd, Writing } checkpointStage_ = CheckpointStage::Idle;
     bool checkpointWasPaused_ = false;
+    bool checkpointFailed_ = false;  // a checkpoint was refused or failed (screenshot mode: exit 2)
     std::future<std::string> checkpointJob_;  // "" or the error
 
     ExportJob export_;

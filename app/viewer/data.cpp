@@ -6,6 +6,9 @@
 // tiles it shows alive while the render replaces them).
 #include "viewer/app.h"
 
+#include "base/error.h"
+#include "io/folder_lock.h"
+
 #include <chrono>
 #include <filesystem>
 #include <future>
@@ -60,6 +63,30 @@ void Viewer::restart(const RenderSettings& s, const std::string& why) {
     }
 }
 
+namespace {
+
+// Throws UserError when `path` is a checkpoint none of `own` names (another render's: saving would
+// replace it silently).
+void refuseForeignCheckpoint(const std::string& path, const std::vector<std::string>& own) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) return;
+    for (const std::string& o : own)
+        if (std::filesystem::equivalent(o, path, ec)) return;
+    std::string what = "a checkpoint that cannot be read";
+    try {
+        const CheckpointInfo info = readCheckpointInfo(path);
+        what = "the checkpoint of another render (" + std::to_string(info.passes) + " passes of " + info.scene +
+               ", written " + info.created + ")";
+    } catch (const UserError&) {
+    }
+    throw UserError(path, 0, "",
+                    "holds " + what + "; the viewer does not replace it: choose another folder in the Export "
+                    "section, or continue that render with `tpb view --resume " +
+                        std::filesystem::path(path).parent_path().string() + "`");
+}
+
+}  // namespace
+
 void Viewer::requestCheckpoint() {
     if (checkpointStage_ != CheckpointStage::Idle) return;
     checkpointWasPaused_ = driver_->paused();
@@ -76,12 +103,24 @@ void Viewer::pollCheckpoint() {
                              snap->minPasses() == static_cast<int64_t>(history.size());
         if (!between) return;  // a pass is still being added (paused takes effect after it)
         const std::string path = (std::filesystem::path(st_.outDir) / kCheckpointFile).string();
+        std::shared_ptr<FolderLock> lock;
+        try {
+            // The export folder's lock, as `tpb render` holds it on its output folder.
+            lock = FolderLock::acquire(st_.outDir, "tpb view", "choose another folder in the Export section");
+            refuseForeignCheckpoint(path, ownCheckpoints_);
+        } catch (const std::exception& e) {
+            status_ = std::string("checkpoint not written: ") + e.what();
+            std::fprintf(stderr, "error: %s\n", status_.c_str());
+            checkpointFailed_ = true;
+            checkpointStage_ = CheckpointStage::Idle;
+            if (!checkpointWasPaused_) driver_->resume();
+            return;
+        }
         const CheckpointInfo info = checkpointInfoFor(prepared_, driver_->settings(), opt_.flags, history.size());
         checkpointStage_ = CheckpointStage::Writing;
         status_ = "checkpoint: writing " + path;
-        checkpointJob_ = std::async(std::launch::async, [d = driver_, path, info, history]() -> std::string {
+        checkpointJob_ = std::async(std::launch::async, [d = driver_, path, info, history, lock]() -> std::string {
             try {
-                std::filesystem::create_directories(std::filesystem::path(path).parent_path());
                 writeCheckpoint(path, info, d->film(), history);
                 return "";
             } catch (const std::exception& e) {
@@ -98,7 +137,9 @@ void Viewer::pollCheckpoint() {
     status_ = err.empty() ? "checkpoint of " + std::to_string(driver_->history().size()) + " passes written to " + path +
                                 " (tpb render --resume " + st_.outDir + ")"
                           : "checkpoint failed: " + err;
-    std::printf("%s\n", status_.c_str());
+    if (err.empty()) ownCheckpoints_.push_back(path);
+    else checkpointFailed_ = true;
+    std::fprintf(err.empty() ? stdout : stderr, "%s\n", status_.c_str());
     std::fflush(stdout);
     checkpointStage_ = CheckpointStage::Idle;
     if (!checkpointWasPaused_) driver_->resume();

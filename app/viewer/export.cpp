@@ -1,12 +1,15 @@
 #include "viewer/export.h"
 
 #include "base/error.h"
+#include "io/atomic_file.h"
+#include "io/folder_lock.h"
 #include "film/picture_export.h"
 #include "film/volume_export.h"
 #include "render/provenance.h"
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 namespace tpb::app {
 
@@ -52,6 +55,18 @@ std::string exportContactSheetName(TimeAxis axis, EmissionMode mode, const TimeR
     return "contact_sheet_" + axisModeTag(axis, mode, r) + ".png";
 }
 
+void markFramesComplete(const std::string& dir, int written, int total) {
+    const std::string marker = dir + "/" + kIncompleteName;
+    if (written >= total) {
+        std::error_code ec;
+        std::filesystem::remove(marker, ec);  // an earlier cancelled export's note: this one is complete
+        return;
+    }
+    writeFileAtomic(marker, "this export was cancelled after " + std::to_string(written) + " of " +
+                                std::to_string(total) + " frames: the frames from frame " + std::to_string(written) +
+                                " on are missing, or left from an earlier export; export all frames again\n");
+}
+
 bool ExportJob::start(std::shared_ptr<const Driver> driver, const ExportRequest& req) {
     if (running_.load()) return false;
     if (thread_.joinable()) thread_.join();
@@ -89,8 +104,12 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
         std::lock_guard<std::mutex> g(mutex_);
         written_.push_back(path);
     };
+    std::vector<std::string> notWritten;  // what a cancel left out, for the message
     try {
-        ensureWritableDir(req.dir);
+        // The folder is locked for the export, as `tpb render` locks its output folder: a render
+        // writing into it refuses this export (and the other way round).
+        const std::shared_ptr<FolderLock> lock =
+            FolderLock::acquire(req.dir, "tpb view", "choose another folder in the Export section");
         if (req.frame && !cancel_) {
             step("current frame");
             const std::string path = req.dir + "/" + exportFrameName(req.bin, req.axis, req.mode, req.response);
@@ -123,8 +142,24 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
             step("all frames");
             const std::string dir = req.dir + "/" + exportFramesDir(req.axis, req.mode, req.response);
             const int base = done_.load();
-            const int n = exportFrames(film, dir, opt, [&](int d, int) { done_ = base + d; }, &cancel_);
-            wrote(dir + "/ (" + std::to_string(n) + " frames)");
+            int n = 0;
+            try {
+                n = exportFrames(film, dir, opt, [&](int d, int) { done_ = base + (n = d); }, &cancel_);
+            } catch (...) {  // a full disk: the frames written are marked as a partial set, if it can be
+                try {
+                    markFramesComplete(dir, n, frames);
+                } catch (const std::exception&) {
+                }
+                throw;
+            }
+            markFramesComplete(dir, n, frames);
+            if (n < frames) {
+                wrote(dir + "/ (" + std::to_string(n) + " of " + std::to_string(frames) + " frames: incomplete, see " +
+                      kIncompleteName + ")");
+                notWritten.push_back(std::to_string(frames - n) + " of the frames");
+            } else {
+                wrote(dir + "/ (" + std::to_string(n) + " frames)");
+            }
         }
         if (req.volume && !cancel_) {
             step("volume (.npy rows)");
@@ -149,8 +184,19 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
                 wrote(path);
         }
         if (cancel_) {
+            // Everything asked for and not finished is named (a cancelled volume or MP4 leaves no file).
+            const auto skipped = [&](bool asked, const std::string& name) {
+                if (asked && std::find_if(written_.begin(), written_.end(), [&](const std::string& w) {
+                                 return w.find(name) != std::string::npos;
+                             }) == written_.end())
+                    notWritten.push_back(name);
+            };
             std::lock_guard<std::mutex> g(mutex_);
+            skipped(req.volume, exportVolumeDir(req.axis, req.mode, req.response) + "/");
+            skipped(req.contactSheet, exportContactSheetName(req.axis, req.mode, req.response));
+            skipped(req.mp4, exportMp4Name(req.axis, req.mode, req.response));
             error_ = "export cancelled";
+            for (size_t i = 0; i < notWritten.size(); ++i) error_ += (i ? ", " : "; not written: ") + notWritten[i];
         }
     } catch (const std::exception& e) {
         std::lock_guard<std::mutex> g(mutex_);

@@ -45,6 +45,13 @@ std::string exportVolumeDir(TimeAxis axis, EmissionMode mode, const TimeResponse
 std::string exportMp4Name(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});             // transient_real_delta.mp4
 std::string exportContactSheetName(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});    // contact_sheet_real_delta.png
 
+// "All frames" cut short (Cancel, or a second Ctrl-C while the viewer closes) leaves this note in
+// the frames' folder, saying how many of them this export wrote; a complete export removes it.
+inline constexpr const char* kIncompleteName = "INCOMPLETE.txt";
+void markFramesComplete(const std::string& dir, int written, int total);
+
+// The job locks its folder (io/folder_lock.h) while it writes: an export into the folder a `tpb
+// render` writes into is refused with the render's pid, and the render is refused meanwhile.
 class ExportJob {
 public:
     ExportJob() = default;

@@ -28,6 +28,7 @@ namespace {
 
 std::string gGlfwError;
 std::atomic<int> gCloseSignal{0};  // the signal that closed the window, 0 = none
+std::atomic<int> gStopSignals{0};  // Ctrl-C and SIGTERM received (a second one cancels an export)
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler only touches lock-free atomics");
 
 void onGlfwError(int code, const char* msg) {
@@ -42,6 +43,8 @@ extern "C" void onCloseSignal(int sig) {
         struct sigaction ignore {};
         ignore.sa_handler = SIG_IGN;
         sigaction(SIGPIPE, &ignore, nullptr);
+    } else {
+        gStopSignals.fetch_add(1);
     }
     int none = 0;
     gCloseSignal.compare_exchange_strong(none, sig);
@@ -53,6 +56,7 @@ class CloseSignals {
 public:
     CloseSignals() {
         gCloseSignal = 0;
+        gStopSignals = 0;
         struct sigaction sa {};
         sa.sa_handler = onCloseSignal;
         sigemptyset(&sa.sa_mask);
@@ -189,6 +193,7 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
     image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
     resumePath_ = resumePath;
+    if (!resumePath.empty()) ownCheckpoints_.push_back(resumePath);  // "Save checkpoint" may replace it
     restart(settings, "");
 }
 
@@ -318,7 +323,7 @@ void Viewer::saveSnapshot(int fbWidth, int fbHeight) {
 void Viewer::endFrameChecks() {
     // Screenshot mode: the film is final, every click done and its effect over. Checks, then the
     // picture is taken by the caller.
-    if (!exportError_.empty()) exitCode() = kExitUserError;
+    if (!exportError_.empty() || checkpointFailed_) exitCode() = kExitUserError;
     if (!opt_.exportDir.empty()) {
         const std::string frame = st_.outDir + "/" + exportFrameName(st_.bin, st_.axis, st_.mode, st_.response);
         for (const std::string& want : {frame, st_.outDir + "/steady.exr"})
@@ -408,6 +413,40 @@ void Viewer::run() {
     }
 }
 
+void Viewer::finishBeforeClosing(const std::function<int()>& closeSignals) {
+    // Closing the window (button, Ctrl-C, SIGTERM, SIGHUP) must not cut an export or a checkpoint
+    // short: half the frames with no note, an MP4 dropped without a word. They are finished, with
+    // their progress on stderr; a new Ctrl-C or SIGTERM cancels the export (which then names what
+    // it did not write). The render stops unless the checkpoint still waits for its pass to end.
+    if (export_.busy() || checkpointStage_ != CheckpointStage::Idle) {
+        glfwHideWindow(window_);
+        const int signalsAtClose = closeSignals();
+        std::fprintf(stderr, "closing: finishing the %s before quitting (Ctrl-C again cancels the export)\n",
+                     export_.busy() ? ("export (" + export_.progressLabel() + ")").c_str() : "checkpoint");
+        bool cancelled = false;
+        double lastReport = glfwGetTime();
+        while (export_.busy() || checkpointStage_ != CheckpointStage::Idle) {
+            if (checkpointStage_ == CheckpointStage::Idle) driver_->requestStop();
+            if (!cancelled && export_.busy() && closeSignals() > signalsAtClose) {
+                export_.cancel();
+                cancelled = true;
+                std::fprintf(stderr, "closing: cancelling the export\n");
+            }
+            pollCheckpoint();
+            if (checkpointStage_ == CheckpointStage::WaitingForPassEnd && !driver_->running()) {
+                std::fprintf(stderr, "error: checkpoint not written: the render stopped inside a pass\n");
+                checkpointStage_ = CheckpointStage::Idle;
+            }
+            if (export_.busy() && glfwGetTime() - lastReport >= 2.0) {
+                lastReport = glfwGetTime();
+                std::fprintf(stderr, "closing: %s\n", export_.progressLabel().c_str());
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+    }
+    pollExport();  // what the last export wrote, or why it stopped (stdout, stderr)
+}
+
 namespace {
 
 // --bin and --time name a bin of the film, or are refused with the film's range (before any window).
@@ -456,6 +495,7 @@ void runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::
         std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n", prepared.source.path.c_str());
         std::fflush(stdout);
         viewer.run();
+        viewer.finishBeforeClosing([] { return gStopSignals.load(); });
     }
     // As `tpb render`: 0 after Ctrl-C, 128 + the signal after SIGTERM (143) or SIGHUP (129).
     const int sig = gCloseSignal.load();

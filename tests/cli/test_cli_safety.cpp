@@ -275,3 +275,22 @@ TEST_F(CliSafety, VideoThatFfmpegLeftIncompleteIsRefusedAndNamed) {
     EXPECT_NE(summary["outputs"]["error"].get<std::string>().find("transient.mp4"), std::string::npos);
     for (const auto& f : summary["outputs"]["files"]) EXPECT_NE(f.get<std::string>(), "transient.mp4");
 }
+
+// Item 7: `--checkpoint` that could not be written only warned, and the render exited 0: a script
+// believed it could resume. Now the outputs are still written, and the exit code is 2 with an error
+// naming the checkpoint's file (here its name is taken by a folder, so the rename fails).
+TEST_F(CliSafety, CheckpointThatCannotBeWrittenIsAnError) {
+    const fs::path scene = write("scene.json", boxScene(8, "{\"photons_per_pass\": 2000, \"passes\": 1, \"seed\": 1}"));
+    const fs::path out = dir_ / "out";
+    fs::create_directories(out / "checkpoint.tpbck");
+    const Proc p = runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint"},
+                          dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("error: the checkpoint was not written: " + (out / "checkpoint.tpbck").string() + ": "),
+              std::string::npos)
+        << p.err;
+    EXPECT_NE(p.err.find("this render cannot be resumed"), std::string::npos) << p.err;
+    EXPECT_TRUE(fs::exists(out / "summary.json")) << "the outputs are still written";
+    EXPECT_EQ(nlohmann::json::parse(slurp(out / "summary.json"))["checkpoint"].get<std::string>(), "");
+    EXPECT_TRUE(fs::is_directory(out / "checkpoint.tpbck"));
+}

@@ -559,9 +559,10 @@ TEST_F(ViewerTest, SteadyStateExportButtonWritesSteadyExr) {
     const Exr steadyRef = readExrFile(reference(kModes[0]) / "steady.exr");
     ASSERT_EQ(steady.rgb.size(), steadyRef.rgb.size());
     EXPECT_LE(maxRelDiff(steady, steadyRef), 1e-6);
-    // That button only: no frame, streak or profile.
+    // That button only: no frame, streak or profile (and the folder's lock file, .tpb.lock).
     int files = 0;
-    for (const auto& e : fs::directory_iterator(out)) files += e.is_regular_file();
+    for (const auto& e : fs::directory_iterator(out))
+        files += e.is_regular_file() && e.path().filename() != ".tpb.lock";
     EXPECT_EQ(files, 1);
 }
 
@@ -924,4 +925,99 @@ TEST_F(ViewerTest, PulseShapeAndSensorResponseAreAppliedToTheShownAndExportedFra
         EXPECT_EQ(summary["frames"]["time_response"],
                   "gaussian pulse, FWHM 0.4 ns; exponential sensor decay, 0.3 ns");
     }
+}
+
+// Issue 33, item 7: closing the viewer during "All frames" cancelled the export and left part of
+// the frames with no note. The export in progress is finished now (the window closes first): Ctrl-C
+// once the export has started, and every frame is there, with no INCOMPLETE.txt. 4096 small bins
+// keep the export busy for much longer than the frame loop takes to see the signal.
+TEST_F(ViewerTest, ClosingDuringAllFramesFinishesTheExport) {
+    const fs::path out = dir_ / "close_frames", log = dir_ / "close_frames.log", script = dir_ / "close_frames.sh";
+    std::ofstream(script) << std::string(TPB_BINARY) << " view " << q(dir_ / "scene.json") << kRenderArgs
+                          << " --width 16 --height 16 --bins 4096 --after-passes 1 --window-size 1280 800"
+                          << " --screenshot " << q(dir_ / "close_frames.png") << " --export-folder " << q(out)
+                          << " --click 'Export/All frames' > " << q(log) << " 2>&1 &\n"
+                          << "pid=$!\ni=0\nwhile [ ! -d " << q(out / "frames_real_delta")
+                          << " ] && [ $i -lt 6000 ]; do sleep 0.01; i=$((i+1)); done\n"
+                          << "kill -INT $pid\nwait $pid\ncat " << q(log) << "\n";
+    const Proc r = runXvfb("timeout 120 sh " + q(script), dir_ / "close_frames");
+    int frames = 0;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(out / "frames_real_delta", ec))
+        frames += e.path().filename().string().rfind("frame_", 0) == 0;
+    EXPECT_EQ(frames, 4096) << r.out << r.err;
+    EXPECT_FALSE(fs::exists(out / "frames_real_delta" / "INCOMPLETE.txt"));
+    EXPECT_NE(r.out.find("closing: finishing the export (all frames "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("exported: "), std::string::npos) << r.out;
+}
+
+// Item 7: an MP4 cut short by closing the viewer was dropped without a word. A second Ctrl-C while
+// the viewer finishes the export cancels it, and says what was not written. The fake ffmpeg on PATH
+// reads nothing for 3 s (the frames fill its pipe), so the export is still running.
+TEST_F(ViewerTest, SecondCtrlCWhileClosingCancelsTheMp4AndSaysSo) {
+    const fs::path out = dir_ / "close_mp4", log = dir_ / "close_mp4.log", script = dir_ / "close_mp4.sh";
+    const fs::path bin = dir_ / "fakebin", started = dir_ / "close_mp4.started";
+    fs::create_directories(bin);
+    std::ofstream(bin / "ffmpeg") << "#!/bin/sh\ntouch " << q(started) << "\nsleep 3\ncat >/dev/null\nexit 1\n";
+    fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+    std::ofstream(script) << "PATH=" << q(bin) << ":$PATH " << std::string(TPB_BINARY) << " view "
+                          << q(dir_ / "scene.json") << kRenderArgs << " --after-passes 1 --window-size 1280 800"
+                          << " --screenshot " << q(dir_ / "close_mp4.png") << " --export-folder " << q(out)
+                          << " --click 'Export/MP4' > " << q(log) << " 2>&1 &\n"
+                          << "pid=$!\ni=0\nwhile [ ! -e " << q(started) << " ] && [ $i -lt 6000 ]; do sleep 0.01; "
+                          << "i=$((i+1)); done\nkill -INT $pid\ni=0\nwhile ! grep -q 'closing: finishing' " << q(log)
+                          << " && [ $i -lt 500 ]; do sleep 0.01; i=$((i+1)); done\n"
+                          << "kill -INT $pid\nwait $pid\ncat " << q(log) << "\n";
+    const Proc r = runXvfb("timeout 120 sh " + q(script), dir_ / "close_mp4");
+    EXPECT_NE(r.out.find("closing: finishing the export (MP4 "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("export failed: export cancelled; not written: transient_real_delta.mp4"), std::string::npos)
+        << r.out;
+    EXPECT_FALSE(fs::exists(out / "transient_real_delta.mp4"));
+}
+
+// Item 7: the viewer's exports and "Save checkpoint" ignored the lock `tpb render` holds on its
+// output folder, and "Save checkpoint" replaced another render's checkpoint. Both are refused now,
+// with the holder or the checkpoint named, and nothing is written (screenshot mode: exit 2).
+TEST_F(ViewerTest, ExportsAndSaveCheckpointRespectTheFolderLockAndOtherCheckpoints) {
+    // A render holds the folder.
+    const fs::path out = dir_ / "locked", log = dir_ / "locked_render.log";
+    const std::string render = std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") +
+                               " --width 16 --height 16 --passes 100000 --threads 1 --no-frames -o " + q(out);
+    const fs::path script = dir_ / "locked.sh";
+    std::ofstream(script) << render << " > " << q(log) << " 2>&1 &\n"
+                          << "rpid=$!\ni=0\nwhile ! grep -q 'pass 1:' " << q(log)
+                          << " && [ $i -lt 3000 ]; do sleep 0.02; i=$((i+1)); done\necho render_pid=$rpid\n"
+                          << std::string(TPB_BINARY) << " view " << q(dir_ / "scene.json") << kRenderArgs
+                          << " --after-passes 1 --window-size 1280 800 --screenshot " << q(dir_ / "locked.png")
+                          << " --export-folder " << q(out)
+                          << " --click 'Export/Steady state' --click 'Progress/Save checkpoint'\n"
+                          << "echo viewer_exit=$?\nkill -KILL $rpid\nwait $rpid\n";
+    Proc r = runXvfb("timeout 120 sh " + q(script), dir_ / "locked");
+    EXPECT_NE(r.out.find("viewer_exit=2"), std::string::npos) << r.out << r.err;
+    const size_t at = r.out.find("render_pid=");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    const std::string pid = r.out.substr(at + 11, r.out.find('\n', at) - at - 11);
+    const std::string held = out.string() + ": another tpb run (tpb render, pid " + pid +
+                             ") is writing into this folder; two runs in one folder would mix their files: wait for "
+                             "it to end, or choose another folder in the Export section";
+    EXPECT_NE(r.err.find("export failed: " + held), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("error: checkpoint not written: " + held), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out / "steady.exr"));
+    EXPECT_FALSE(fs::exists(out / "checkpoint.tpbck"));
+
+    // Another render's checkpoint in the export folder (no render runs now): kept, not replaced.
+    const fs::path other = dir_ / "other_ckpt";
+    const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") +
+                                " --width 16 --height 16 --passes 1 --checkpoint --no-frames --strip 0 -q -o " + q(other),
+                            dir_ / "other_ckpt");
+    ASSERT_EQ(w.code, 0) << w.err;
+    const std::string before = slurp(other / "checkpoint.tpbck");
+    r = viewRun("other_ckpt_view", kRenderArgs + " --after-passes 1 --export-folder " + q(other) +
+                                       " --click 'Progress/Save checkpoint'");
+    EXPECT_EQ(r.code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find("error: checkpoint not written: " + (other / "checkpoint.tpbck").string() +
+                         ": holds the checkpoint of another render (1 passes of "),
+              std::string::npos)
+        << r.err;
+    EXPECT_TRUE(slurp(other / "checkpoint.tpbck") == before) << "the other render's checkpoint was replaced";
 }
