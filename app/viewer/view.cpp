@@ -409,7 +409,8 @@ void Viewer::run() {
     }
     if (shot && !screenshotTaken_) {
         std::fprintf(stderr, "error: the viewer was closed before the screenshot was taken\n");
-        exitCode() = 1;
+        const int sig = gCloseSignal.load();
+        exitCode() = sig ? 128 + sig : 1;  // closed by a signal: 128 + it, as a killed process would report
     }
 }
 
