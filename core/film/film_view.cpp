@@ -56,7 +56,8 @@ std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, Emi
     std::vector<float> out(static_cast<size_t>(s.width()) * s.height() * 3);
     bin = std::clamp(bin, 0, s.bins() - 1);
     const int a = static_cast<int>(axis);
-    const BinKernel kernel = binKernel(response, s.time().binWidth);
+    const std::shared_ptr<const BinKernel> shared = sharedBinKernel(response, s.time().binWidth, s.bins());
+    const BinKernel& kernel = *shared;
     if (!kernel.identity()) {
         // Y_bin = sum_i w_i S(bin - lo - i), S the delta sums or the running sums (time_response.h).
         const bool cont = mode == EmissionMode::Continuous;
@@ -73,12 +74,17 @@ std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, Emi
                     const double zero[3] = {0.0, 0.0, 0.0};
                     const double* left = cont ? &sums.before[a][pixel * 3] : zero;
                     const double* right = cont ? src + sums.binIndex(pixel, bins - 1) : zero;
+                    // (the same sum, in the same order, as applyKernel)
                     double acc[3] = {0.0, 0.0, 0.0};
+                    if (kernel.after != 0.0)
+                        for (int c = 0; c < 3; ++c) acc[c] += kernel.after * right[c];
                     for (size_t i = 0; i < kernel.w.size(); ++i) {
                         const int k = bin - (kernel.lo + static_cast<int>(i));
                         const double* v = k < 0 ? left : k >= bins ? right : src + sums.binIndex(pixel, k);
                         for (int c = 0; c < 3; ++c) acc[c] += kernel.w[i] * v[c];
                     }
+                    if (kernel.before != 0.0)
+                        for (int c = 0; c < 3; ++c) acc[c] += kernel.before * left[c];
                     float* dst = &out[((static_cast<size_t>(r.y0 + py) * s.width()) + r.x0 + px) * 3];
                     for (int c = 0; c < 3; ++c) dst[c] = static_cast<float>(acc[c] * inv);
                 }
@@ -152,7 +158,7 @@ std::vector<float> pixelProfile(const FilmSnapshot& s, int x, int y, TimeAxis ax
                                 const TimeResponse& response) {
     std::vector<float> out(static_cast<size_t>(s.bins()) * 3, 0.0f);
     if (x < 0 || y < 0 || x >= s.width() || y >= s.height()) return out;
-    forEachBin(s, x, y, axis, mode, binKernel(response, s.time().binWidth), [&](int k, const double* rgb) {
+    forEachBin(s, x, y, axis, mode, *sharedBinKernel(response, s.time().binWidth, s.bins()), [&](int k, const double* rgb) {
         for (int c = 0; c < 3; ++c) out[static_cast<size_t>(k) * 3 + c] = static_cast<float>(rgb[c]);
     });
     return out;
@@ -163,9 +169,9 @@ std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, Em
     const int W = s.width();
     std::vector<float> out(static_cast<size_t>(s.bins()) * W * 3, 0.0f);
     if (row < 0 || row >= s.height()) return out;
-    const BinKernel kernel = binKernel(response, s.time().binWidth);
+    const std::shared_ptr<const BinKernel> kernel = sharedBinKernel(response, s.time().binWidth, s.bins());
     for (int x = 0; x < W; ++x)
-        forEachBin(s, x, row, axis, mode, kernel, [&](int k, const double* rgb) {
+        forEachBin(s, x, row, axis, mode, *kernel, [&](int k, const double* rgb) {
             for (int c = 0; c < 3; ++c) out[(static_cast<size_t>(k) * W + x) * 3 + c] = static_cast<float>(rgb[c]);
         });
     return out;
@@ -173,12 +179,12 @@ std::vector<float> streakImage(const FilmSnapshot& s, int row, TimeAxis axis, Em
 
 std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mode, const TimeResponse& response) {
     const size_t bins = static_cast<size_t>(s.bins());
-    const BinKernel kernel = binKernel(response, s.time().binWidth);
+    const std::shared_ptr<const BinKernel> kernel = sharedBinKernel(response, s.time().binWidth, s.bins());
     std::vector<double> out(static_cast<size_t>(s.width()) * s.height() * bins * 3, 0.0);
     for (int y = 0; y < s.height(); ++y)
         for (int x = 0; x < s.width(); ++x) {
             double* dst = &out[(static_cast<size_t>(y) * s.width() + x) * bins * 3];
-            forEachBin(s, x, y, axis, mode, kernel, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, dst + k * 3); });
+            forEachBin(s, x, y, axis, mode, *kernel, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, dst + k * 3); });
         }
     return out;
 }

@@ -4,6 +4,8 @@
 #include "base/math.h"
 
 #include <algorithm>
+#include <atomic>
+#include <mutex>
 #include <charconv>
 #include <functional>
 #include <cmath>
@@ -113,17 +115,28 @@ double responseSpanBins(const TimeResponse& r, double binWidth) {
     return (hi - lo) / binWidth;
 }
 
-BinKernel binKernel(const TimeResponse& r, double binWidth) {
+namespace {
+std::atomic<uint64_t> gKernelComputations{0};
+}  // namespace
+
+uint64_t binKernelComputations() { return gKernelComputations.load(); }
+
+BinKernel binKernel(const TimeResponse& r, double binWidth, int filmBins) {
     BinKernel k;
     if (r.identity()) return k;
     if ((r.pulse != PulseShape::Delta && !(r.pulseWidth > 0.0)) || (r.sensor != SensorShape::Ideal && !(r.sensorWidth > 0.0)))
         throw std::invalid_argument("binKernel: a pulse or sensor width must be > 0");
     if (!(responseSpanBins(r, binWidth) <= kMaxResponseBins))
         throw std::invalid_argument("binKernel: the pulse and sensor span more than 2^20 bins");
+    ++gKernelComputations;
     double lo = 0.0, hi = 0.0;
     support(r, lo, hi);
-    const int mlo = static_cast<int>(std::floor(lo / binWidth)) - 1, mhi = static_cast<int>(std::ceil(hi / binWidth)) + 1;
-    std::vector<double> G(static_cast<size_t>(mhi - mlo + 3));
+    int mlo = static_cast<int>(std::floor(lo / binWidth)) - 1, mhi = static_cast<int>(std::ceil(hi / binWidth)) + 1;
+    // Cut to the weights a film of filmBins bins reads (|m| < filmBins); the rest go to before/after.
+    const bool cutLo = filmBins > 0 && mlo < 1 - filmBins, cutHi = filmBins > 0 && mhi > filmBins - 1;
+    if (cutLo) mlo = 1 - filmBins;
+    if (cutHi) mhi = filmBins - 1;
+    std::vector<double> G(static_cast<size_t>(mhi - mlo + 3));  // G at (mlo - 1 .. mhi + 1) D
     for (int m = mlo - 1; m <= mhi + 1; ++m) G[static_cast<size_t>(m - mlo + 1)] = responseG(r, m * binWidth);
     k.lo = mlo;
     k.w.assign(static_cast<size_t>(mhi - mlo + 1), 0.0);
@@ -131,24 +144,57 @@ BinKernel binKernel(const TimeResponse& r, double binWidth) {
         const size_t i = static_cast<size_t>(m - mlo + 1);
         k.w[static_cast<size_t>(m - mlo)] = std::max(0.0, (G[i + 1] - 2.0 * G[i] + G[i - 1]) / binWidth);
     }
-    // Trim the weights that are zero to rounding at both ends (a long exponential tail stays).
+    // The weights beyond a cut: sum_{m > mhi} W_m = 1 - F(mhi + 1), sum_{m < mlo} W_m = F(mlo).
+    if (cutHi) k.before = std::max(0.0, 1.0 - (G[G.size() - 1] - G[G.size() - 2]) / binWidth);
+    if (cutLo) k.after = std::max(0.0, (G[1] - G[0]) / binWidth);
+    // Trim the weights that are zero to rounding at the support's ends (a long exponential tail
+    // stays); a cut end keeps its weights.
     size_t a = 0, b = k.w.size();
-    while (a + 1 < b && k.w[a] < 1e-15) ++a;
-    while (b > a + 1 && k.w[b - 1] < 1e-15) --b;
+    while (!cutLo && a + 1 < b && k.w[a] < 1e-15) ++a;
+    while (!cutHi && b > a + 1 && k.w[b - 1] < 1e-15) --b;
     k.lo += static_cast<int>(a);
     k.w = std::vector<double>(k.w.begin() + static_cast<std::ptrdiff_t>(a), k.w.begin() + static_cast<std::ptrdiff_t>(b));
     return k;
+}
+
+std::shared_ptr<const BinKernel> sharedBinKernel(const TimeResponse& r, double binWidth, int filmBins) {
+    struct Entry {
+        TimeResponse response;
+        double binWidth;
+        int filmBins;
+        std::shared_ptr<const BinKernel> kernel;
+    };
+    static const auto identity = std::make_shared<const BinKernel>();
+    if (r.identity()) return identity;  // every frame of every render: no lock
+    static std::mutex mutex;
+    static std::vector<Entry> cache;  // most recently used last
+    constexpr size_t kKept = 8;       // a few: the viewer switches between responses, axes' widths are equal
+    const std::lock_guard<std::mutex> lock(mutex);  // held while computing: each kernel once
+    for (size_t i = 0; i < cache.size(); ++i)
+        if (cache[i].response == r && cache[i].binWidth == binWidth && cache[i].filmBins == filmBins) {
+            std::rotate(cache.begin() + static_cast<std::ptrdiff_t>(i), cache.begin() + static_cast<std::ptrdiff_t>(i) + 1,
+                        cache.end());
+            return cache.back().kernel;
+        }
+    auto kernel = std::make_shared<const BinKernel>(binKernel(r, binWidth, filmBins));
+    if (cache.size() == kKept) cache.erase(cache.begin());
+    cache.push_back({r, binWidth, filmBins, kernel});
+    return kernel;
 }
 
 void applyKernel(const BinKernel& k, const double* x, int bins, const double* left, const double* right, double* out) {
     const int n = static_cast<int>(k.w.size());
     for (int j = 0; j < bins; ++j) {
         double acc[3] = {0.0, 0.0, 0.0};
+        if (k.after != 0.0)
+            for (int c = 0; c < 3; ++c) acc[c] += k.after * right[c];
         for (int i = 0; i < n; ++i) {
             const int src = j - (k.lo + i);
             const double* v = src < 0 ? left : src >= bins ? right : x + static_cast<size_t>(src) * 3;
             for (int c = 0; c < 3; ++c) acc[c] += k.w[static_cast<size_t>(i)] * v[c];
         }
+        if (k.before != 0.0)
+            for (int c = 0; c < 3; ++c) acc[c] += k.before * left[c];
         for (int c = 0; c < 3; ++c) out[static_cast<size_t>(j) * 3 + c] = acc[c];
     }
 }

@@ -28,6 +28,8 @@
 // Continuous emission (the step response) blurred: Y_k = sum_m W_m C_(k-m), C the running sum. C
 // is taken as the light that arrived before the film for k < 0, and as its last value past the end.
 #pragma once
+#include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -56,11 +58,17 @@ std::string sensorName(const TimeResponse& r);  // "exp:0.05" (ns)
 // For people: "gaussian pulse, FWHM 0.1 ns; ideal sensor".
 std::string describe(const TimeResponse& r);
 
-// The weights of Y_k = sum_{i} w[i] X_(k - (lo + i)).
+// The weights of Y_k = sum_{i} w[i] X_(k - (lo + i)) + before * X_(before the film) + after * X_(past
+// the end). A film of B bins reads only the weights W_m with |m| < B: a longer kernel is cut to
+// them, and the weights of the light that lies before (m >= B) or past (m <= -B) the film for every
+// bin are summed into `before` and `after` (from G in closed form: sum_{m>=M} W_m = 1 - F(M),
+// sum_{m<M} W_m = F(M), F(M) = [G(MD) - G((M-1)D)] / D). They multiply the extensions (0 for delta
+// emission), so a cut kernel reads the film as the whole one does, in O(B) per value.
 struct BinKernel {
     int lo = 0;
     std::vector<double> w{1.0};
-    bool identity() const { return lo == 0 && w.size() == 1 && w[0] == 1.0; }
+    double before = 0.0, after = 0.0;
+    bool identity() const { return lo == 0 && w.size() == 1 && w[0] == 1.0 && before == 0.0 && after == 0.0; }
 };
 // Why a limit: each weight is a second difference of G, which grows like the response's width w
 // while W_m ~ D/w, so G's rounding (1e-16 relative) costs each weight about 1e-16 (w/D)^2: up to
@@ -71,7 +79,15 @@ struct BinKernel {
 inline constexpr double kMaxResponseBins = 1 << 20;
 // The span of h = p * s that the kernel covers (both shapes' reach), in bins of width binWidth.
 double responseSpanBins(const TimeResponse& r, double binWidth);
-BinKernel binKernel(const TimeResponse& r, double binWidth);
+// The kernel for bins of width binWidth, cut to a film of filmBins bins (0: the whole support).
+BinKernel binKernel(const TimeResponse& r, double binWidth, int filmBins = 0);
+// binKernel, computed once per (response, bin width, film bins) and shared: the film readers
+// (film_view.h) ask for it on every frame, profile and streak (an export of N frames, the viewer's
+// every step), and each weight of a pulse costs a quadrature of G (up to 1280 evaluations).
+// Thread-safe; keeps the last few kernels.
+std::shared_ptr<const BinKernel> sharedBinKernel(const TimeResponse& r, double binWidth, int filmBins);
+// How many kernels binKernel has computed in this process (for the tests of the cache).
+uint64_t binKernelComputations();
 // G of the combined h at t (m of OPL), as above; exposed for the tests.
 double responseG(const TimeResponse& r, double t);
 

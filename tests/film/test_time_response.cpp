@@ -4,17 +4,20 @@
 // emission times the pulse spreads over (transport is time-invariant: a pulse is a weighted sum of
 // delta pulses emitted at other instants); the film readers (frame, profile, streak, volume,
 // continuous emission) through the kernel.
+#include "film/film_export.h"
 #include "film/film_view.h"
 #include "film/time_response.h"
 #include "film/transient_film.h"
 #include "eval/reference.h"
 #include "base/rng.h"
 #include "support/quadrature.h"
+#include "support/temp_dir.h"
 #include "support/test_scene.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numeric>
 #include <random>
 
 namespace tpb {
@@ -265,6 +268,94 @@ TEST(TimeResponse, FilmReadersApplyTheKernelAlongEachPixelsSeries) {
     // The identity reads the sums as before, bit for bit.
     EXPECT_EQ(frameImage(*snap, 7, TimeAxis::Real, EmissionMode::Delta, TimeResponse{}),
               frameImage(*snap, 7, TimeAxis::Real, EmissionMode::Delta));
+}
+
+// A kernel cut to the film (|m| < bins, the rest summed into before/after) reads a series as the
+// whole kernel does, for responses far longer than the film on both sides, in delta (extensions 0)
+// and continuous emission (extensions: what came before, the last value); a response shorter than
+// the film gives the same kernel, weight for weight.
+TEST(TimeResponse, KernelCutToTheFilmReadsItAsTheWholeKernelDoes) {
+    const double D = 0.1;
+    const int B = 24;
+    Rng rng(11, Stream::Test, 0, 0);
+    std::vector<double> x(static_cast<size_t>(B) * 3);
+    for (double& v : x) v = rng.uniform();
+    const double left[3] = {0.7, 0.2, 1.3}, right[3] = {2.0, 0.4, 0.9}, zero[3] = {0.0, 0.0, 0.0};
+    for (const TimeResponse& r : {both("gaussian:3", "exp:2"), both("square:20", "gaussian:1"), sensor("exp:40"),
+                                  pulse("gaussian:30")}) {
+        SCOPED_TRACE(describe(r));
+        const BinKernel whole = binKernel(r, D), cut = binKernel(r, D, B);
+        ASSERT_GT(whole.w.size(), static_cast<size_t>(2 * B)) << "the response must be longer than the film";
+        EXPECT_GE(cut.lo, 1 - B);
+        EXPECT_LE(cut.lo + static_cast<int>(cut.w.size()), B);
+        EXPECT_GT(cut.before + cut.after, 0.0);
+        // The cut kernel's tails are telescoped sums (exact to rounding); the whole kernel's are sums
+        // of thousands of second differences, each off by G's rounding: it misses 1 by up to 5e-10
+        // (exp:40), and the two readings agree within that.
+        const double wholeSum = std::accumulate(whole.w.begin(), whole.w.end(), 0.0);
+        EXPECT_NEAR(std::accumulate(cut.w.begin(), cut.w.end(), 0.0) + cut.before + cut.after, 1.0, 1e-14);
+        const double tol = 1e-12 + 2.0 * std::abs(wholeSum - 1.0);
+        for (const double* ext : {zero, left}) {
+            const double* rightExt = ext == zero ? zero : right;
+            std::vector<double> a(x.size()), b(x.size());
+            applyKernel(whole, x.data(), B, ext, rightExt, a.data());
+            applyKernel(cut, x.data(), B, ext, rightExt, b.data());
+            for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(b[i], a[i], tol * (1.0 + std::abs(a[i]))) << i;
+        }
+    }
+    const BinKernel narrow = binKernel(both("gaussian:0.6", "exp:0.1"), D), narrowCut = binKernel(both("gaussian:0.6", "exp:0.1"), D, B);
+    EXPECT_EQ(narrowCut.lo, narrow.lo);
+    EXPECT_EQ(narrowCut.w, narrow.w);
+    EXPECT_EQ(narrowCut.before, 0.0);
+    EXPECT_EQ(narrowCut.after, 0.0);
+}
+
+// Issue 33 item 6: the kernel was computed for every frame (a wide response took seconds per frame:
+// 64 frames of 64x64 in minutes; the viewer froze on every step). It is computed once per
+// (response, bin width, film bins): an export of all frames, the strip, a profile, a streak, the
+// volume and continuous frames compute it once; another response once more; the first again not
+// at all. The shared kernel is the computed one, weight for weight, and a frame read through it
+// twice is the same image.
+TEST(TimeResponse, KernelIsComputedOncePerResponseAndBinWidth) {
+    const TimeBins time{1.0, 0.1, 24};
+    TransientFilm film(12, 10, time);
+    Rng rng(7, Stream::Test, 0, 0);
+    for (int tile = 0; tile < film.tileCount(); ++tile) {
+        TransientFilm::TileWriter w(film, tile);
+        const TileRect r = film.tileRect(tile);
+        PixelAccumulator acc(time.bins);
+        for (int y = r.y0; y < r.y0 + r.h; ++y)
+            for (int x = r.x0; x < r.x0 + r.w; ++x) {
+                acc.reset(time.bins);
+                for (int k = 0; k < time.bins; ++k) acc.add(TimeAxis::Real, k, Color(rng.uniform()));
+                w.addPixel(x, y, acc);
+            }
+    }
+    const auto snap = film.snapshot();
+    test::TempDir tmp("time_response_cache");
+    ExportOptions opt;
+    opt.response = both("gaussian:0.613", "exp:0.417");  // widths no other test uses (the cache is per process)
+    const uint64_t n0 = binKernelComputations();
+    const std::vector<float> first = frameImage(*snap, 9, TimeAxis::Real, EmissionMode::Delta, opt.response);
+    EXPECT_EQ(exportFrames(*snap, tmp.path().string() + "/frames", opt), time.bins);
+    exportStripPng(*snap, tmp.path().string() + "/strip.png", 8, opt);
+    pixelProfile(*snap, 3, 4, TimeAxis::Real, EmissionMode::Delta, opt.response);
+    streakImage(*snap, 5, TimeAxis::Real, EmissionMode::Continuous, opt.response);
+    volume(*snap, TimeAxis::Real, EmissionMode::Delta, opt.response);
+    for (int k = 0; k < time.bins; ++k) frameImage(*snap, k, TimeAxis::Real, EmissionMode::Continuous, opt.response);
+    EXPECT_EQ(binKernelComputations() - n0, 1u) << "the kernel must be computed once for every read of one response";
+    const TimeResponse other = both("gaussian:0.613", "exp:0.2");
+    frameImage(*snap, 3, TimeAxis::Real, EmissionMode::Delta, other);
+    frameImage(*snap, 4, TimeAxis::Real, EmissionMode::Delta, other);
+    EXPECT_EQ(binKernelComputations() - n0, 2u);
+    EXPECT_EQ(frameImage(*snap, 9, TimeAxis::Real, EmissionMode::Delta, opt.response), first);
+    EXPECT_EQ(binKernelComputations() - n0, 2u);
+    const std::shared_ptr<const BinKernel> shared = sharedBinKernel(opt.response, time.binWidth, time.bins);
+    const BinKernel computed = binKernel(opt.response, time.binWidth, time.bins);
+    EXPECT_EQ(shared->lo, computed.lo);
+    EXPECT_EQ(shared->w, computed.w);
+    EXPECT_EQ(shared->before, computed.before);
+    EXPECT_EQ(shared->after, computed.after);
 }
 
 }  // namespace
