@@ -29,6 +29,7 @@ void run(const ViewCmd& c) {
     if (c.scene.empty() && c.resume.empty())
         throw UserError("tpb view: give a scene file (tpb view SCENE), or --resume DIR to go on refining a checkpoint");
     ViewOptions view = c.view;
+    view.launchedAt = nowSec();  // the viewer's timeline counts from here (the scene's loading included)
     view.flags = c.ov.settings();
     if (!c.resume.empty()) {  // the checkpoint's scene and settings (cli/resume.h), refined further
         if (c.method != "beams") throw UserError("--resume: checkpoints are of the photon beams; drop --method " + c.method);
@@ -87,8 +88,9 @@ void registerView(CLI::App& app) {
     cmd->add_option("--export-folder", o->exportFolder, "The Export section's folder (default out/view)");
     cmd->add_option("--click", o->clicks,
                     "With --screenshot: once the passes are done, click this control before the screenshot, "
-                    "as 'Section/label' (e.g. 'View/Continuous emission', 'Export/Steady state'); repeatable, "
-                    "in order")
+                    "as 'Section/label' (e.g. 'View/Continuous emission', 'Export/Steady state'), or press a key as "
+                    "'key:NAME' (Escape, Q, F, 1, Left, Right, Space; on the frame after the previous click); "
+                    "repeatable, in order")
         ->needs(shot)
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
@@ -108,7 +110,10 @@ void registerView(CLI::App& app) {
         ->check(flags::sensor());
     cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
     cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
-    cmd->add_flag("--steady", o->steady, "Start on the steady-state image");
+    CLI::Option* steady = cmd->add_flag(
+        "--steady", o->steady, "Start on the steady-state image (the default without --bin/--time, until a time is picked)");
+    cmd->add_flag("--frame", o->frame, "Start on a time frame (the bin of peak energy without --bin/--time)")
+        ->excludes(steady);
     cmd->add_option("--pixel", o->pixel, "Selected pixel: X Y (time profile; Y is the streak row)")->expected(2);
     cmd->add_option("--window-size", o->windowSize, "Window size: W H (default 1280 800)")
         ->expected(2)

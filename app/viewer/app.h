@@ -11,6 +11,8 @@
 #include "render/prepare.h"
 #include "viewer/export.h"
 #include "viewer/gl.h"
+#include "viewer/image_view.h"
+#include "viewer/instrument.h"
 
 #include <imgui.h>
 
@@ -32,6 +34,7 @@ inline constexpr int64_t kMaxWindowPx = 16384;   // beyond any OpenGL 3.3 frameb
 // held tile makes the render copy it: with every pixel read, the first seven passes of the default
 // scene took 3.7 s instead of 0.9 s, `tpb view ... --screenshot --after-passes 7`, timeline line).
 inline constexpr int kAutoBinStride = 4;
+inline constexpr float kProfileDecades = 6.0f;  // the profile's log scale spans this far below its peak
 
 // What `tpb view` asks of the viewer beyond the prepared render (plain values, filled by the
 // command line: app/cli/view_command.cpp).
@@ -45,11 +48,12 @@ struct ViewOptions {
     std::vector<int> pixel;  // x y
     std::vector<int> windowSize{1280, 800};
     bool unwarp = false, realTime = false, continuous = false, delta = false;
-    bool falseColor = false, noSrgb = false, steady = false;
+    bool falseColor = false, noSrgb = false, steady = false, frame = false;
     // The flags the render runs with, stored in the checkpoints "Save checkpoint" writes (to
     // <export folder>/checkpoint.tpbck: render/checkpoint.h) so `--resume` can reproduce it.
     SettingsOverrides flags;
     std::string pulse = "delta", sensor = "ideal";  // --pulse, --sensor (film/time_response.h; checked)
+    double launchedAt = 0.0;  // nowSec() when `tpb view` started (the timeline's origin)
 };
 
 // What the user looks at (changed by the UI, never by other threads).
@@ -62,6 +66,9 @@ struct ViewState {
     TimeResponse response;
     double pulseNs = 0.0, sensorNs = 0.0;
     bool showSteady = false;
+    // Opened on the steady image by default (no --bin/--time/--frame/--steady): the first time the
+    // user picks a time (slider, keys, Play, a click on the streak or the profile), the frame shows.
+    bool steadyUntilTime = false;
     DisplayParams display;
     float evFrame = 0.0f, evSteady = 0.0f;  // exposure per view (frame and streak share evFrame)
     // Auto exposure pending: refitted to every fetch that shows light (the tiles finished so far)
@@ -71,6 +78,7 @@ struct ViewState {
     // energy, refitted like the exposure until the first pass is complete.
     bool autoBin = true;
     bool playing = false, loop = true;
+    bool profileLog = false;  // the pixel profile on a log scale (kProfileDecades below its peak)
     float speed = 8.0f;  // bins per second
     double playAccum = 0.0;
     int selX = 0, selY = 0;  // pixel of the profile; selY is the streak's row
@@ -117,6 +125,14 @@ struct ControlRect {
 
 // The automatic exposure: fitExposure (core/film/tone_map.h).
 
+// A driver made off the UI thread (its film allocated, a checkpoint read into it), not started yet.
+struct PreparedDriver {
+    std::shared_ptr<Driver> driver;
+    uint64_t resumedPasses = 0;  // from the checkpoint of `tpb view --resume` (0: none)
+};
+std::future<PreparedDriver> prepareDriver(const Scene& scene, const RenderSettings& s, const TimeBins& time,
+                                          const std::string& resumePath);
+
 class Viewer {
 public:
     // `resumePath`: a checkpoint of this render to go on from (tpb view --resume, checked by
@@ -133,10 +149,13 @@ public:
 private:
     // session (data.cpp)
     void restart(const RenderSettings& s, const std::string& why);
+    void adopt(PreparedDriver p, const std::string& why);  // starts its passes
     void updateFrame();
     void updateProfile();
     void updateBinEnergy();
     void fitPendingExposure(const FetchKey& key);
+    void fitHiddenFrameExposure();
+    void trackNoise(const FetchKey& key);  // after a frame fetch
     void pollExport();
     void drawTimeResponse();   // View section: pulse shape and sensor response
     std::string responseNote() const;
@@ -154,21 +173,29 @@ private:
     void drawUi();
     void drawControls();
     void drawImagePanel();
+    void drawColourBar(ImVec2 at, float width);  // under the image, with false colour
     void drawTimePanel();
     void drawTimeSection();
     void drawProgressSection();
+    void drawNoise();  // the noise indicator row
     void drawSettingsSection();
     bool drawEstimatorSettings();
     void drawExportSection();
     void drawMessages();
+    void drawPopups();  // the confirmations: restart the accumulation, quit during an export
+    void askRestart(const RenderSettings& s, const std::string& what);  // restart, asking first once passes are in
+    void requestQuit();  // Esc / Q
     bool section(const char* label, ImGuiTreeNodeFlags flags = 0);  // a collapsing header, tracked
     void track(const char* label);  // records the last item as control "<section>/<label>"
     void handleKeys(const std::vector<int>& keys);  // GLFW key codes pressed since the last frame
     void advancePlayback(double dt);
     void setBin(int bin);  // the user's choice: ends the automatic bin
+    void showFrameOnce();  // the steady image shown by default gives way to the frame
     void setAutoBin(int bin);
 
     // main loop (view.cpp)
+    bool waitForFilm();  // draws "preparing" frames until the first driver is made; false: closed
+    void drawPreparing();
     bool settled();  // nothing left to fetch, render or export
     void scriptedInput();  // screenshot mode: --click / --export, injected as ImGui mouse input
     void endFrameChecks();
@@ -183,7 +210,8 @@ private:
     GLFWwindow* window_;
     ViewState st_;
 
-    std::shared_ptr<Driver> driver_;
+    std::shared_ptr<Driver> driver_;           // null until the first one is prepared (waitForFilm)
+    std::future<PreparedDriver> prepareJob_;  // the first driver, made while the window shows
     uint64_t generation_ = 0;
     RenderSettings edit_;  // the settings panel's copy
     std::string status_;
@@ -198,6 +226,9 @@ private:
     bool frameComplete_ = false;
     double lastFetch_ = 0.0, fetchSec_ = 0.0;  // when and how long the last fetch took
     ExposureFit lastFit_;
+    BatchNoise noise_;     // of the picture shown (noiseKey_), from the spread between passes
+    FetchKey noiseKey_;    // its key without the passes
+    uint64_t hiddenFitPasses_ = 0;  // the passes the frames' exposure was last fitted to behind the steady image
 
     std::future<BinEnergyResult> binEnergyJob_;
     FetchKey binEnergyRequested_;
@@ -207,9 +238,7 @@ private:
     FetchKey profileRequested_, profileKey_;
     std::vector<float> profileRgb_, profileLum_;
 
-    // Checkpoints: the one to resume from at the first start, and the one being written (the
-    // driver stays paused until it is on disk).
-    std::string resumePath_;
+    // The checkpoint being written (the driver stays paused until it is on disk).
     // The checkpoints this viewer resumed from or wrote: the only ones "Save checkpoint" overwrites
     // (another render's checkpoint in the export folder is refused, never replaced silently).
     std::vector<std::string> ownCheckpoints_;
@@ -217,6 +246,13 @@ private:
     bool checkpointWasPaused_ = false;
     bool checkpointFailed_ = false;  // a checkpoint was refused or failed (screenshot mode: exit 2)
     std::future<std::string> checkpointJob_;  // "" or the error
+
+    // The confirmation asked (its popup opens on the next drawUi), and the restart it would do.
+    static constexpr const char* kRestartPopup = "Restart the accumulation?";
+    static constexpr const char* kQuitPopup = "Quit during the export?";
+    const char* openPopup_ = nullptr;
+    std::optional<RenderSettings> pendingRestart_;
+    std::string pendingWhat_;
 
     ExportJob export_;
     std::vector<std::string> exportLog_;  // the last export's files
@@ -240,7 +276,11 @@ private:
 
     // Where the film image was drawn (framebuffer pixels), for the screenshot report.
     ImVec2 imageMin_{0, 0}, imageSize_{0, 0};
+    ImVec2 canvasMin_{0, 0}, canvasSize_{0, 0};  // the panel's area for the image
     float imageZoom_ = 1.0f;
+    ImageViewport view_;  // fitted, or the user's zoom and pan
+    std::vector<AxisTick> streakTicksNs_, profileTicksNs_;  // as drawn (screenshot report)
+    std::vector<AxisTick> colourBarTicks_;  // value: position on the bar (0..1), label: film luminance
 
     bool snapRequested_ = false;  // F12 / the button: save the window to the export folder
     int snapCount_ = 0;
@@ -248,6 +288,9 @@ private:
     // Timeline of the current accumulation (glfwGetTime, s): when it (re)started, when a fetched
     // image first had light in it (-1: not yet), for the Progress section and the screenshot report.
     double startedAt_ = 0.0, firstLightSec_ = -1.0;
+    // From the launch of `tpb view` (ViewOptions::launchedAt, steady clock): when the window first
+    // showed a frame, and when the film was ready and the passes started (-1: not yet).
+    double windowShownSec_ = -1.0, filmReadySec_ = -1.0;
 
     int settleFrames_ = 0;
     bool screenshotTaken_ = false;

@@ -35,6 +35,23 @@ int peakEnergyBin(const std::vector<double>& energy) {
     return best;
 }
 
+// The first driver: its film (hundreds of MiB on the default scene: seconds to allocate) and the
+// checkpoint it resumes from are made on a helper thread while the window already shows a
+// "preparing" screen (Viewer::waitForFilm); the driver only starts once it is adopted.
+std::future<PreparedDriver> prepareDriver(const Scene& scene, const RenderSettings& s, const TimeBins& time,
+                                          const std::string& resumePath) {
+    return std::async(std::launch::async, [&scene, s, time, resumePath] {
+        PreparedDriver p;
+        p.driver = std::make_shared<Driver>(scene, s, time);
+        if (!resumePath.empty()) {  // `tpb view --resume`: go on from the checkpoint's passes
+            Checkpoint c = readCheckpoint(resumePath, &p.driver->film());  // into the driver's film: one film in memory
+            p.resumedPasses = c.info.passes;
+            p.driver->restore(nullptr, std::move(c.history));
+        }
+        return p;
+    });
+}
+
 void Viewer::restart(const RenderSettings& s, const std::string& why) {
     if (checkpointStage_ == CheckpointStage::Writing) {  // finish it (it holds the old driver)
         checkpointJob_.wait();
@@ -42,25 +59,26 @@ void Viewer::restart(const RenderSettings& s, const std::string& why) {
     }
     checkpointStage_ = CheckpointStage::Idle;
     if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
-    driver_ = std::make_shared<Driver>(scene_, s, time_);
-    if (!resumePath_.empty()) {  // the first start of `tpb view --resume`: go on from the checkpoint's passes
-        Checkpoint c = readCheckpoint(resumePath_, &driver_->film());  // into the driver's film: one film in memory
-        const uint64_t n = c.info.passes;
-        driver_->restore(nullptr, std::move(c.history));
-        resumePath_.clear();
-        std::printf("resumed %llu passes from the checkpoint\n", static_cast<unsigned long long>(n));
-    }
+    driver_.reset();               // before the new film is allocated: one film in memory, not two
+    adopt(prepareDriver(scene_, s, time_, "").get(), why);
+}
+
+void Viewer::adopt(PreparedDriver p, const std::string& why) {
+    driver_ = std::move(p.driver);
+    if (p.resumedPasses > 0)
+        std::printf("resumed %llu passes from the checkpoint\n", static_cast<unsigned long long>(p.resumedPasses));
     ++generation_;
     edit_ = driver_->settings();
     driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
     startedAt_ = glfwGetTime();
     firstLightSec_ = -1.0;
     status_ = why;
+    const RenderSettings& s = driver_->settings();
     if (!why.empty()) {
         std::printf("%s (photons/pass %lld, alpha %.4g, initial radius %.6g m, pass limit %lld)\n", why.c_str(),
                     static_cast<long long>(s.photonsPerPass), s.alpha, s.beamRadius0, static_cast<long long>(s.passes));
-        std::fflush(stdout);
     }
+    std::fflush(stdout);
 }
 
 namespace {
@@ -206,10 +224,12 @@ void Viewer::updateFrame() {
         image_.upload(width, height, frameRgb_.data());
         imageDirty_ = true;
         fitPendingExposure(key);
+        trackNoise(key);
         if (firstLightSec_ < 0.0 && std::any_of(frameRgb_.begin(), frameRgb_.end(), [](float v) { return v > 0.0f; }))
             firstLightSec_ = glfwGetTime() - startedAt_;
         fetchSec_ = glfwGetTime() - now;  // the fit included (it sorts the lit pixels)
     }
+    fitHiddenFrameExposure();
     DisplayParams p = st_.display;
     p.exposureEv = st_.showSteady ? st_.evSteady : st_.evFrame;
     if (imageDirty_ || p.exposureEv != lastImageParams_.exposureEv || p.srgb != lastImageParams_.srgb ||
@@ -218,6 +238,42 @@ void Viewer::updateFrame() {
         lastImageParams_ = p;
         imageDirty_ = false;
     }
+}
+
+void Viewer::trackNoise(const FetchKey& key) {
+    // The noise of the picture shown, from the spread between the batches of passes it was fetched
+    // at (instrument.h BatchNoise): complete fetches only (every tile at the same pass). Another
+    // picture (bin, axis, emission, response, steady) or a restart starts the estimate over.
+    FetchKey picture = key;
+    picture.passes = 0;
+    if (!(picture == noiseKey_)) {
+        noiseKey_ = picture;
+        noise_.reset(frameRgb_.size() / 3);
+    }
+    if (!frameComplete_ || key.passes == 0) return;
+    const RenderSettings& s = driver_->settings();
+    double weight = 0.0;  // the film's divisor after key.passes passes (render_settings.h passWeight)
+    for (uint64_t i = 1; i <= key.passes; ++i) weight += s.passWeight(i);
+    std::vector<float> lum(frameRgb_.size() / 3);
+    for (size_t i = 0; i < lum.size(); ++i)
+        lum[i] = static_cast<float>(luminance(Color(frameRgb_[3 * i], frameRgb_[3 * i + 1], frameRgb_[3 * i + 2])));
+    noise_.add(lum, weight);
+}
+
+void Viewer::fitHiddenFrameExposure() {
+    // The steady image is shown, the frames' exposure still automatic: fit it to the frame of the
+    // automatic bin once that bin is decided (a complete pass), so that the frame the user switches
+    // to, the streak image and the MP4/contact sheet exports are exposed for frames.
+    const uint64_t passes = driver_->completedPasses();
+    if (!st_.showSteady || !st_.autoFrame || st_.autoBin || passes == 0 || passes == hiddenFitPasses_) return;
+    hiddenFitPasses_ = passes;
+    std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+    const std::vector<float> rgb = frameImage(*snap, st_.bin, st_.axis, st_.mode, st_.response);
+    snap.reset();
+    const ExposureFit fit = fitExposure(rgb);
+    if (!fit.found) return;  // a black frame: again after the next pass
+    st_.evFrame = fit.ev;
+    st_.autoFrame = false;
 }
 
 void Viewer::fitPendingExposure(const FetchKey& key) {

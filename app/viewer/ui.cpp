@@ -26,6 +26,8 @@ constexpr ImGuiWindowFlags kPanel = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_N
                                     ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings |
                                     ImGuiWindowFlags_NoBringToFrontOnFocus;
 
+constexpr ImU32 kTickColour = IM_COL32(200, 200, 210, 220);  // axis ticks and their labels
+
 ImTextureID texId(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
 
 void hint(const char* text) {
@@ -56,6 +58,13 @@ const char* axisName(TimeAxis a) { return a == TimeAxis::Real ? "real time" : "c
 void Viewer::setBin(int bin) {
     st_.bin = std::clamp(bin, 0, time_.bins - 1);
     st_.autoBin = false;  // the user chose a time: no more automatic bin
+    showFrameOnce();
+}
+
+void Viewer::showFrameOnce() {
+    if (!st_.steadyUntilTime) return;
+    st_.steadyUntilTime = false;
+    st_.showSteady = false;
 }
 
 void Viewer::setAutoBin(int bin) { st_.bin = std::clamp(bin, 0, time_.bins - 1); }
@@ -100,6 +109,14 @@ void Viewer::handleKeys(const std::vector<int>& keys) {
             case GLFW_KEY_END: setBin(time_.bins - 1); break;
             case GLFW_KEY_SPACE: st_.playing = !st_.playing; break;
             case GLFW_KEY_F12: snapRequested_ = true; break;
+            case GLFW_KEY_F: view_ = ImageViewport{}; break;
+            case GLFW_KEY_ESCAPE:
+            case GLFW_KEY_Q:
+                if (!ImGui::IsPopupOpen(nullptr, ImGuiPopupFlags_AnyPopupId)) requestQuit();
+                break;
+            case GLFW_KEY_1:
+                view_ = oneToOne(scene_.camera.width, scene_.camera.height, ImGui::GetIO().DisplayFramebufferScale.x);
+                break;
             default: break;
         }
     }
@@ -111,6 +128,7 @@ void Viewer::advancePlayback(double dt) {
         return;
     }
     st_.autoBin = false;
+    showFrameOnce();
     st_.playAccum += std::min(dt, 0.25) * st_.speed;
     while (st_.playAccum >= 1.0) {
         st_.playAccum -= 1.0;
@@ -151,21 +169,43 @@ void Viewer::drawUi() {
         ImGui::EndChild();
     }
     ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(left, 0));
+    ImGui::SetNextWindowSize(ImVec2(ds.x - left, topH));
+    section_ = "Image";
+    if (ImGui::Begin("Image", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse)) drawImagePanel();
+    ImGui::End();
+
+    ImGui::SetNextWindowPos(ImVec2(left, topH));
+    ImGui::SetNextWindowSize(ImVec2(ds.x - left, ds.y - topH));
+    section_ = "Streak and pixel profile";
+    if (ImGui::Begin("Streak and pixel profile", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawTimePanel();
+    ImGui::End();
+    drawPopups();
     if (!firstRecorded_) {  // the layout the user first aims at (screenshot mode reports it)
         firstRecorded_ = true;
         firstControls_ = controls_;
         firstPasses_ = driver_->completedPasses();
         firstRunning_ = driver_->running();
     }
+}
 
-    ImGui::SetNextWindowPos(ImVec2(left, 0));
-    ImGui::SetNextWindowSize(ImVec2(ds.x - left, topH));
-    if (ImGui::Begin("Image", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawImagePanel();
-    ImGui::End();
-
-    ImGui::SetNextWindowPos(ImVec2(left, topH));
-    ImGui::SetNextWindowSize(ImVec2(ds.x - left, ds.y - topH));
-    if (ImGui::Begin("Streak and pixel profile", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawTimePanel();
+void Viewer::drawPreparing() {
+    // The window before the film exists: what is being prepared, so it is never a black window.
+    const ImVec2 ds = ImGui::GetIO().DisplaySize;
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ds);
+    if (ImGui::Begin("Preparing", nullptr, kPanel | ImGuiWindowFlags_NoTitleBar)) {
+        const int w = scene_.camera.width, h = scene_.camera.height;
+        ImGui::SetCursorPos(ImVec2(std::floor(ds.x * 0.3f), std::floor(ds.y * 0.4f)));
+        ImGui::BeginGroup();
+        ImGui::Text("%s", scenePath_.c_str());
+        ImGui::Text("preparing the film: %d x %d px, %d bins (%s) ...", w, h, time_.bins,
+                    humanBytes(filmBytes(w, h, time_.bins)).c_str());
+        ImGui::TextDisabled("the first pass starts as soon as it is allocated (%.1f s)",
+                            nowSec() - opt_.launchedAt);
+        ImGui::EndGroup();
+    }
     ImGui::End();
 }
 
@@ -188,6 +228,7 @@ void Viewer::drawControls() {
         ImGui::SameLine();
         ImGui::RadioButton("Steady state##view", &show, 1);  // unique ID: the Export section has one too
         track("Steady state##view");
+        if (st_.showSteady != (show == 1)) st_.steadyUntilTime = false;  // the user's choice from now on
         st_.showSteady = show == 1;
         bool unwarp = st_.axis == TimeAxis::Unwarped;
         if (ImGui::Checkbox("Camera unwarping", &unwarp)) st_.axis = unwarp ? TimeAxis::Unwarped : TimeAxis::Real;
@@ -314,6 +355,8 @@ void Viewer::drawProgressSection() {
         ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes), state);
     else
         ImGui::Text("pass %llu  (%s)", static_cast<unsigned long long>(done), state);
+    ImGui::SameLine();  // on the pass row: the Export buttons stay in view in an 800-pixel window
+    drawNoise();
     if (s.passes > 0)
         ImGui::ProgressBar(static_cast<float>(done) / static_cast<float>(s.passes), ImVec2(-1, 0));
     else
@@ -389,6 +432,26 @@ void Viewer::drawProgressSection() {
     if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
         ImGui::SetTooltip("the film and its passes to <export folder>/checkpoint.tpbck, between passes;\n"
                           "go on later with tpb render --resume FOLDER or tpb view --resume FOLDER");
+}
+
+void Viewer::drawNoise() {
+    // One row, always: how far the picture shown is from converged, as far as its noise tells.
+    const double e = noise_.relativeError();
+    if (e < 0.0) {
+        ImGui::TextDisabled("noise -");
+    } else {
+        // Colour: red above 10 %, yellow above 2 %, green below (a clean picture to the eye).
+        const ImVec4 c = e > 0.10 ? ImVec4(1.0f, 0.45f, 0.4f, 1.0f)
+                         : e > 0.02 ? ImVec4(1.0f, 0.85f, 0.3f, 1.0f) : ImVec4(0.5f, 0.9f, 0.5f, 1.0f);
+        ImGui::TextColored(c, "noise %.*f %%", e < 0.1 ? 1 : 0, 100.0 * e);
+    }
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("%d batches of passes so far (known from 2 on).\n"
+                          "The picture's relative standard error: RMS over the pixels of the standard error of\n"
+                          "each pixel's value, over the mean pixel value (luminance). Estimated from the spread of\n"
+                          "the batches of passes this picture was read at (restarts on a change of time, axis,\n"
+                          "emission or view). It falls as 1/sqrt(passes); the kernels' blur (bias) is not in it.",
+                          noise_.batches());
 }
 
 // Pulse shape and sensor response (film/time_response.h): a convolution along time applied when
@@ -512,13 +575,13 @@ bool Viewer::drawEstimatorSettings() {
     }
     edit_.volumeEstimator = s.volumeEstimator;
     edit_.timeKernel = s.timeKernel;
-    restart(s, what + ": accumulation restarted");
+    askRestart(s, what);
     return true;
 }
 
 void Viewer::drawSettingsSection() {
     if (!section("Render settings")) return;
-    hint("a change (Enter or leaving the field) restarts the accumulation");
+    hint("a change (Enter or leaving the field) restarts the accumulation, asking first once passes are in");
     // The integrator (render_settings.h Method): any of them runs in the same Driver, so the
     // scrubbing, toggles and exports work the same for each.
     const Method methods[] = {Method::Beams, Method::PathTracer, Method::Preview};
@@ -528,7 +591,7 @@ void Viewer::drawSettingsSection() {
         RenderSettings s = driver_->settings();
         s.method = methods[m];
         edit_.method = s.method;
-        restart(s, std::string("method ") + methodName(s.method) + ": accumulation restarted");
+        askRestart(s, std::string("method ") + methodName(s.method));
         return;
     }
     track("method");
@@ -596,7 +659,80 @@ void Viewer::drawSettingsSection() {
         return;
     }
     for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
-    restart(s, "settings changed: accumulation restarted");
+    askRestart(s, "settings changed");
+}
+
+void Viewer::askRestart(const RenderSettings& s, const std::string& what) {
+    // Nothing to lose yet: restart at once. Otherwise ask (drawPopups): the passes are discarded.
+    if (driver_->completedPasses() == 0) {
+        restart(s, what + ": accumulation restarted");
+        return;
+    }
+    pendingRestart_ = s;
+    pendingWhat_ = what;
+    openPopup_ = kRestartPopup;
+}
+
+void Viewer::requestQuit() {
+    // A keyboard quit (Esc, Q): at once, unless an export would be cut short.
+    if (export_.busy()) {
+        openPopup_ = kQuitPopup;
+        std::printf("quit: asked first, an export is running\n");
+        std::fflush(stdout);
+        return;
+    }
+    std::printf("quit: by the keyboard\n");
+    std::fflush(stdout);
+    glfwSetWindowShouldClose(window_, GLFW_TRUE);
+}
+
+void Viewer::drawPopups() {
+    if (openPopup_) {
+        ImGui::OpenPopup(openPopup_);
+        openPopup_ = nullptr;
+    }
+    if (ImGui::BeginPopupModal(kRestartPopup, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+        section_ = kRestartPopup;
+        const unsigned long long done = driver_->completedPasses();
+        ImGui::Text("%s: this restarts the accumulation.", pendingWhat_.c_str());
+        ImGui::Text("The %llu pass%s rendered so far will be discarded.", done, done == 1 ? "" : "es");
+        if (ImGui::Button("Restart##confirm")) {
+            if (pendingRestart_) restart(*pendingRestart_, pendingWhat_ + ": accumulation restarted");
+            pendingRestart_.reset();
+            ImGui::CloseCurrentPopup();
+        }
+        track("Restart##confirm");
+        ImGui::SameLine();
+        if (ImGui::Button("Keep the accumulation") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
+            pendingRestart_.reset();
+            edit_ = driver_->settings();
+            status_ = pendingWhat_ + ": not applied, the accumulation is kept";
+            ImGui::CloseCurrentPopup();
+        }
+        track("Keep the accumulation");
+        ImGui::EndPopup();
+    }
+    if (ImGui::BeginPopupModal(kQuitPopup, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+        section_ = kQuitPopup;
+        ImGui::Text("An export is running (%s).", export_.progressLabel().c_str());
+        if (ImGui::Button("Quit after the export")) {  // finishBeforeClosing finishes it
+            ImGui::CloseCurrentPopup();
+            glfwSetWindowShouldClose(window_, GLFW_TRUE);
+        }
+        track("Quit after the export");
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel it and quit")) {  // a cancelled MP4 or volume leaves no file
+            export_.cancel();
+            ImGui::CloseCurrentPopup();
+            glfwSetWindowShouldClose(window_, GLFW_TRUE);
+        }
+        track("Cancel it and quit");
+        ImGui::SameLine();
+        if (ImGui::Button("Keep exporting") || !export_.busy()) ImGui::CloseCurrentPopup();
+        track("Keep exporting");
+        ImGui::EndPopup();
+    }
+    section_ = "";
 }
 
 void Viewer::drawExportSection() {
@@ -685,41 +821,76 @@ void Viewer::drawMessages() {
 
 void Viewer::drawImagePanel() {
     const int w = scene_.camera.width, h = scene_.camera.height;
+    // The title row: what is shown, and the zoom buttons at its right end.
+    const float buttonsW = ImGui::CalcTextSize("Fit 1:1").x + 4.0f * ImGui::GetStyle().FramePadding.x +
+                           ImGui::GetStyle().ItemSpacing.x;
+    ImGui::PushTextWrapPos(ImGui::GetContentRegionMax().x - buttonsW - ImGui::GetStyle().ItemSpacing.x);
     if (st_.showSteady) {
-        ImGui::TextWrapped("Steady state (all time), %llu passes", static_cast<unsigned long long>(frameKey_.passes));
+        ImGui::TextWrapped("Steady state (all time), %llu passes%s", static_cast<unsigned long long>(frameKey_.passes),
+                           st_.steadyUntilTime ? "  -  pick a time (slider, Left/Right, Play) to see the pulse" : "");
     } else {
         const double opl = binCentreOpl(st_.bin);
         ImGui::TextWrapped("bin %d: t = %.4f ns (%.4f m), %s, %s%s", st_.bin, opl / kC_m_per_ns, opl,
                            axisName(st_.axis), emissionLabel(), responseNote().c_str());
     }
-    const ImVec2 avail = ImGui::GetContentRegionAvail();
-    float zoom = std::min(avail.x / w, avail.y / h);
-    if (zoom >= 1.0f) zoom = std::floor(zoom);  // whole screen pixels per film pixel when it fits
-    zoom = std::max(zoom, 0.01f);
+    ImGui::PopTextWrapPos();
+    ImGui::SameLine(ImGui::GetContentRegionMax().x - buttonsW);
+    if (ImGui::SmallButton("Fit")) view_ = ImageViewport{};
+    track("Fit");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("fit the image to the panel (key F); wheel: zoom, right-drag: pan");
+    ImGui::SameLine();
+    if (ImGui::SmallButton("1:1")) view_ = oneToOne(w, h, ImGui::GetIO().DisplayFramebufferScale.x);
+    track("1:1");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("one screen pixel per film pixel (key 1)");
+
+    // The canvas: the rest of the panel. The image is placed by the viewport (fitted unless the
+    // user zoomed or panned) and clipped to the canvas.
+    ImVec2 avail = ImGui::GetContentRegionAvail();
+    // False colour: a colour bar under the image says which luminance each colour is.
+    const float barH = st_.display.falseColor ? 2.0f * ImGui::GetTextLineHeightWithSpacing() + 6.0f : 0.0f;
+    avail.y = std::max(avail.y - barH, 1.0f);
+    const ImVec2 c0 = ImGui::GetCursorScreenPos();
+    ImGui::InvisibleButton("##canvas", ImVec2(std::max(avail.x, 1.0f), std::max(avail.y, 1.0f)),
+                           ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight |
+                               ImGuiButtonFlags_MouseButtonMiddle);
+    const bool hovered = ImGui::IsItemHovered();
+    const ImagePlacement pl = placeImage(view_, avail.x, avail.y, w, h);
+    const ImVec2 p0(c0.x + pl.x, c0.y + pl.y);
+    const float zoom = pl.zoom;
     const ImVec2 size(w * zoom, h * zoom);
-    ImGui::SetCursorPosX(ImGui::GetCursorPosX() + std::floor(std::max(0.0f, (avail.x - size.x) * 0.5f)));
-    const ImVec2 p0 = ImGui::GetCursorScreenPos();
-    ImGui::Image(texId(image_.texture()), size);
-    const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+    ImGuiIO& io = ImGui::GetIO();
+    if (hovered && io.MouseWheel != 0.0f)  // zoom about the pointer
+        view_ = zoomAbout(pl, std::pow(1.25f, io.MouseWheel), io.MousePos.x - c0.x, io.MousePos.y - c0.y);
+    if (ImGui::IsItemActive() && (ImGui::IsMouseDragging(ImGuiMouseButton_Right) ||
+                                  ImGui::IsMouseDragging(ImGuiMouseButton_Middle))) {
+        view_ = panBy(pl, io.MouseDelta.x, io.MouseDelta.y);
+    }
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    dl->PushClipRect(c0, ImVec2(c0.x + avail.x, c0.y + avail.y), true);
+    dl->AddImage(texId(image_.texture()), p0, ImVec2(p0.x + size.x, p0.y + size.y));
+    const ImVec2 scale = io.DisplayFramebufferScale;
     imageMin_ = ImVec2(p0.x * scale.x, p0.y * scale.y);
     imageSize_ = ImVec2(size.x * scale.x, size.y * scale.y);
     imageZoom_ = zoom * scale.x;
+    canvasMin_ = ImVec2(c0.x * scale.x, c0.y * scale.y);
+    canvasSize_ = ImVec2(avail.x * scale.x, avail.y * scale.y);
 
-    if (ImGui::IsItemHovered()) {
-        const ImVec2 m = ImGui::GetIO().MousePos;
-        const int x = std::clamp(static_cast<int>((m.x - p0.x) / zoom), 0, w - 1);
-        const int y = std::clamp(static_cast<int>((m.y - p0.y) / zoom), 0, h - 1);
-        const size_t i = (static_cast<size_t>(y) * w + x) * 3;
-        if (i + 2 < frameRgb_.size())
-            ImGui::SetTooltip("pixel (%d, %d)\nRGB %.4g %.4g %.4g\nclick: profile + streak row", x, y, frameRgb_[i],
-                              frameRgb_[i + 1], frameRgb_[i + 2]);
-        if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
-            st_.selX = x;
-            st_.selY = y;
+    if (hovered) {
+        const ImVec2 m = io.MousePos;
+        const int x = static_cast<int>(std::floor((m.x - p0.x) / zoom));
+        const int y = static_cast<int>(std::floor((m.y - p0.y) / zoom));
+        if (x >= 0 && y >= 0 && x < w && y < h) {
+            const size_t i = (static_cast<size_t>(y) * w + x) * 3;
+            if (i + 2 < frameRgb_.size())
+                ImGui::SetTooltip("pixel (%d, %d)\nRGB %.4g %.4g %.4g\nclick: profile + streak row", x, y, frameRgb_[i],
+                                  frameRgb_[i + 1], frameRgb_[i + 2]);
+            if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+                st_.selX = x;
+                st_.selY = y;
+            }
         }
     }
     // Selection markers: the pixel's outline and ticks beside the image for the streak row.
-    ImDrawList* dl = ImGui::GetWindowDrawList();
     const ImU32 col = IM_COL32(255, 200, 40, 255);
     const float sx = p0.x + st_.selX * zoom, sy = p0.y + st_.selY * zoom;
     dl->AddRect(ImVec2(sx - 1, sy - 1), ImVec2(sx + zoom + 1, sy + zoom + 1), col);
@@ -727,18 +898,101 @@ void Viewer::drawImagePanel() {
     dl->AddTriangleFilled(ImVec2(p0.x - 8, cy - 4), ImVec2(p0.x - 8, cy + 4), ImVec2(p0.x - 2, cy), col);
     dl->AddTriangleFilled(ImVec2(p0.x + size.x + 8, cy - 4), ImVec2(p0.x + size.x + 8, cy + 4),
                           ImVec2(p0.x + size.x + 2, cy), col);
+    dl->PopClipRect();
+    colourBarTicks_.clear();
+    if (st_.display.falseColor) drawColourBar(ImVec2(c0.x, c0.y + avail.y + 4.0f), avail.x);
 }
+
+void Viewer::drawColourBar(ImVec2 at, float width) {
+    // The false-colour ramp as the shader maps it (toneMapPixel: the same mapping on the CPU), with
+    // the film luminance of each decade: after the exposure, white is 1, so a luminance L shows as
+    // 10^-k of white at L = 2^-EV 10^-k.
+    DisplayParams p = st_.display;
+    p.exposureEv = st_.showSteady ? st_.evSteady : st_.evFrame;
+    const float decades = std::max(p.decades, 0.1f);
+    const float barH = ImGui::GetTextLineHeight();
+    const float labelW = ImGui::CalcTextSize("clipped").x + barH + 12.0f;
+    const float x0 = at.x + labelW, x1 = at.x + std::max(width - labelW, labelW + 40.0f);
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const int segments = 96;
+    for (int i = 0; i < segments; ++i) {
+        const float t = (i + 0.5f) / segments;
+        const float lum = std::exp2(-p.exposureEv) * std::pow(10.0f, (t - 1.0f) * decades);
+        const float rgb[3] = {lum, lum, lum};
+        unsigned char c[3];
+        toneMapPixel(rgb, p, c);
+        const float xa = x0 + (x1 - x0) * i / segments, xb = x0 + (x1 - x0) * (i + 1) / segments;
+        dl->AddRectFilled(ImVec2(xa, at.y), ImVec2(xb + 0.5f, at.y + barH), IM_COL32(c[0], c[1], c[2], 255));
+    }
+    dl->AddRectFilled(ImVec2(at.x, at.y), ImVec2(at.x + barH, at.y + barH), IM_COL32(0, 0, 0, 255));
+    dl->AddText(ImVec2(at.x + barH + 4.0f, at.y), kTickColour, "none");
+    dl->AddRectFilled(ImVec2(x1 + 4.0f, at.y), ImVec2(x1 + 4.0f + barH, at.y + barH), IM_COL32(255, 255, 255, 255));
+    dl->AddText(ImVec2(x1 + 8.0f + barH, at.y), kTickColour, "clipped");
+    const int n = static_cast<int>(std::floor(decades));
+    const int every = std::max(1, static_cast<int>(std::ceil((n + 1) * 70.0f / std::max(x1 - x0, 1.0f))));
+    for (int k = 0; k <= n; k += every) {  // k decades below white
+        const float t = 1.0f - k / decades;
+        const float x = x0 + (x1 - x0) * t;
+        char label[32];
+        std::snprintf(label, sizeof label, "%.2g", std::exp2(-p.exposureEv) * std::pow(10.0f, -static_cast<float>(k)));
+        dl->AddLine(ImVec2(x, at.y + barH), ImVec2(x, at.y + barH + 3.0f), kTickColour);
+        const float lw = ImGui::CalcTextSize(label).x;
+        dl->AddText(ImVec2(std::clamp(x - 0.5f * lw, x0, x1 - lw), at.y + barH + 3.0f), kTickColour, label);
+        colourBarTicks_.push_back({t, label});
+    }
+    if (ImGui::IsMouseHoveringRect(ImVec2(x0, at.y), ImVec2(x1, at.y + barH)))
+        ImGui::SetTooltip("false colour: log10 luminance (film units) over %.1f decades below the white point;\n"
+                          "black = no energy, white = clipped (above the white point)",
+                          static_cast<double>(decades));
+}
+
+namespace {
+
+// Ticks of a vertical time axis beside [top, bottom]: at x, pointing left (side < 0, labels to the
+// left) or right; value -> y by the axis' range. Labels at most every lineH pixels.
+void verticalTicks(ImDrawList* dl, const std::vector<AxisTick>& ticks, double lo, double hi, float top, float bottom,
+                   float x, float side) {
+    for (const AxisTick& t : ticks) {
+        const float y = top + static_cast<float>((t.value - lo) / (hi - lo)) * (bottom - top);
+        dl->AddLine(ImVec2(x, y), ImVec2(x + side * 5.0f, y), kTickColour);
+        const ImVec2 sz = ImGui::CalcTextSize(t.label.c_str());
+        const float lx = side < 0 ? x - 7.0f - sz.x : x + 7.0f;
+        dl->AddText(ImVec2(lx, std::clamp(y - 0.5f * sz.y, top - 0.5f * sz.y, bottom - 0.5f * sz.y)), kTickColour,
+                    t.label.c_str());
+    }
+}
+
+// Ticks of a horizontal time axis under [left, right] at y.
+void horizontalTicks(ImDrawList* dl, const std::vector<AxisTick>& ticks, double lo, double hi, float left, float right,
+                     float y) {
+    for (const AxisTick& t : ticks) {
+        const float x = left + static_cast<float>((t.value - lo) / (hi - lo)) * (right - left);
+        dl->AddLine(ImVec2(x, y), ImVec2(x, y + 4.0f), kTickColour);
+        const ImVec2 sz = ImGui::CalcTextSize(t.label.c_str());
+        dl->AddText(ImVec2(std::clamp(x - 0.5f * sz.x, left, right - sz.x), y + 4.0f), kTickColour, t.label.c_str());
+    }
+}
+
+}  // namespace
 
 void Viewer::drawTimePanel() {
     const int w = scene_.camera.width, bins = time_.bins;
-    ImGui::TextWrapped("Streak image of row %d (x across, time down), %s, %s%s", st_.selY, axisName(st_.axis),
-                       emissionLabel(), responseNote().c_str());
+    // The time axis of both plots: the film's range, in ns (labelled) and in m of optical path.
+    const double lo = time_.startOpl, hi = time_.endOpl();
+    const double loNs = lo / kC_m_per_ns, hiNs = hi / kC_m_per_ns;
+    ImGui::TextWrapped("Streak image of row %d (x across, time down: ns left, m of OPL right), %s, %s%s", st_.selY,
+                       axisName(st_.axis), emissionLabel(), responseNote().c_str());
     const ImVec2 avail = ImGui::GetContentRegionAvail();
     const float lineH = ImGui::GetTextLineHeightWithSpacing();
+    const float margin = ImGui::CalcTextSize("000.00").x + 10.0f;  // tick labels beside the streak
     const float plotH = std::max(60.0f, std::min(140.0f, avail.y * 0.4f));
-    const float streakH = std::max(20.0f, avail.y - plotH - 2.0f * lineH - 8.0f);
-    const ImVec2 size(avail.x, streakH);
+    const float streakH = std::max(20.0f, avail.y - plotH - 3.0f * lineH - 8.0f);
+    const ImVec2 size(std::max(avail.x - 2.0f * margin, 20.0f), streakH);
+    ImGui::SetCursorPosX(ImGui::GetCursorPosX() + margin);
     const ImVec2 p0 = ImGui::GetCursorScreenPos();
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const int maxTicks = std::max(2, static_cast<int>(streakH / (1.2f * lineH)));
+    streakTicksNs_ = niceTicks(loNs, hiNs, maxTicks);
     if (!streak_.empty()) {
         ImGui::Image(texId(streak_.texture()), size);
         const float zx = size.x / w, zy = size.y / bins;
@@ -747,13 +1001,13 @@ void Viewer::drawTimePanel() {
             const int x = std::clamp(static_cast<int>((m.x - p0.x) / zx), 0, w - 1);
             const int k = std::clamp(static_cast<int>((m.y - p0.y) / zy), 0, bins - 1);
             const double opl = binCentreOpl(k);
-            ImGui::SetTooltip("x %d, bin %d (%.4f ns)\nclick: go to this time and pixel", x, k, opl / kC_m_per_ns);
+            ImGui::SetTooltip("x %d, bin %d (%.4f ns, %.4f m)\nclick: go to this time and pixel", x, k,
+                              opl / kC_m_per_ns, opl);
             if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
                 st_.selX = x;
                 setBin(k);
             }
         }
-        ImDrawList* dl = ImGui::GetWindowDrawList();
         const float y = p0.y + (st_.bin + 0.5f) * zy;
         dl->AddLine(ImVec2(p0.x, y), ImVec2(p0.x + size.x, y), IM_COL32(255, 200, 40, 160));
         const float x = p0.x + (st_.selX + 0.5f) * zx;
@@ -761,26 +1015,51 @@ void Viewer::drawTimePanel() {
     } else {
         ImGui::Dummy(size);
     }
+    verticalTicks(dl, streakTicksNs_, loNs, hiNs, p0.y, p0.y + size.y, p0.x - 1.0f, -1.0f);
+    verticalTicks(dl, niceTicks(lo, hi, maxTicks), lo, hi, p0.y, p0.y + size.y, p0.x + size.x + 1.0f, 1.0f);
 
     ImGui::Text("Time profile of pixel (%d, %d), luminance", st_.selX, st_.selY);
-    if (!profileLum_.empty()) {
-        const float peak = *std::max_element(profileLum_.begin(), profileLum_.end());
-        char overlay[96];
-        std::snprintf(overlay, sizeof overlay, "peak %.4g, bin %d: %.4g", peak, st_.bin,
-                      st_.bin < static_cast<int>(profileLum_.size()) ? profileLum_[st_.bin] : 0.0f);
+    ImGui::SameLine();
+    ImGui::Checkbox("log scale", &st_.profileLog);
+    track("log scale");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip("log10 of the luminance over %.0f decades below the pixel's peak", kProfileDecades);
+    if (profileLum_.empty()) return;
+    const float peak = *std::max_element(profileLum_.begin(), profileLum_.end());
+    char overlay[128];
+    const float at = st_.bin < static_cast<int>(profileLum_.size()) ? profileLum_[st_.bin] : 0.0f;
+    if (st_.profileLog)
+        std::snprintf(overlay, sizeof overlay, "log scale, %.0f decades; peak %.4g, bin %d: %.4g", kProfileDecades,
+                      peak, st_.bin, at);
+    else
+        std::snprintf(overlay, sizeof overlay, "peak %.4g, bin %d: %.4g", peak, st_.bin, at);
+    ImGui::SetCursorPosX(ImGui::GetCursorPosX() + margin);
+    if (st_.profileLog) {
+        const std::vector<float> shown = logScale(profileLum_, kProfileDecades);
+        ImGui::PlotLines("##profile", shown.data(), static_cast<int>(shown.size()), 0, overlay, 0.0f, 1.05f,
+                         ImVec2(size.x, plotH));
+    } else {
         ImGui::PlotLines("##profile", profileLum_.data(), static_cast<int>(profileLum_.size()), 0, overlay, 0.0f,
-                         peak > 0 ? peak * 1.05f : 1.0f, ImVec2(avail.x, plotH));
-        const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
-        const float pad = ImGui::GetStyle().FramePadding.x;
-        // PlotLines puts value k at k / (count - 1) of the inner frame.
-        const float span = std::max(1.0f, b.x - a.x - 2.0f * pad);
-        const float x = a.x + pad + (bins > 1 ? static_cast<float>(st_.bin) / (bins - 1) : 0.5f) * span;
-        ImGui::GetWindowDrawList()->AddLine(ImVec2(x, a.y), ImVec2(x, b.y), IM_COL32(255, 200, 40, 200));
-        if (ImGui::IsItemHovered() && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
-            const float t = (ImGui::GetIO().MousePos.x - a.x - pad) / span;
-            setBin(static_cast<int>(std::lround(t * (bins - 1))));
-        }
+                         peak > 0 ? peak * 1.05f : 1.0f, ImVec2(size.x, plotH));
     }
+    const ImVec2 a = ImGui::GetItemRectMin(), b = ImGui::GetItemRectMax();
+    const float pad = ImGui::GetStyle().FramePadding.x;
+    // PlotLines puts value k at k / (count - 1) of the inner frame; the ticks follow the bin centres.
+    const float span = std::max(1.0f, b.x - a.x - 2.0f * pad);
+    const float x = a.x + pad + (bins > 1 ? static_cast<float>(st_.bin) / (bins - 1) : 0.5f) * span;
+    dl->AddLine(ImVec2(x, a.y), ImVec2(x, b.y), IM_COL32(255, 200, 40, 200));
+    const bool hovered = ImGui::IsItemHovered();
+    if (hovered && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+        const float t = (ImGui::GetIO().MousePos.x - a.x - pad) / span;
+        setBin(static_cast<int>(std::lround(t * (bins - 1))));
+    }
+    const double c0 = binCentreOpl(0) / kC_m_per_ns, c1 = binCentreOpl(bins - 1) / kC_m_per_ns;
+    profileTicksNs_ = niceTicks(loNs, hiNs, std::max(2, static_cast<int>(span / 70.0f)));
+    std::vector<AxisTick> inside;
+    for (const AxisTick& t : profileTicksNs_)
+        if (t.value >= c0 && t.value <= c1) inside.push_back(t);
+    horizontalTicks(dl, inside, c0, c1 > c0 ? c1 : c0 + 1.0, a.x + pad, a.x + pad + span, b.y);
+    dl->AddText(ImVec2(a.x - margin + 4.0f, b.y + 4.0f), kTickColour, "ns");
 }
 
 }  // namespace tpb::app

@@ -175,7 +175,12 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     if (st_.response.sensor != SensorShape::Ideal) st_.sensorNs = st_.response.sensorWidth / kC_m_per_ns;
     st_.display.falseColor = opt.falseColor;
     st_.display.srgb = !opt.noSrgb;
-    st_.showSteady = opt.steady;
+    // The first picture (issue 33): without a time asked for, the steady image - every surface
+    // the light reaches, a picture within the first passes - until the user picks a time. A single
+    // time bin of the first passes is a few photons' discs (the default scene's peak bin after two
+    // passes: 5 % of the pixels lit; the steady image after the warm-up's three: over 90 %).
+    st_.showSteady = opt.steady || (!opt.frame && !opt.bin && !opt.timeNs);
+    st_.steadyUntilTime = st_.showSteady && !opt.steady;
     st_.selX = scene.camera.width / 2;
     st_.selY = scene.camera.height / 2;
     if (opt.pixel.size() == 2) {
@@ -192,9 +197,8 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     }
     frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
     image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
-    resumePath_ = resumePath;
     if (!resumePath.empty()) ownCheckpoints_.push_back(resumePath);  // "Save checkpoint" may replace it
-    restart(settings, "");
+    prepareJob_ = prepareDriver(scene_, settings, time_, resumePath);  // run() waits for it (waitForFilm)
 }
 
 Viewer::~Viewer() {
@@ -204,6 +208,7 @@ Viewer::~Viewer() {
     if (checkpointJob_.valid()) checkpointJob_.wait();  // a checkpoint being written is finished, not cut
     if (profileJob_.valid()) profileJob_.wait();
     if (binEnergyJob_.valid()) binEnergyJob_.wait();
+    if (prepareJob_.valid()) prepareJob_.wait();  // closed while preparing: the film is dropped once made
     if (driver_) driver_->stop();
 }
 
@@ -217,6 +222,16 @@ bool Viewer::settled() {
 }
 
 namespace {
+
+// The keys a script can press (--click key:NAME), as GLFW codes; -1 for another name.
+int scriptedKey(const std::string& name) {
+    const std::pair<const char*, int> keys[] = {{"Escape", GLFW_KEY_ESCAPE}, {"Q", GLFW_KEY_Q},   {"F", GLFW_KEY_F},
+                                                {"1", GLFW_KEY_1},           {"Left", GLFW_KEY_LEFT}, {"Right", GLFW_KEY_RIGHT},
+                                                {"Space", GLFW_KEY_SPACE}};
+    for (const auto& [n, code] : keys)
+        if (name == n) return code;
+    return -1;
+}
 
 // "Export (EXR)/Current frame" may be written "Export/Current frame" (a section without its note).
 bool controlNamed(const ControlRect& c, const std::string& want) {
@@ -235,9 +250,23 @@ void Viewer::scriptedInput() {
     io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
     for (bool& down : io.MouseDown) down = false;
     if (clickIndex_ >= clicks_.size() || !scriptError_.empty()) return;
+    const std::string& want = clicks_[clickIndex_];
+    if (want.rfind("key:", 0) == 0) {  // a key press, on the frame after the previous click
+        if (clickIndex_ == 0 && settleFrames_ < 3) return;
+        const int key = scriptedKey(want.substr(4));
+        if (key < 0) {
+            scriptError_ = "--click '" + want + "': no such key; the keys are Escape, Q, F, 1, Left, Right, Space";
+            return;
+        }
+        std::printf("key: %s\n", want.c_str() + 4);
+        std::fflush(stdout);
+        gKeys.push_back(key);
+        ++clickIndex_;
+        settleFrames_ = 0;
+        return;
+    }
     if (clickPhase_ == 0) {
         if (settleFrames_ < 3) return;
-        const std::string& want = clicks_[clickIndex_];
         const auto c = std::find_if(controls_.begin(), controls_.end(),
                                     [&](const ControlRect& r) { return controlNamed(r, want); });
         if (c == controls_.end()) {
@@ -282,6 +311,19 @@ void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
                 static_cast<double>(st_.showSteady ? st_.evSteady : st_.evFrame), st_.bin, st_.showSteady ? 1 : 0,
                 st_.mode == EmissionMode::Delta ? "delta" : "continuous",
                 st_.axis == TimeAxis::Real ? "real" : "unwarped");
+    std::printf("image_panel %.3f %.3f %.3f %.3f fit %d\n", canvasMin_.x, canvasMin_.y, canvasSize_.x, canvasSize_.y,
+                view_.fit ? 1 : 0);
+    // The time axes' ticks (ns) and the colour bar's labels, as drawn.
+    const auto labels = [](const char* what, const std::vector<AxisTick>& ticks) {
+        std::printf("%s", what);
+        for (const AxisTick& t : ticks) std::printf(" %s", t.label.c_str());
+        std::printf("\n");
+    };
+    labels("ticks streak_ns", streakTicksNs_);
+    labels("ticks profile_ns", profileTicksNs_);
+    labels("colour_bar", colourBarTicks_);
+    std::printf("profile_log %d\n", st_.profileLog ? 1 : 0);
+    std::printf("noise relative_error %.6g batches %d\n", noise_.relativeError(), noise_.batches());
     // How fast the picture came: seconds from the driver's start to the first fetched image with
     // light, and to the end of each pass (the warm-up's effect; issue 15's targets: light within 1 s,
     // four passes within 3 s).
@@ -291,6 +333,8 @@ void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
     const FilmStats& fs = driver_->film().stats;
     std::printf(" copied_tiles %lld of %lld\n", static_cast<long long>(fs.copiedTiles.load()),
                 static_cast<long long>(fs.stagedTiles.load()));
+    // From the launch of `tpb view`: the window's first frame, the film ready (the passes start).
+    std::printf("opening window_s %.3f film_ready_s %.3f\n", windowShownSec_, filmReadySec_);
     // The controls (window pixels) now and in the first frame, drawn while the first pass rendered.
     std::printf("messages_area %.1f %.1f\n", controlsMinX_, controlsMaxX_);
     std::printf("layout_first passes %llu running %d\n", static_cast<unsigned long long>(firstPasses_),
@@ -335,8 +379,46 @@ void Viewer::endFrameChecks() {
     if (!idClashes_.empty()) exitCode() = 1;  // reported on stderr when found
 }
 
+bool Viewer::waitForFilm() {
+    // The window is open: show what is being prepared while the film is allocated (and a
+    // checkpoint read) on a helper thread, instead of a black window for seconds.
+    using namespace std::chrono_literals;
+    while (prepareJob_.wait_for(0s) != std::future_status::ready) {
+        if (glfwWindowShouldClose(window_) || gCloseSignal.load() != 0) return false;
+        glfwPollEvents();
+        int fbw = 0, fbh = 0;
+        glfwGetFramebufferSize(window_, &fbw, &fbh);
+        if (fbw > 0 && fbh > 0) {
+            ImGui_ImplOpenGL3_NewFrame();
+            ImGui_ImplGlfw_NewFrame();
+            ImGui::NewFrame();
+            drawPreparing();
+            ImGui::Render();
+            glViewport(0, 0, fbw, fbh);
+            glClearColor(0.06f, 0.06f, 0.07f, 1.0f);
+            glClear(GL_COLOR_BUFFER_BIT);
+            ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+            glfwSwapBuffers(window_);
+            if (windowShownSec_ < 0.0) windowShownSec_ = nowSec() - opt_.launchedAt;
+        }
+        prepareJob_.wait_for(100ms);  // a few frames a second: the cores are the allocation's
+    }
+    adopt(prepareJob_.get(), "");
+    filmReadySec_ = nowSec() - opt_.launchedAt;
+    std::printf("film ready %.2f s after the launch (window shown after %.2f s)\n", filmReadySec_, windowShownSec_);
+    std::fflush(stdout);
+    return true;
+}
+
 void Viewer::run() {
     const bool shot = !opt_.screenshot.empty();
+    if (!waitForFilm()) {
+        if (shot) {
+            std::fprintf(stderr, "error: the viewer was closed before the screenshot was taken\n");
+            exitCode() = 1;
+        }
+        return;
+    }
     double last = glfwGetTime();
     int extraFrames = 3;  // after an event, draw a few frames so ImGui settles
     while (!glfwWindowShouldClose(window_) && gCloseSignal.load() == 0) {
@@ -355,7 +437,6 @@ void Viewer::run() {
         glfwGetFramebufferSize(window_, &fbw, &fbh);
         if (fbw <= 0 || fbh <= 0 || glfwGetWindowAttrib(window_, GLFW_ICONIFIED)) {  // minimised: nothing to draw
             pollExport();
-        pollCheckpoint();
             pollCheckpoint();
             glfwWaitEventsTimeout(0.1);
             continue;
@@ -400,6 +481,7 @@ void Viewer::run() {
             }
         }
         glfwSwapBuffers(window_);
+        if (windowShownSec_ < 0.0) windowShownSec_ = nowSec() - opt_.launchedAt;
 
         if (animate || extraFrames > 0) {  // cap the frame rate; leave the cores to the workers
             const double frame = busyDriver ? 1.0 / 30.0 : 1.0 / 60.0;

@@ -581,14 +581,14 @@ TEST_F(ViewerTest, NoTwoControlsShareAnImGuiId) {
         EXPECT_TRUE(controls.count(name)) << name << " not drawn:\n" << r.out;
 }
 
-// The first picture shows light: without --bin the viewer opens on the bin of peak energy (not bin
-// 0, before any light arrives) with the exposure fitted to it, in both emission modes.
+// The first frame shows light: with --frame and without --bin the viewer shows the bin of peak
+// energy (not bin 0, before any light arrives) with the exposure fitted to it, in both emission modes.
 TEST_F(ViewerTest, FirstPictureShowsLightInBothEmissionModes) {
     const std::vector<double> energy = binEnergy();
     const double peak = *std::max_element(energy.begin(), energy.end());
     for (const Mode& m : {kModes[0], kModes[2]}) {
         SCOPED_TRACE(m.name);
-        const Proc r = viewRun("first_" + m.name, kRenderArgs + m.flags + " --after-passes 1");
+        const Proc r = viewRun("first_" + m.name, kRenderArgs + m.flags + " --frame --after-passes 1");
         ASSERT_EQ(r.code, 0) << r.out << r.err;
         const Area a = parseArea(r.out);
         ASSERT_TRUE(a.ok) << r.out;
@@ -690,6 +690,153 @@ TEST_F(ViewerTest, LongStatusLinesWrap) {
     EXPECT_LE(st.x + st.w, right + 1.0) << "the status line runs past the panel";
     EXPECT_GE(st.h, 3 * 13.0) << "a " << ("saved " + out.string()).size() << "-character status line on "
                               << st.h / 13.0 << " lines";
+}
+
+// Issue 33 item 11: the first picture of the default scene (the one tools/run opens) shows the
+// scene - most of its pixels lit - after the warm-up's passes (3, 7/8 of one full pass's photons:
+// the first ~0.15 s of a desktop's render), not a few grey discs of one time bin (5 % lit: what the
+// peak bin showed, and what --frame still shows). 128x128 keeps the film small; the photons' discs
+// cover the same share of the walls at any resolution. And the image is fitted to its panel.
+TEST_F(ViewerTest, FirstPictureOfTheDefaultSceneLightsMostOfIt) {
+    const std::string scene = q(fs::path(TPB_SOURCE_DIR) / "scenes" / "cornell_medium.json");
+    const auto litShare = [](const Image8& shot, const Area& a, int film) {
+        int lit = 0;
+        for (int y = 0; y < film; ++y)
+            for (int x = 0; x < film; ++x) {
+                const int sx = static_cast<int>(std::floor(a.x + (x + 0.5) * a.zoom));
+                const int sy = static_cast<int>(std::floor(a.y + (y + 0.5) * a.zoom));
+                const unsigned char* p = shot.at(std::clamp(sx, 0, shot.w - 1), std::clamp(sy, 0, shot.h - 1));
+                lit += std::max({p[0], p[1], p[2]}) > 8;
+            }
+        return static_cast<double>(lit) / (film * film);
+    };
+    const std::string args = " --width 128 --height 128 --seed 3 --threads 2 --after-passes " +
+                             std::to_string(tpb::kViewerWarmupPasses) + " --window-size 1280 800 --screenshot ";
+    const fs::path shot = dir_ / "default_first.png";
+    const Proc r = runXvfb(std::string(TPB_BINARY) + " view " + scene + args + q(shot), dir_ / "default_first");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const Area a = parseArea(r.out);
+    ASSERT_TRUE(a.ok) << r.out;
+    const double lit = litShare(readPng(shot), a, 128);
+    std::printf("default scene after %d passes: %.3f of the pixels lit (steady %d)\n", tpb::kViewerWarmupPasses, lit,
+                a.steady);
+    EXPECT_GT(lit, 0.8) << r.out;
+
+    // Fitted: the image fills the panel's height or width (the old integer zoom left a 256-pixel
+    // image at 1:1 in an 880 x 430 panel).
+    double px = 0, py = 0, pw = 0, ph = 0;
+    int fit = 0;
+    const size_t at = r.out.find("image_panel ");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    ASSERT_EQ(std::sscanf(r.out.c_str() + at, "image_panel %lf %lf %lf %lf fit %d", &px, &py, &pw, &ph, &fit), 5);
+    EXPECT_EQ(fit, 1);
+    EXPECT_TRUE(a.h >= ph - 2.0 || a.w >= pw - 2.0 * 12.0 - 2.0) << "image " << a.w << " x " << a.h << " in a panel of "
+                                                                   << pw << " x " << ph;
+    EXPECT_GE(a.x, px);
+    EXPECT_LE(a.x + a.w, px + pw + 1e-3);
+
+    // The frame of the peak bin, as the viewer opened before (and opens with --frame): discs.
+    const fs::path frame = dir_ / "default_frame.png";
+    const Proc f = runXvfb(std::string(TPB_BINARY) + " view " + scene + " --frame" + args + q(frame), dir_ / "default_frame");
+    ASSERT_EQ(f.code, 0) << f.out << f.err;
+    const Area fa = parseArea(f.out);
+    ASSERT_TRUE(fa.ok) << f.out;
+    const double frameLit = litShare(readPng(frame), fa, 128);
+    std::printf("its peak bin %d: %.3f lit\n", fa.bin, frameLit);
+    EXPECT_LT(frameLit, 0.5) << "the peak bin is a picture already: this test no longer shows what the default avoids";
+}
+
+namespace {
+
+// The words after `tag` on its report line ("ticks streak_ns 0 5 10" -> {"0", "5", "10"}).
+std::vector<std::string> reportWords(const std::string& out, const std::string& tag) {
+    std::vector<std::string> words;
+    const size_t at = out.find("\n" + tag + " ");
+    if (at == std::string::npos) return words;
+    std::istringstream line(out.substr(at + tag.size() + 2, out.find('\n', at + 1) - at - tag.size() - 2));
+    for (std::string w; line >> w;) words.push_back(w);
+    return words;
+}
+
+}  // namespace
+
+// Issue 33 item 12: the streak and the profile have time ticks in ns (the streak also in m), the
+// profile a log scale, false colour a colour bar whose labels are the film luminance of each
+// decade below the white point (2^-EV), as drawn.
+TEST_F(ViewerTest, TimeTicksLogScaleAndColourBarAreDrawn) {
+    const Proc r = viewRun("instrument", kRenderArgs + " --after-passes 2 --false-color --bin " + std::to_string(bin()) +
+                                             " --click 'Streak and pixel profile/log scale'");
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const Area a = parseArea(r.out);
+    ASSERT_TRUE(a.ok) << r.out;
+    for (const char* axis : {"ticks streak_ns", "ticks profile_ns"}) {
+        const std::vector<std::string> t = reportWords(r.out, axis);
+        EXPECT_GE(t.size(), 3u) << axis << "\n" << r.out;
+        double last = -1.0;
+        for (const std::string& w : t) {  // increasing numbers
+            const double v = std::stod(w);
+            EXPECT_GT(v, last) << axis;
+            last = v;
+        }
+    }
+    EXPECT_NE(r.out.find("\nprofile_log 1"), std::string::npos) << r.out;
+    const std::vector<std::string> bar = reportWords(r.out, "colour_bar");
+    ASSERT_EQ(bar.size(), 5u) << r.out;  // white, then 4 decades below it (the default decades)
+    const double white = std::exp2(-a.ev);
+    EXPECT_NEAR(std::stod(bar[0]), white, 0.05 * white) << r.out;
+    EXPECT_NEAR(std::stod(bar[4]), 1e-4 * white, 0.05e-4 * white) << r.out;
+}
+
+// Item 12: a settings change that would discard the accumulation asks first (a popup); "Keep the
+// accumulation" keeps the passes, "Restart" restarts. Sections are folded so that the Render
+// settings' "auto radius" button is in view of an 800-pixel window.
+TEST_F(ViewerTest, SettingsThatDiscardTheAccumulationAskFirst) {
+    const std::string fold = kRenderArgs + " --after-passes 2 --bin 3 --click Time --click View --click Display "
+                                           "--click 'Render settings' --click 'Render settings/auto radius'";
+    const Proc asked = viewRun("ask_restart", fold);
+    ASSERT_EQ(asked.code, 0) << asked.out << asked.err;
+    const std::map<std::string, Rect> controls = parseControls(asked.out, "control");
+    EXPECT_TRUE(controls.count("Restart the accumulation?/Restart")) << asked.out;
+    EXPECT_TRUE(controls.count("Restart the accumulation?/Keep the accumulation")) << asked.out;
+    EXPECT_EQ(asked.out.find("accumulation restarted"), std::string::npos) << asked.out;
+
+    const Proc kept = viewRun("keep_restart", fold + " --click 'Restart the accumulation?/Keep the accumulation'");
+    ASSERT_EQ(kept.code, 0) << kept.out << kept.err;
+    EXPECT_EQ(kept.out.find("accumulation restarted"), std::string::npos) << kept.out;
+    EXPECT_FALSE(parseControls(kept.out, "control").count("Restart the accumulation?/Restart")) << kept.out;
+
+    const Proc restarted = viewRun("do_restart", fold + " --click 'Restart the accumulation?/Restart'");
+    ASSERT_EQ(restarted.code, 0) << restarted.out << restarted.err;
+    EXPECT_NE(restarted.out.find("accumulation restarted"), std::string::npos) << restarted.out;
+}
+
+// Item 12: Q (or Esc) quits at once, but asks first while an export runs (the MP4 here).
+TEST_F(ViewerTest, KeyboardQuitAsksWhileAnExportRuns) {
+    const fs::path out = dir_ / "quit_export";
+    const Proc asked = viewRun("quit_export", kRenderArgs + " --after-passes 1 --bin 3 --export-folder " + q(out) +
+                                                  " --click Export/MP4 --click key:Q");
+    EXPECT_EQ(asked.code, 0) << asked.out << asked.err;  // still open: the screenshot was taken
+    EXPECT_NE(asked.out.find("quit: asked first, an export is running"), std::string::npos) << asked.out;
+    const Proc quit = viewRun("quit_now", kRenderArgs + " --after-passes 1 --bin 3 --click key:Q");
+    EXPECT_NE(quit.out.find("quit: by the keyboard"), std::string::npos) << quit.out;
+    EXPECT_NE(quit.err.find("closed before the screenshot"), std::string::npos) << quit.err;
+}
+
+// Item 12: the noise indicator (the spread between the batches of passes, instrument.h) is known
+// after two batches and falls as the passes accumulate (about as 1/sqrt of the photons).
+TEST_F(ViewerTest, NoiseIndicatorFallsAsPassesAccumulate) {
+    const auto noise = [](const Proc& r) {
+        const std::vector<std::string> w = reportWords(r.out, "noise");
+        return w.size() >= 2 ? std::stod(w[1]) : -2.0;
+    };
+    const Proc few = viewRun("noise_few", "--seed 7 --threads 2 --steady --after-passes 4");
+    const Proc many = viewRun("noise_many", "--seed 7 --threads 2 --steady --after-passes 16");
+    ASSERT_EQ(few.code, 0) << few.err;
+    ASSERT_EQ(many.code, 0) << many.err;
+    std::printf("steady image noise after 4 passes %.4f, after 16 %.4f\n", noise(few), noise(many));
+    EXPECT_GT(noise(few), 0.0) << few.out;
+    EXPECT_GT(noise(many), 0.0) << many.out;
+    EXPECT_LT(noise(many), 0.7 * noise(few));
 }
 
 // Without a display: a clear message and exit code 2 (needs no X server).
