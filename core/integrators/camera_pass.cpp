@@ -72,14 +72,18 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
             const SpecularContinuation c = reflectMirror(scene, ray, *hit, si);
             path.beta *= c.tint;
             ray = c.ray;
-            continue;
+        } else {
+            // Dielectric or null boundary: follow reflection or refraction, chosen by Fresnel.
+            const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
+            if (c.regionOverflow) { ++stats.regionOverflows; break; }
+            ray = c.ray;
+            if (c.nullCrossing && nullCrossings.free()) { --depth; continue; }
+            path.beta *= c.tint;
         }
-        // Dielectric or null boundary: follow reflection or refraction, chosen by Fresnel.
-        const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
-        if (c.regionOverflow) { ++stats.regionOverflows; break; }
-        ray = c.ray;
-        if (c.nullCrossing && nullCrossings.free()) --depth;
-        path.beta *= c.tint;
+        // A specular chain that never loses weight (a closed box of perfect mirrors) still ends
+        // past kDeepRouletteDepth bounces, whatever max_depth; before that no roulette, no random
+        // number (the films of max_depth < kDeepRouletteDepth stay as they were).
+        if (depth + 1 >= kDeepRouletteDepth && !russianRoulette(rng, path.beta, 1.0, depth + 1)) break;
     }
 }
 

@@ -192,10 +192,11 @@ void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const
                  [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(mis.ray.d, w))); });
 }
 
-// Russian roulette on the throughput; false if the path dies.
+// Russian roulette on the throughput from the kRussianRouletteDepth-th vertex on, ending even
+// full-throughput paths past kDeepRouletteDepth vertices (russianRoulette); false if the path dies.
 bool roulette(Rng& rng, Color& beta, int depth) {
     if (depth < kRussianRouletteDepth) return true;
-    return russianRoulette(rng, beta, 1.0);
+    return russianRoulette(rng, beta, 1.0, depth);
 }
 
 void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {

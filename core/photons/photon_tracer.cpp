@@ -46,32 +46,34 @@ uint64_t mapBytes(size_t beams, size_t photons, size_t points) {
 
 uint64_t storedMapBytes(const PhotonMap& m) { return mapBytes(m.beams.size(), m.photons.size(), m.points.size()); }
 
-void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out) {
+bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out,
+                 const std::atomic<bool>* abort) {
     Rng rng(s.seed, Stream::Photon, s.pass, static_cast<uint64_t>(index));
     double lightPdf;
     const int li = scene.pickLight(rng.uniform(), lightPdf);
-    if (li < 0 || lightPdf <= 0.0) return;
+    if (li < 0 || lightPdf <= 0.0) return true;
     const Light& light = scene.lights[li];
     EmissionSample em = light.sampleEmission(rng, scene.rayEps);
     Color power = em.power / (lightPdf * static_cast<double>(s.powerPhotons > 0 ? s.powerPhotons : s.photons));
     const double power0 = maxComponent(power);
-    if (!(power0 > 0.0)) return;
+    if (!(power0 > 0.0)) return true;
     out.emittedFlux += power;
     Ray ray = em.ray;
     // The photon starts in the region where it leaves the light: a light inside a fog container
     // or a closed box emits into it (an area light may straddle a boundary: per point).
     const std::optional<RegionStack> startRegions = scene.emissionRegions(li, ray.o);
-    if (!startRegions) { ++out.regionOverflows; return; }
+    if (!startRegions) { ++out.regionOverflows; return true; }
     RegionStack regions = *startRegions;
     double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
     NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
     const size_t beams0 = out.beams.size(), photons0 = out.photons.size(), points0 = out.points.size();
 
     for (int depth = 0; depth < s.maxDepth; ++depth) {
-        if (s.maxMapBytes > 0 && (depth & 4095) == 4095) {
+        if ((depth & 4095) == 4095) {  // a long photon: the memory guard and the abort flag
             const uint64_t mine =
                 mapBytes(out.beams.size() - beams0, out.photons.size() - photons0, out.points.size() - points0);
-            if (mine > s.maxMapBytes) mapTooLarge(s, "photon " + std::to_string(index) + " alone");
+            if (s.maxMapBytes > 0 && mine > s.maxMapBytes) mapTooLarge(s, "photon " + std::to_string(index) + " alone");
+            if (abort && abort->load(std::memory_order_relaxed)) return false;
         }
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
         const double dSurf = hit ? hit->t : kInf;
@@ -110,10 +112,10 @@ void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                 opl += ff.opl;
                 ray = {ray.at(ff.distance), m.phase.sample(ray.d, rng.uniform(), rng.uniform())};
             }
-            if (!isFinite(power)) { ++out.rejected; return; }
+            if (!isFinite(power)) { ++out.rejected; return true; }
             if (ff.scattered) {
                 // Russian roulette on the throughput relative to the emitted power.
-                if (!russianRoulette(rng, power, power0)) return;
+                if (!russianRoulette(rng, power, power0, depth + 1, s.rouletteDepth)) return true;
                 continue;
             }
         }
@@ -123,11 +125,11 @@ void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
         const SurfaceInteraction si = interact(scene, ray, *hit);
         switch (si.kind) {
             case SurfaceKind::Emitter:
-            case SurfaceKind::Absorber: return;  // emitters and unassigned shapes absorb
+            case SurfaceKind::Absorber: return true;  // emitters and unassigned shapes absorb
             case SurfaceKind::Diffuse: {
                 if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, si.ng, power, opl});
                 const Vec3 newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), si.ns));
-                if (glm::dot(newDir, si.ng) <= 0.0) return;
+                if (glm::dot(newDir, si.ng) <= 0.0) return true;
                 power *= si.material->albedo;
                 ray = {scene.bounceOrigin(ray, *hit, si.ng), newDir};
                 break;
@@ -141,15 +143,16 @@ void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
             case SurfaceKind::Dielectric:
             case SurfaceKind::Null: {
                 const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
-                if (c.regionOverflow) { ++out.regionOverflows; return; }
+                if (c.regionOverflow) { ++out.regionOverflows; return true; }
                 ray = c.ray;
                 if (c.nullCrossing && nullCrossings.free()) { --depth; continue; }
                 power *= c.tint;
                 break;
             }
         }
-        if (!russianRoulette(rng, power, power0)) return;
+        if (!russianRoulette(rng, power, power0, depth + 1, s.rouletteDepth)) return true;
     }
+    return true;
 }
 
 PhotonMap PhotonTracer::trace(const Scene& scene, const PhotonPassParams& s, const std::atomic<bool>* abort) {
@@ -166,8 +169,10 @@ PhotonMap PhotonTracer::trace(const Scene& scene, const PhotonPassParams& s, con
         PhotonMap& part = parts_[static_cast<size_t>(b)];
         const int64_t end = std::min(s.photons, (b + 1) * kBatch);
         uint64_t reported = 0;  // of this batch's bytes, those added to `stored`
-        for (int64_t i = b * kBatch; i < end; ++i) {
-            tracePhoton(scene, s, i, part);
+        int64_t i = b * kBatch;
+        for (; i < end; ++i) {
+            if (abort && abort->load(std::memory_order_relaxed)) break;
+            if (!tracePhoton(scene, s, i, part, abort)) break;
             if (s.maxMapBytes > 0) {
                 const uint64_t mine = storedMapBytes(part);
                 uint64_t total = stored.load(std::memory_order_relaxed) + (mine - reported);
@@ -178,7 +183,8 @@ PhotonMap PhotonTracer::trace(const Scene& scene, const PhotonPassParams& s, con
                 if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
             }
         }
-        part.emitted = end - b * kBatch;
+        part.emitted = i - b * kBatch;
+        part.aborted = i < end;
     }, abort);
     PhotonMap all;
     size_t nb = 0, np = 0, nv = 0;
@@ -195,7 +201,10 @@ PhotonMap PhotonTracer::trace(const Scene& scene, const PhotonPassParams& s, con
         all.emittedFlux += p.emittedFlux;
         all.cutFlux += p.cutFlux;
         all.regionOverflows += p.regionOverflows;
+        all.aborted = all.aborted || p.aborted;
     }
+    // Batches never handed out (parallelFor stops at the abort flag) leave the map short too.
+    if (abort && abort->load() && all.emitted < s.photons) all.aborted = true;
     return all;
 }
 

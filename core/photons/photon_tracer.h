@@ -29,6 +29,7 @@
 #pragma once
 #include "base/math.h"
 #include "scene/scene.h"
+#include "transport/interaction.h"
 
 #include <atomic>
 #include <cstdint>
@@ -73,12 +74,14 @@ struct PhotonMap {
     Color emittedFlux{0.0};    // W: the flux the pass's photons started with (estimates the lights' power)
     Color cutFlux{0.0};        // W: flux still carried at the end of long beams cut in an unbounded medium
     int64_t regionOverflows = 0;   // photons ended because their region stack was full (RegionStack)
+    bool aborted = false;          // the abort flag stopped the pass: the map is partial, discard it
     // Empty, keeping the arrays' capacity (PhotonTracer reuses its batches' maps).
     void clear() {
         beams.clear();
         photons.clear();
         points.clear();
         emitted = rejected = regionOverflows = 0;
+        aborted = false;
         emittedFlux = cutFlux = Color(0.0);
     }
 };
@@ -94,6 +97,10 @@ struct PhotonPassParams {
     // photons / powerPhotons of a full pass's.
     int64_t powerPhotons = 0;
     int maxDepth = 16;
+    // Events from which Russian roulette also ends full-weight photons (russianRoulette,
+    // transport/interaction.h): what bounds a pass whose photons never lose weight. Tests lower it
+    // to compare the deep rule with none (INT_MAX turns it off).
+    int rouletteDepth = kDeepRouletteDepth;
     bool storeBeams = true;
     bool storeSurfacePhotons = true;
     bool storePoints = false;  // volume photons at scattering events (the point estimators)
@@ -111,6 +118,8 @@ struct PhotonPassParams {
 // Traces passes of photons in fixed batches (the map's order does not depend on the number of
 // threads), keeping the batches' buffers from one pass to the next: a renderer's passes trace the
 // same count, and growing fresh buffers every pass was ~3 % of a small point3d pass (issue 15).
+// `abort` is read before every photon and every 4096 events of one photon: a pass stops within
+// milliseconds of Ctrl-C (PhotonMap::aborted), however long its photons are.
 class PhotonTracer {
 public:
     PhotonMap trace(const Scene& scene, const PhotonPassParams& s, const std::atomic<bool>* abort = nullptr);
@@ -127,7 +136,9 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s,
 uint64_t storedMapBytes(const PhotonMap& m);
 
 // Traces photon `index` of the pass (deterministic given seed, pass, index). Appends to `out`.
-// Throws UserError if this photon alone stores more than s.maxMapBytes.
-void tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out);
+// Throws UserError if this photon alone stores more than s.maxMapBytes. Returns false, the photon
+// cut short, when `abort` is set.
+bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out,
+                 const std::atomic<bool>* abort = nullptr);
 
 }  // namespace tpb

@@ -82,6 +82,10 @@ RadiusPilot pilotRadius(const Scene& scene, const RenderSettings& settings, cons
         out.why = "the pilot's photon map outgrew the memory budget";
         return out;
     }
+    if (map.aborted) {  // Ctrl-C during the pilot: the caller stops (nothing measured)
+        out.why = "the pilot was interrupted";
+        return out;
+    }
     out.photons = map.emitted;
 
     // The scattering region holding most of the beam length.

@@ -107,8 +107,9 @@ Ray offsetStraightThrough(const Scene& scene, const Ray& ray, const SurfaceHit& 
     return {hit.p - scene.rayEps * n, ray.d};
 }
 
-bool russianRoulette(Rng& rng, Color& weight, double reference) {
-    const double q = std::min(1.0, maxComponent(weight) / reference);
+bool russianRoulette(Rng& rng, Color& weight, double reference, int events, int deepDepth) {
+    double q = std::min(1.0, maxComponent(weight) / reference);
+    if (events >= deepDepth) q = std::min(q, kDeepRouletteSurvival);
     if (!(q > 0.0)) return false;
     if (q < 1.0) {
         if (rng.uniform() >= q) return false;

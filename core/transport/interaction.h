@@ -86,9 +86,19 @@ struct NullCrossingBudget {
     bool free() { return ++crossings <= kFreeCrossings; }
 };
 
-// Russian roulette on a path weight: it survives with q = min(1, max_c weight / reference) and is
-// divided by q. reference: the photon's emitted power (photon tracer), 1 (camera paths). Draws a
-// random number only when q < 1. False: the path dies.
-[[nodiscard]] bool russianRoulette(Rng& rng, Color& weight, double reference);
+// Russian roulette on a path weight after `events` scattering/reflection events: it survives with
+// q = min(1, max_c weight / reference) and is divided by q. reference: the photon's emitted power
+// (photon tracer), 1 (camera paths). From `deepDepth` events on, q is also at most
+// kDeepRouletteSurvival, so a path whose weight never drops (albedo 1 everywhere: a lossless
+// medium, white walls, perfect mirrors) still ends: on average 1 / (1 - 0.95) = 20 events past
+// deepDepth, whatever max_depth says (1e6 for a Mitsuba user's "unbounded"). Unbiased: a survivor
+// is divided by q. Draws a random number only when q < 1, so a path with fewer than deepDepth
+// events draws exactly what it did without the deep rule: no render with max_depth < deepDepth
+// changes (the default max_depth is 16; every shipped scene renders with at most 16). False: the
+// path dies.
+inline constexpr int kDeepRouletteDepth = 64;
+inline constexpr double kDeepRouletteSurvival = 0.95;
+[[nodiscard]] bool russianRoulette(Rng& rng, Color& weight, double reference, int events,
+                                   int deepDepth = kDeepRouletteDepth);
 
 }  // namespace tpb

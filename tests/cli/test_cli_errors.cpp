@@ -563,8 +563,9 @@ TEST_F(CliErrors, DiskFullDuringExportKeepsCompleteFiles) {
     }
 }
 
-// A pass that fails on the render thread (here: an albedo-1 box with max_depth 1e8 outgrows the
-// memory limit, TPB_MAX_FILM_BYTES) ends the render with exit 2 and the reason, not a crash; the
+// A pass that fails on the render thread (here: an albedo-1 box with max_depth 1e8, whose photons the
+// deep roulette ends after ~83 events, ~20 MB for 2000, outgrows a 4 MB memory limit,
+// TPB_MAX_FILM_BYTES) ends the render with exit 2 and the reason, not a crash; the
 // outputs are still written from the passes finished before it (none here, so the images are black).
 TEST_F(CliErrors, PassThatOutgrowsMemoryStopsTheRenderCleanly) {
     const fs::path scene = write("scene.json", R"({"version": 1,

@@ -9,6 +9,7 @@
 #include "support/path_tracer_passes.h"
 #include "integrators/path_tracer.h"
 #include "scene/scene.h"
+#include "transport/interaction.h"
 #include "support/scene_builder.h"
 #include "support/test_scene.h"
 
@@ -828,6 +829,41 @@ TEST(PathTracer, DiffuseSphereFurnace) {
             EXPECT_GE(first[0], binIndex(lo, start, width, bins) - 1) << "pixel " << x << "," << y;
             EXPECT_LE(first[0], binIndex(hi, start, width, bins) + 1) << "pixel " << x << "," << y;
         }
+}
+
+// Issue 33 item 5: a white box full of lossless fog with a huge max_depth. The throughput never
+// drops, so the throughput roulette never fires; the deep rule (russianRoulette from
+// kDeepRouletteDepth vertices, survival 0.95) ends every camera path after 64 + Geometric(0.05)
+// vertices (mean 83), each with one next-event shadow ray (equiangular off). Before, every path
+// ran to max_depth (depthLimited == cameraPaths, 1e5 vertices each).
+TEST(PathTracer, AlbedoOneBoxWithAHugeMaxDepthEndsEveryPath) {
+    test::SceneBuilder b;
+    b.camera(Vec3(0.0, 0.0, 0.9), Vec3(0.0), 60.0, 8, 8).film(0.0, 0.25, 8);
+    b.globalMedium(b.medium(Color(2.0), Color(0.0)));
+    b.box(Vec3(-1.0), Vec3(1.0), b.diffuse(Color(1.0)), -1, true);
+    b.pointLight(Vec3(0.2, 0.1, -0.3), Color(2.0));
+    auto scene = test::prepareTestScene(b.desc());
+    RenderSettings s;
+    s.maxDepth = 100000;
+    s.seed = 4;
+    s.samplesPerPixel = 4;
+    s.equiangular = false;
+    s.threads = 2;
+    TransientFilm film(8, 8, scene.time);
+    PathTracerStats st;
+    ASSERT_EQ(test::renderPathTracer(*scene, s, 1, 1, film, &st), 1);
+    const double q = kDeepRouletteSurvival, paths = double(st.cameraPaths);
+    const double mean = kDeepRouletteDepth + q / (1.0 - q), sigmaMean = std::sqrt(q) / (1.0 - q) / std::sqrt(paths);
+    std::printf("albedo-1 box, max_depth 1e5: %lld paths, %.2f vertices (shadow rays) per path (expect %.2f +- %.2f), "
+                "%lld depth-limited\n",
+                static_cast<long long>(st.cameraPaths), st.shadowRays / paths, mean, sigmaMean,
+                static_cast<long long>(st.depthLimited));
+    EXPECT_EQ(st.cameraPaths, 8 * 8 * 4);
+    EXPECT_EQ(st.depthLimited, 0);
+    EXPECT_NEAR(st.shadowRays / paths, mean, 5.0 * sigmaMean);
+    std::vector<float> img;
+    film.steadyImage(img);
+    for (float v : img) ASSERT_TRUE(std::isfinite(v));
 }
 
 // ---- 6. area light: seen directly, and next-event estimation on a floor vs quadrature ------------

@@ -9,16 +9,22 @@
 //    photon in a closed box of grey and of chromatic fog with multiple scattering; and, for the
 //    uncollided photons of a point light in an unbounded medium, the closed form
 //    P (e^{-sigma_t a} - e^{-sigma_t b}) / sigma_t over a shell a < |x| < b;
-//  - the memory guard counts points.
+//  - the memory guard counts points;
+//  - (issue 33) the deep Russian roulette ends photons that never lose weight and keeps the energy,
+//    and the abort flag stops a pass inside a long photon.
 #include "base/error.h"
 #include "photons/photon_tracer.h"
 #include "support/test_scene.h"
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <optional>
+#include <thread>
 
 using namespace tpb;
 
@@ -288,4 +294,126 @@ TEST(PhotonTracerPoints, MemoryGuardCountsPoints) {
     EXPECT_THROW(tracePhotons(*sc, p), UserError);
     p.storePoints = false;  // nothing stored: nothing to guard
     EXPECT_NO_THROW(tracePhotons(*sc, p));
+}
+
+// ---- issue 33 item 5: paths that never lose weight end, and a pass stops at Ctrl-C -------------------
+
+namespace {
+
+// A closed box (2 m) of walls with albedo `wallAlbedo`, filled with a lossless fog (sigma_s 2 /m,
+// albedo 1), a point light inside: with white walls nothing is ever absorbed.
+std::string furnaceScene(double wallAlbedo, bool fog = true) {
+    return std::string(R"({"version": 1,
+      "camera": {"position": [0, 0, 0.9], "look_at": [0, 0, 0], "fov": 60, "resolution": [8, 8]},
+      "film": {"start_m": 0, "bin_width_m": 0.25, "bins": 8},)") +
+           (fog ? R"("media": {"m": {"sigma_s": 2.0}}, "global_medium": "m",)" : "") + R"(
+      "materials": {"wall": {"type": "diffuse", "albedo": )" + std::to_string(wallAlbedo) + R"(}},
+      "shapes": [{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": "wall", "flip_normals": true}],
+      "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
+      "render": {"photons_per_pass": 2000, "seed": 8}})";
+}
+
+}  // namespace
+
+// max_depth 1e6 (a Mitsuba user's "unbounded") in an albedo-1 box full of albedo-1 fog: the weight
+// never drops, so the throughput roulette never fires. The deep rule (russianRoulette from
+// kDeepRouletteDepth events, survival 0.95) ends every photon: events per photon are
+// 64 + Geometric(0.05), mean 64 + 19 = 83, and each event is the end of one fog segment (a beam).
+// Before it, photon 0 alone ran to 1e6 events: the 64 MiB guard stopped the pass (UserError).
+TEST(PhotonTracerDeepRoulette, AlbedoOneBoxWithAHugeMaxDepthEndsEveryPhoton) {
+    const test::TestScene sc = test::testSceneFrom(furnaceScene(1.0));
+    PhotonPassParams p = params(2000, 1000000, false);
+    p.maxMapBytes = 64u << 20;
+    PhotonMap map;
+    ASSERT_NO_THROW(map = tracePhotons(*sc, p));
+    EXPECT_EQ(map.emitted, p.photons);
+    EXPECT_FALSE(map.aborted);
+    const double q = kDeepRouletteSurvival;
+    const double meanEvents = kDeepRouletteDepth + q / (1.0 - q);
+    const double sigmaMean = std::sqrt(q) / (1.0 - q) / std::sqrt(double(p.photons));
+    const double beamsPerPhoton = double(map.beams.size()) / double(p.photons);
+    uint32_t deepest = 0;
+    for (const Beam& b : map.beams) deepest = std::max(deepest, b.depth);
+    std::printf("albedo-1 box, max_depth 1e6: %.2f beams/photon (expect %.2f +- %.2f), %.2f surface photons/photon, "
+                "deepest event %u, %.1f MB\n",
+                beamsPerPhoton, meanEvents, sigmaMean, double(map.photons.size()) / p.photons, deepest,
+                storedMapBytes(map) / 1e6);
+    EXPECT_NEAR(beamsPerPhoton, meanEvents, 5.0 * sigmaMean);
+    EXPECT_LT(deepest, 1000u);  // P(one photon past 1000) = 0.95^936 ~ 1e-21
+}
+
+// The deep rule is unbiased: in a lossy box (walls 0.8, lossless fog) where it acts at every fog
+// event (rouletteDepth 1: survival 0.95, weight / 0.95), the energy landing on the walls, Phi (1 +
+// rho + rho^2 + ...) = Phi / (1 - rho) = 5 Phi, and the fog's track length sum(P_b len_b) agree
+// with the same pass without it (rouletteDepth off) and, for the landed energy, with the closed
+// form; z-tests on per-photon sums (max_depth 1000 truncates nothing measurable: rho^1000/3).
+TEST(PhotonTracerDeepRoulette, EndingFullWeightPathsKeepsTheEnergy) {
+    const test::TestScene sc = test::testSceneFrom(furnaceScene(0.8));
+    struct Tally {
+        double landed = 0.0, landed2 = 0.0, track = 0.0, track2 = 0.0, events = 0.0;
+    };
+    const auto run = [&](int rouletteDepth) {
+        PhotonPassParams p = params(20000, 1000, false);
+        p.rouletteDepth = rouletteDepth;
+        Tally t;
+        PhotonMap one;
+        for (int64_t i = 0; i < p.photons; ++i) {
+            one.clear();
+            tracePhoton(*sc, p, i, one);
+            double landed = 0.0, track = 0.0;
+            for (const SurfacePhoton& ph : one.photons) landed += ph.power.x;
+            for (const Beam& b : one.beams) track += b.power.x * b.length;
+            t.landed += landed;
+            t.landed2 += landed * landed;
+            t.track += track;
+            t.track2 += track * track;
+            t.events += double(one.beams.size());
+        }
+        return t;
+    };
+    const Tally off = run(std::numeric_limits<int>::max()), deep = run(1);
+    const double n = 20000.0, phi = 2.0;
+    const auto var = [&](double s, double s2) { return (s2 - s * s / n) / (n - 1.0) * n; };  // of the sum
+    const double zLanded = (deep.landed - off.landed) / std::sqrt(var(deep.landed, deep.landed2) + var(off.landed, off.landed2));
+    const double zTrack = (deep.track - off.track) / std::sqrt(var(deep.track, deep.track2) + var(off.track, off.track2));
+    const double zClosed = (deep.landed - phi / (1.0 - 0.8)) / std::sqrt(var(deep.landed, deep.landed2));
+    std::printf("deep roulette: landed %.4f vs %.4f without vs %.4f closed form (z %.2f, %.2f); track %.4f vs %.4f "
+                "(z %.2f); %.1f vs %.1f events/photon\n",
+                deep.landed / phi, off.landed / phi, 1.0 / (1.0 - 0.8), zLanded, zClosed, deep.track, off.track, zTrack,
+                deep.events / n, off.events / n);
+    EXPECT_LT(deep.events, 0.8 * off.events);  // the deep rule did act
+    EXPECT_LT(std::abs(zLanded), 4.0);
+    EXPECT_LT(std::abs(zTrack), 4.0);
+    EXPECT_LT(std::abs(zClosed), 4.0);
+}
+
+// Ctrl-C inside a pass: the abort flag is read within a photon too, not only between batches of
+// 1024. One photon in a white box (no fog, nothing stored) with the deep rule off and max_depth
+// 2e7 bounces would run for seconds; a flag set from another thread after 20 ms stops it, the pass
+// returns marked aborted with the photon not counted. (Before: the flag was read only between
+// batches, so this pass ran all 2e7 bounces and returned a complete photon.)
+TEST(PhotonTracerDeepRoulette, AbortStopsALongPhotonInsideThePass) {
+    const test::TestScene sc = test::testSceneFrom(furnaceScene(1.0, false));
+    PhotonPassParams p = params(1, 20000000, false);
+    p.rouletteDepth = std::numeric_limits<int>::max();
+    p.storeSurfacePhotons = false;
+    p.threads = 1;
+    std::atomic<bool> abort{false};
+    std::thread ctrlC([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        abort = true;
+    });
+    const PhotonMap map = tracePhotons(*sc, p, &abort);
+    ctrlC.join();
+    EXPECT_TRUE(map.aborted);
+    EXPECT_EQ(map.emitted, 0);
+    // With the flag already set nothing is handed out (aborted); with it clear the pass completes.
+    p.maxDepth = 5000;
+    const PhotonMap none = tracePhotons(*sc, p, &abort);
+    EXPECT_TRUE(none.aborted);
+    EXPECT_EQ(none.emitted, 0);
+    abort = false;
+    const PhotonMap done = tracePhotons(*sc, p, &abort);
+    EXPECT_FALSE(done.aborted);
+    EXPECT_EQ(done.emitted, 1);
 }

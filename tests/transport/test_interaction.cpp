@@ -5,7 +5,8 @@
 //    Snell's law, total internal reflection beyond the critical angle from inside (every u);
 //  - the region stack: pushed on entering, popped on leaving, a push onto a full stack reported as
 //    regionOverflow (stack untouched, nothing thrown); null boundaries never bend or reflect;
-//  - the mirror bounce, Russian roulette's survival frequency and weight, the null-crossing budget.
+//  - the mirror bounce, Russian roulette's survival frequency and weight (also the deep rule that
+//    ends full-weight paths), the null-crossing budget.
 // The Fresnel reflectance and Snell's law are this file's own code, not scene/bsdf.h.
 #include "transport/interaction.h"
 
@@ -290,7 +291,7 @@ TEST(Interaction, RussianRouletteSurvivalFrequencyAndWeight) {
     int survived = 0;
     for (int i = 0; i < n; ++i) {
         Color w(0.3, 0.1, 0.2);
-        if (russianRoulette(rng, w, 1.0)) {
+        if (russianRoulette(rng, w, 1.0, 1)) {
             ++survived;
             EXPECT_NEAR(w.x, 1.0, 1e-12);
             EXPECT_NEAR(w.y, 0.1 / 0.3, 1e-12);
@@ -300,11 +301,50 @@ TEST(Interaction, RussianRouletteSurvivalFrequencyAndWeight) {
     // Relative to a reference; q >= 1 survives without drawing a number.
     Rng a(3, Stream::Test, 0, 3), b(3, Stream::Test, 0, 3);
     Color w(2.0);
-    EXPECT_TRUE(russianRoulette(a, w, 1.5));
+    EXPECT_TRUE(russianRoulette(a, w, 1.5, 1));
     EXPECT_EQ(w, Color(2.0));
     EXPECT_EQ(a.uniform(), b.uniform());
     Color zero(0.0);
-    EXPECT_FALSE(russianRoulette(a, zero, 1.0));
+    EXPECT_FALSE(russianRoulette(a, zero, 1.0, 1));
+}
+
+// Issue 33 item 5: from kDeepRouletteDepth events on, a full-weight path (albedo 1 everywhere, where
+// the throughput rule never fires) survives with kDeepRouletteSurvival and is divided by it, so it
+// ends; before that depth it draws nothing, as before (the films of max_depth < 64 are unchanged).
+// A lower throughput survival is kept (q = min(weight / reference, 0.95)).
+TEST(Interaction, DeepRussianRouletteEndsFullWeightPathsWithoutBias) {
+    // Below the deep depth: a full weight survives without drawing.
+    Rng a(5, Stream::Test, 0, 4), b(5, Stream::Test, 0, 4);
+    Color w(1.0);
+    EXPECT_TRUE(russianRoulette(a, w, 1.0, kDeepRouletteDepth - 1));
+    EXPECT_EQ(w, Color(1.0));
+    EXPECT_EQ(a.uniform(), b.uniform());
+    // From the deep depth on: survival frequency 0.95 and weight 1 / 0.95, mean weight kept.
+    Rng rng(11, Stream::Test, 0, 5);
+    const int n = 100000;
+    const double q = kDeepRouletteSurvival;
+    int survived = 0;
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) {
+        Color v(1.0, 0.5, 0.25);
+        if (russianRoulette(rng, v, 1.0, kDeepRouletteDepth)) {
+            ++survived;
+            ASSERT_EQ(v, Color(1.0 / q, 0.5 / q, 0.25 / q));
+            sum += v.x;
+        }
+    }
+    EXPECT_LT(std::abs((survived - n * q) / std::sqrt(n * q * (1.0 - q))), 4.0);
+    EXPECT_NEAR(sum / n, 1.0, 4.0 * std::sqrt((1.0 - q) / q / n));
+    // A weight below the cap keeps the throughput rule: q = 0.3, weight brought back to the reference.
+    Color low(0.3);
+    Rng c(7, Stream::Test, 0, 6);
+    for (int i = 0; i < 100 && !russianRoulette(c, low, 1.0, 10 * kDeepRouletteDepth); ++i) low = Color(0.3);
+    EXPECT_NEAR(low.x, 1.0, 1e-12);
+    // The depth is a parameter: a caller may start the deep rule earlier.
+    Rng d(9, Stream::Test, 0, 7), e(9, Stream::Test, 0, 7);
+    Color x(1.0);
+    (void)russianRoulette(d, x, 1.0, 3, 3);
+    EXPECT_NE(d.uniform(), e.uniform());  // it drew
 }
 
 TEST(Interaction, NullCrossingBudgetGivesTheFirstCrossingsFree) {
