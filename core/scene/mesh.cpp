@@ -322,6 +322,43 @@ TriangleMesh makeQuad(const Vec3& corner, const Vec3& edgeU, const Vec3& edgeV) 
     return m;
 }
 
+OpenEdges openEdges(const TriangleMesh& m) {
+    // One id per distinct position (sorted, then equal neighbours share it).
+    const size_t n = m.positions.size();
+    std::vector<uint32_t> order(n), id(n);
+    for (size_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(i);
+    const auto key = [&](uint32_t i) { return std::array<double, 3>{m.positions[i].x, m.positions[i].y, m.positions[i].z}; };
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    uint32_t next = 0;
+    for (size_t k = 0; k < n; ++k) {
+        if (k > 0 && key(order[k]) != key(order[k - 1])) ++next;
+        id[order[k]] = next;
+    }
+    // Every directed edge as (lower id, higher id) and its direction; an edge is matched when its
+    // uses in both directions are as many.
+    std::vector<std::pair<uint64_t, int>> edges;
+    edges.reserve(3 * m.triangles.size());
+    for (const glm::uvec3& t : m.triangles) {
+        if (t.x >= n || t.y >= n || t.z >= n) continue;
+        const uint32_t v[3] = {id[t.x], id[t.y], id[t.z]};
+        if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) continue;
+        for (int e = 0; e < 3; ++e) {
+            const uint32_t a = v[e], b = v[(e + 1) % 3];
+            edges.push_back({(uint64_t(std::min(a, b)) << 32) | std::max(a, b), a < b ? 1 : -1});
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    OpenEdges out;
+    for (size_t i = 0; i < edges.size();) {
+        size_t j = i;
+        int balance = 0;
+        for (; j < edges.size() && edges[j].first == edges[i].first; ++j) balance += edges[j].second;
+        if (balance != 0) ++(j - i == 1 ? out.holes : out.misfits);
+        i = j;
+    }
+    return out;
+}
+
 TriangleMesh makeBox(const Vec3& lo, const Vec3& hi) {
     const Vec3 a = glm::min(lo, hi), b = glm::max(lo, hi);
     TriangleMesh m;

@@ -2,6 +2,7 @@
 // rendered as triangles (quad, box).
 #pragma once
 #include "base/math.h"
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,18 @@ struct TriangleMesh {
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate = nullptr);
 // A mesh file by its extension: ".ply" (any case) through loadPly (scene/ply.h), anything else as OBJ.
 TriangleMesh loadMeshFile(const std::string& path, size_t* droppedDegenerate = nullptr);
+
+// The edges of a mesh that no other triangle walks the opposite way (vertices compared by position,
+// so vertices split for normals still meet; triangles with a repeated vertex skipped). A mesh is
+// closed and consistently oriented - the boundary of a solid, which a ray that enters must leave -
+// iff there are none. `holes`: edges of one triangle only; `misfits`: edges shared by triangles
+// that face opposite ways, or by more than two.
+struct OpenEdges {
+    int64_t holes = 0;
+    int64_t misfits = 0;
+    bool closed() const { return holes == 0 && misfits == 0; }
+};
+OpenEdges openEdges(const TriangleMesh& m);
 
 // corner + s*edgeU + t*edgeV; two triangles, normal along cross(edgeU, edgeV).
 TriangleMesh makeQuad(const Vec3& corner, const Vec3& edgeU, const Vec3& edgeV);

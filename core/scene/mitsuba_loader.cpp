@@ -20,6 +20,7 @@
 #include "render/memory_budget.h"
 #include "render/render_settings.h"
 #include "scene/light.h"
+#include "scene/scene_loader.h"
 
 #include <pugixml.hpp>
 
@@ -62,6 +63,7 @@ namespace {
 
 constexpr int kDiskSegments = 128;
 constexpr double kAirTolerance = 1e-3;  // ext_ior within this of 1 (air: 1.00028) is taken as 1
+constexpr int kXmlMaxDepth = 256;       // element nesting (Importer::checkNesting)
 
 struct XmlFile {
     std::string path, dir, text;
@@ -173,6 +175,7 @@ public:
 private:
     friend class Props;
     const XmlFile& parse(const std::string& text, const std::string& path);
+    void checkNesting(const XmlFile& f) const;
     void collect(const Elem& scene, std::vector<Elem>& out, std::vector<std::string>& stack);
     void registerIds(const Elem& e);
 
@@ -418,7 +421,34 @@ const XmlFile& Importer::parse(const std::string& text, const std::string& path)
     if (!r)
         throw UserError(path, f.lineOf(r.offset), "", std::string("XML parse error: ") + r.description() +
                                                           "; check the markup on this line and the one before it");
+    checkNesting(f);
     return f;
+}
+
+// The importer walks elements recursively (ids, nested bsdfs): refuse documents nested deeper
+// than kXmlMaxDepth elements before it does, walking the tree without recursion (a 50,000-deep
+// file overflowed the stack). Real scenes nest under ten levels.
+void Importer::checkNesting(const XmlFile& f) const {
+    int depth = 0;  // of n below the root element
+    pugi::xml_node n = f.doc.document_element();
+    while (n) {
+        if (depth >= kXmlMaxDepth)
+            throw UserError(f.path, f.lineOf(n.offset_debug()), "",
+                            "elements nested deeper than " + std::to_string(kXmlMaxDepth) + " levels (<" +
+                                std::string(n.name()) + "> here); a Mitsuba scene nests a few levels: check for "
+                                "unclosed or runaway elements");
+        if (pugi::xml_node c = n.first_child(); c) {  // down
+            n = c;
+            ++depth;
+            continue;
+        }
+        while (depth > 0 && !n.next_sibling()) {  // up to the first ancestor with a next sibling
+            n = n.parent();
+            --depth;
+        }
+        if (depth == 0) break;  // back at the root element
+        n = n.next_sibling();
+    }
 }
 
 std::optional<std::string> Importer::attr(const Elem& e, const char* name) const {
@@ -475,11 +505,13 @@ void Importer::collect(const Elem& scene, std::vector<Elem>& out, std::vector<st
             const std::string path = p.lexically_normal().string();
             if (std::find(stack.begin(), stack.end(), path) != stack.end() || stack.size() > 16)
                 fail(e, "include cycle (or more than 16 levels): " + path + " is already being read");
-            std::ifstream in(path, std::ios::binary);
-            if (!in || fs::is_directory(path)) fail(e, "cannot open the included file " + path);
-            std::ostringstream ss;
-            ss << in.rdbuf();
-            const XmlFile& f = parse(ss.str(), path);
+            std::string text;
+            try {
+                text = readSceneFile(path, "the included file");
+            } catch (const UserError& err) {
+                fail(e, err.what());
+            }
+            const XmlFile& f = parse(text, path);
             const pugi::xml_node root = f.doc.document_element();
             if (std::string(root.name()) != "scene")
                 fail(Elem{root, &f}, "an included file must hold a <scene> element, got <" + std::string(root.name()) + ">");
@@ -1192,13 +1224,7 @@ SceneDesc loadMitsubaSceneFromString(const std::string& text, const std::string&
 }
 
 SceneDesc loadMitsubaScene(const std::string& path, const MitsubaOptions& options) {
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) throw UserError(path, 0, "", "cannot open scene file (it is a directory)");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw UserError(path, 0, "", std::string("cannot open scene file (") + std::strerror(errno) + ")");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return loadMitsubaSceneFromString(ss.str(), path, options);
+    return loadMitsubaSceneFromString(readSceneFile(path), path, options);
 }
 
 }  // namespace tpb

@@ -11,6 +11,28 @@ namespace tpb {
 
 namespace {
 
+// A mesh that holds a medium (a dielectric or null shape with an interior medium) must be closed
+// and consistently oriented: a ray that enters it pushes its region and must meet it again to pop
+// it, else the medium leaks out to everything the ray reaches after (openEdges, mesh.h). Shapes
+// other than meshes are closed by construction (quads, rectangles and disks cannot hold a medium).
+void checkClosedContainer(const SceneDesc& d, const std::string& key, const ShapeDesc& sd, const std::string& name,
+                          const TriangleMesh& m, size_t droppedDegenerate) {
+    const OpenEdges open = openEdges(m);
+    if (open.closed()) return;
+    const std::string mediumKey = d.locs.count(key + ".interior_medium") ? key + ".interior_medium" : key;
+    std::string what;
+    if (open.holes > 0) what += std::to_string(open.holes) + " edges of one triangle only (holes)";
+    if (open.misfits > 0)
+        what += std::string(what.empty() ? "" : " and ") + std::to_string(open.misfits) +
+                " edges shared by triangles facing opposite ways (or by more than two)";
+    const std::string mesh = "the mesh \"" + name + "\"" + (sd.meshPath.empty() ? "" : " (" + sd.meshPath + ")");
+    throw UserError(d.where(mediumKey) + mediumKey + ": " + mesh + " holds a medium but is not closed: " + what +
+                    (droppedDegenerate > 0 ? " (" + std::to_string(droppedDegenerate) + " zero-area triangles were dropped on loading)" : "") +
+                    "; the medium would leak out through them. Close the mesh and orient its faces consistently "
+                    "(e.g. Blender: Select > All by Trait > Non Manifold, then Face > Fill; Mesh > Normals > "
+                    "Recalculate Outside), or remove the interior medium");
+}
+
 Region makeRegion(const MediumDesc* m, double iorOverride) {
     Region r;
     if (m) {
@@ -171,11 +193,12 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d) {
         switch (sd.type) {
             case ShapeType::Mesh: {
                 TriangleMesh m;
+                size_t dropped = 0;
                 if (sd.meshPath.empty()) {
                     m.positions = sd.inlinePositions;
                     m.triangles = sd.inlineTriangles;
                 } else try {
-                    m = loadMeshFile(sd.meshPath);
+                    m = loadMeshFile(sd.meshPath, &dropped);
                 } catch (const UserError& e) {  // name the scene's key too: "scene.json:8: shapes[0].file: x.obj:4: ..."
                     throw UserError(d.where(key + ".file") + key + ".file: " + e.what());
                 }
@@ -186,6 +209,7 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d) {
                     throw UserError(d.where(k) + k + ": " + sd.meshPath + ": " + e.what());
                 }
                 if (sd.flipNormals) m.flip();
+                if (isInterface && sd.interiorMedium >= 0) checkClosedContainer(d, key, sd, info.name, m, dropped);
                 addMesh(m);
                 break;
             }

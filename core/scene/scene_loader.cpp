@@ -962,20 +962,42 @@ int maxUsefulThreads() {
     return kThreadsPerCoreCap * static_cast<int>(std::max(1u, cores));
 }
 
+std::string readSceneFile(const std::string& path, const std::string& what) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);  // follows symlinks: a link to a file is fine
+    if (fs::is_directory(st)) throw UserError(path, 0, "", "cannot open " + what + " (it is a directory)");
+    if (fs::exists(st) && !fs::is_regular_file(st))
+        throw UserError(path, 0, "", "cannot read " + what + ": it is not a regular file but a " +
+                                         (fs::is_character_file(st) || fs::is_block_file(st) ? "device"
+                                          : fs::is_fifo(st)                                   ? "FIFO (pipe)"
+                                          : fs::is_socket(st)                                 ? "socket"
+                                                                                              : "special file") +
+                                         ", which could be read forever; save the scene to a file and give its path");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw UserError(path, 0, "", "cannot open " + what + " (" + std::strerror(errno) + ")");
+    const uint64_t bytes = fs::file_size(path, ec);
+    if (ec) throw UserError(path, 0, "", "cannot read " + what + " (" + ec.message() + ")");
+    if (bytes > kMaxSceneFileBytes)
+        throw UserError(path, 0, "", what + " is " + humanBytes(bytes) + " (" + std::to_string(bytes) +
+                                         " bytes), more than the " + humanBytes(kMaxSceneFileBytes) +
+                                         " a scene file may take; is it the right file? Large meshes belong in "
+                                         "OBJ/PLY files the scene names");
+    // Exactly the size it had when asked: a file that grows while being read is not followed.
+    std::string text(static_cast<size_t>(bytes), '\0');
+    in.read(text.data(), static_cast<std::streamsize>(bytes));
+    if (in.bad() || static_cast<uint64_t>(in.gcount()) != bytes)
+        throw UserError(path, 0, "", "cannot read " + what + " (read " + std::to_string(in.gcount()) + " of " +
+                                         std::to_string(bytes) + " bytes: did it change while being read?)");
+    return text;
+}
+
 SceneDesc loadScene(const std::string& path) {
     // Mitsuba 3 XML (scene/mitsuba_loader.h) by its extension; anything else is a JSON scene.
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     if (ext == ".xml") return loadMitsubaScene(path);
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        throw UserError(path, 0, "", "cannot open scene file (it is a directory)");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw UserError(path, 0, "", std::string("cannot open scene file (") + std::strerror(errno) + ")");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    if (in.bad()) throw UserError(path, 0, "", "cannot read scene file");
-    return loadSceneFromString(ss.str(), path);
+    return loadSceneFromString(readSceneFile(path), path);
 }
 
 }  // namespace tpb

@@ -3,6 +3,7 @@
 #pragma once
 #include "render/memory_budget.h"
 #include "scene/scene_desc.h"
+#include <cstdint>
 #include <string>
 
 namespace tpb {
@@ -13,6 +14,13 @@ SceneDesc loadScene(const std::string& path);
 // Same, from text (for tests and tools); `virtualPath` names it in messages and sets the folder.
 SceneDesc loadSceneFromString(const std::string& text, const std::string& virtualPath);
 // The loader refuses films and photon counts above the memory budget (memory_budget.h).
+
+// The whole text of a scene file (JSON, Mitsuba XML and its includes), read only if it is a
+// regular file of at most kMaxSceneFileBytes: a device (/dev/zero), a FIFO or a folder would be
+// read forever or not at all, and a huge file would fill memory before any check. UserError
+// (file `path`, line 0) naming what it is, its size, and the fix. `what`: "scene file", ...
+inline constexpr uint64_t kMaxSceneFileBytes = uint64_t(256) << 20;
+std::string readSceneFile(const std::string& path, const std::string& what = "scene file");
 
 // Worker threads beyond this are pointless (the workers never wait on I/O: more threads than cores
 // only add memory and contention; 1000 threads on 2 cores ran a thread per tile): 4 x the cores

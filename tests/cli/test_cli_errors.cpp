@@ -30,6 +30,7 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -1305,4 +1306,21 @@ TEST_F(CliErrors, MitsubaXmlScenesAreCheckedLikeJson) {
     expectUserError(runTpb({"info", broken.string()}, dir_), broken.string() + ":3", "", "XML parse error");
     const fs::path inc = write("inc.xml", "<scene version=\"3.0.0\">\n<include filename=\"broken.xml\"/>\n</scene>\n");
     expectUserError(runTpb({"info", inc.string()}, dir_), broken.string() + ":3", "", "XML parse error");
+}
+
+// Issue 33 item 8: `tpb render /dev/zero` read forever (and ignored Ctrl-C), a FIFO blocked in
+// open(), and XML nested 50,000 deep crashed the loader. Each is now a user error, exit 2, at once:
+// special files are refused before they are opened, nesting beyond 256 levels by file:line.
+TEST_F(CliErrors, SpecialFilesAndDeepNestingAreRefusedCleanly) {
+    expectUserError(render("/dev/zero"), "/dev/zero", "", "it is not a regular file but a device");
+    const fs::path fifo = dir_ / "pipe.json";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    expectUserError(render(fifo), fifo.string(), "", "it is not a regular file but a FIFO (pipe)");
+    std::string xml = "<scene version=\"3.0.0\">\n";
+    for (int i = 0; i < 50000; ++i) xml += "<shape type=\"cube\">\n";
+    for (int i = 0; i < 50000; ++i) xml += "</shape>";
+    const fs::path deepXml = write("deep.xml", xml + "\n</scene>\n");
+    expectUserError(render(deepXml), deepXml.string() + ":257", "", "nested deeper than 256 levels");
+    const fs::path deepJson = write("deep.json", std::string(50000, '[') + std::string(50000, ']'));
+    expectUserError(render(deepJson), deepJson.string() + ":1", "", "nesting deeper than 256");
 }

@@ -22,6 +22,7 @@
 
 using namespace tpb;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 namespace {
 
@@ -450,6 +451,63 @@ TEST(MitsubaLoader, ErrorsNameFileAndLine) {
     expectError(scene("<shape type=\"rectangle\"><medium type=\"homogeneous\" name=\"interior\"/></shape>"), 2, "open");
     expectError(scene("<shape type=\"cube\" id=\"a\"/>\n<shape type=\"cube\" id=\"a\"/>"), 3, "already used");
     expectError("<scene version=\"3.0.0\">\n<include filename=\"nowhere.xml\"/></scene>", 2, "cannot open the included file");
+}
+
+// Issue 33 item 8: XML nested 50,000 deep overflowed the stack (the importer walks elements
+// recursively). Nesting beyond 256 levels is refused at the first element too deep, by file:line,
+// without recursion; 255 levels below <scene> pass.
+TEST(MitsubaLoader, DeepNestingIsRefusedWithoutRecursion) {
+    const auto nested = [](int depth) {
+        std::string x = "<scene version=\"3.0.0\">\n";
+        for (int i = 0; i < depth; ++i) x += "<bsdf type=\"twosided\">\n";
+        for (int i = 0; i < depth; ++i) x += "</bsdf>";
+        return x + "</scene>\n";
+    };
+    expectError(nested(50000), 257, "nested deeper than 256 levels (<bsdf> here)");  // the 256th <bsdf>
+    expectError(nested(256), 257, "nested deeper than 256");
+    // 255 levels pass the check (and are then refused for what they are, not for the depth).
+    try {
+        load(nested(255));
+    } catch (const UserError& e) {
+        EXPECT_THAT(e.what(), Not(HasSubstr("nested deeper")));
+    }
+    // Deep in an included file: that file's line.
+    test::TempDir tmp("test_mitsuba_nesting");
+    tmp.write("deep.xml", nested(300));
+    tmp.write("main.xml", "<scene version=\"3.0.0\">\n<include filename=\"deep.xml\"/>\n</scene>\n");
+    try {
+        loadScene((tmp.path() / "main.xml").string());
+        ADD_FAILURE() << "no error";
+    } catch (const UserError& e) {
+        EXPECT_EQ(e.file(), (tmp.path() / "deep.xml").lexically_normal().string()) << e.what();
+        EXPECT_EQ(e.line(), 257) << e.what();
+    }
+}
+
+// Issue 33 item 8: a mesh that holds a medium must be closed, or the medium leaks out through its
+// holes; an open OBJ with an interior medium is refused by the shape's line, with the count of
+// open edges. The same open mesh as a plain dielectric (no interior medium) still loads.
+TEST(MitsubaLoader, OpenMeshHoldingAMediumIsRefused) {
+    test::TempDir tmp("test_mitsuba_open_mesh");
+    // A unit cube without its y = 1 face: 10 triangles, that square's 4 edges open.
+    tmp.write("open.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                          "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 1 5 8 4\n");
+    const std::string body = R"(<medium type="homogeneous" id="fog"><rgb name="sigma_t" value="1"/></medium>
+<shape type="obj">
+<string name="filename" value="open.obj"/><ref name="interior" id="fog"/></shape>)";
+    tmp.write("s.xml", scene(body));
+    try {
+        test::prepareTestScene(loadScene((tmp.path() / "s.xml").string()));
+        ADD_FAILURE() << "no error";
+    } catch (const UserError& e) {
+        const std::string msg = e.what();
+        EXPECT_THAT(msg, HasSubstr("s.xml:3: shapes[0]: "));
+        EXPECT_THAT(msg, HasSubstr("open.obj"));
+        EXPECT_THAT(msg, HasSubstr("holds a medium but is not closed: 4 edges of one triangle only"));
+        EXPECT_THAT(msg, HasSubstr("Close the mesh"));
+    }
+    tmp.write("glass.xml", scene(R"(<shape type="obj"><string name="filename" value="open.obj"/><bsdf type="dielectric"/></shape>)"));
+    EXPECT_NO_THROW(test::prepareTestScene(loadScene((tmp.path() / "glass.xml").string())));
 }
 
 TEST(MitsubaLoader, UnknownParametersAreWarnedAbout) {

@@ -3,6 +3,7 @@
 #include "base/error.h"
 #include "io/json.h"
 #include "scene/mesh.h"
+#include "scene/scene.h"
 #include "scene/scene_loader.h"
 #include "support/temp_dir.h"
 
@@ -17,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sys/stat.h>
 #include <unistd.h>
 
 using namespace tpb;
@@ -324,6 +326,92 @@ TEST(SceneLoader, CannotOpenFile) {
         EXPECT_THAT(std::string(e.what()), HasSubstr("cannot open scene file"));
         EXPECT_THAT(std::string(e.what()), HasSubstr("/nonexistent/dir/scene.json"));
     }
+}
+
+// Issue 33 item 8: `tpb render /dev/zero` read forever. A scene file must be a regular file of at
+// most kMaxSceneFileBytes: a device, a FIFO and a folder are refused before any read, a larger file
+// by its size (a sparse file here: no disk used), JSON and XML alike.
+TEST(SceneLoader, RefusesSpecialAndHugeFilesBeforeReading) {
+    const auto error = [](const std::string& path) {
+        try {
+            loadScene(path);
+        } catch (const UserError& e) {
+            EXPECT_EQ(e.file(), path);
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_THAT(error("/dev/zero"), HasSubstr("/dev/zero: cannot read scene file: it is not a regular file but a device"));
+    test::TempDir tmp{"test_scene_file_kinds"};
+    const std::string fifo = (tmp.path() / "pipe.json").string();
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    EXPECT_THAT(error(fifo), HasSubstr("not a regular file but a FIFO (pipe)"));  // (opening it would block)
+    std::filesystem::create_directories(tmp.path() / "dir.xml");
+    EXPECT_THAT(error((tmp.path() / "dir.xml").string()), HasSubstr("cannot open scene file (it is a directory)"));
+    for (const char* name : {"huge.json", "huge.xml"}) {
+        const std::string huge = (tmp.path() / name).string();
+        std::ofstream(huge) << "{";
+        std::filesystem::resize_file(huge, kMaxSceneFileBytes + 1);
+        EXPECT_THAT(error(huge), HasSubstr("scene file is 256.0 MiB (268435457 bytes), more than the 256.0 MiB"));
+    }
+    // At the limit's side of it, an ordinary file reads whole.
+    tmp.write("ok.json", "{\"version\": 1}");
+    EXPECT_EQ(readSceneFile((tmp.path() / "ok.json").string()), "{\"version\": 1}");
+}
+
+// Issue 33 item 8: a mesh that holds a medium (a null or dielectric shape with interior_medium)
+// must be closed and consistently oriented, else the fog leaks out through its holes (a ray that
+// entered never pops the region). Refused at Scene::build with the shape's file:line, the count of
+// open edges and the fix; the closed mesh, and the open one as a plain dielectric, load.
+TEST(SceneLoader, OpenMeshHoldingAMediumIsRefused) {
+    test::TempDir tmp{"test_scene_open_mesh"};
+    const std::string cube = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                             "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 1 5 8 4\n";
+    tmp.write("closed.obj", cube + "f 4 8 7 3\n");
+    tmp.write("open.obj", cube);                      // no y = 1 face: its 4 edges are holes
+    tmp.write("flipped.obj", cube + "f 4 3 7 8\n");  // that face inside out: its 4 edges misfit
+    const auto sceneWith = [&](const std::string& obj, const std::string& material, bool medium) {
+        return tmp.write("s.json", R"({"version": 1,
+  "media": {"fog": {"sigma_s": 1}},
+  "materials": {"m": {"type": ")" + material + R"("}},
+  "shapes": [
+    {"type": "mesh", "file": ")" + obj + R"(", "material": "m")" +
+                                        (medium ? ",\n     \"interior_medium\": \"fog\"" : "") + R"(}],
+  "lights": [{"type": "point", "position": [0.5, 3, 0.5], "power": 1}]})")
+            .string();
+    };
+    const auto buildError = [&](const std::string& path) {
+        try {
+            Scene::build(loadScene(path));
+        } catch (const UserError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    const std::string s = sceneWith("open.obj", "null", true);
+    EXPECT_THAT(buildError(s), HasSubstr(s + ":6: shapes[0].interior_medium: the mesh \"shapes[0]\" ("));
+    EXPECT_THAT(buildError(s), HasSubstr("open.obj) holds a medium but is not closed: 4 edges of one triangle only "
+                                         "(holes); the medium would leak out through them. Close the mesh"));
+    EXPECT_THAT(buildError(sceneWith("flipped.obj", "dielectric", true)),
+                HasSubstr("not closed: 4 edges shared by triangles facing opposite ways"));
+    EXPECT_EQ(buildError(sceneWith("closed.obj", "null", true)), "no error");
+    EXPECT_EQ(buildError(sceneWith("open.obj", "dielectric", false)), "no error");  // no medium to hold
+    EXPECT_EQ(buildError(sceneWith("open.obj", "null", false)), "no error");
+
+    // openEdges itself: vertices split (same position, other index) still meet.
+    TriangleMesh quad = makeQuad(Vec3(0.0), Vec3(1.0, 0.0, 0.0), Vec3(0.0, 1.0, 0.0));
+    EXPECT_EQ(openEdges(quad).holes, 4);
+    TriangleMesh box = makeBox(Vec3(0.0), Vec3(1.0));
+    EXPECT_TRUE(openEdges(box).closed());
+    TriangleMesh split = box;
+    for (glm::uvec3& t : split.triangles) {  // every triangle its own three vertices
+        const uint32_t base = static_cast<uint32_t>(split.positions.size());
+        split.positions.insert(split.positions.end(), {box.positions[t.x], box.positions[t.y], box.positions[t.z]});
+        t = glm::uvec3(base, base + 1, base + 2);
+    }
+    EXPECT_TRUE(openEdges(split).closed());
+    box.flip();
+    EXPECT_TRUE(openEdges(box).closed());  // inside out but consistent
 }
 
 // ---- one test per kind of mistake --------------------------------------------------------------
