@@ -655,6 +655,7 @@ void writePictureOutputs(const FilmSnapshot& snap, const RenderOutputs& r, Outpu
     if (r.contactSheet > 0 && !rep.interrupted) {
         exportContactSheet(snap, r.out + "/contact_sheet.png", r.contactSheet, r.opt, tone);
         rep.kept.push_back("contact_sheet.png");
+        rep.exposureEv.emplace_back("contact_sheet.png", tone.exposureEv);
     }
     if (r.mp4 && !rep.interrupted) {
         int n = 0;
@@ -662,7 +663,10 @@ void writePictureOutputs(const FilmSnapshot& snap, const RenderOutputs& r, Outpu
             ExportProgress bar("encoding transient.mp4", tty, r.quiet);
             n = exportMp4(snap, r.out + "/transient.mp4", r.opt, tone, r.fps, std::ref(bar), cancel);
         }
-        if (!stopped("transient.mp4") && n > 0) rep.kept.push_back("transient.mp4");
+        if (!stopped("transient.mp4") && n > 0) {
+            rep.kept.push_back("transient.mp4");
+            rep.exposureEv.emplace_back("transient.mp4", tone.exposureEv);
+        }
     }
 }
 
@@ -679,6 +683,10 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         nlohmann::json j = summary();
         replaceNonFiniteNumbers(j);
         nlohmann::json o = {{"frames_expected", rep.framesExpected}, {"files", rep.kept}};
+        nlohmann::json ev = nlohmann::json::object();
+        if (r.previewEv) ev["preview.png"] = *r.previewEv;
+        for (const auto& [name, e] : rep.exposureEv) ev[name] = e;
+        o["exposure_ev"] = ev;
         if (final) o["frames_written"] = rep.framesWritten;
         else o["frames_written"] = nullptr;  // being written: the final summary replaces this one
         if (!rep.error.empty()) o["error"] = rep.error;
@@ -690,8 +698,9 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         const std::vector<float> steady = steadyImage(*snap);  // one image for both files
         writeExr(r.out + "/steady.exr", film.width(), film.height(), steady, r.opt.pixel);
         rep.kept.push_back("steady.exr");
-        writePngPreview(r.out + "/steady.png", film.width(), film.height(), steady);
+        const float ev = writeAutoExposedPng(r.out + "/steady.png", film.width(), film.height(), steady, ToneMap{});
         rep.kept.push_back("steady.png");
+        rep.exposureEv.emplace_back("steady.png", ev);
     }
     rep.kept.push_back("summary.json");
     writeSummary(false);
@@ -721,8 +730,12 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
             }
         }
         if (r.strip > 0 && !rep.interrupted) {
-            exportStripPng(*snap, r.out + "/strip.png", r.strip, r.opt, r.stripEv);
+            ToneMap stripTone;  // the frames' exposure rule (picture_export.h), sRGB, --strip-ev more
+            stripTone.exposureEv = static_cast<float>(r.stripEv);
+            stripTone = autoExposedToneMap(*snap, r.opt, stripTone);
+            exportStripPng(*snap, r.out + "/strip.png", r.strip, r.opt, stripTone);
             rep.kept.push_back("strip.png");
+            rep.exposureEv.emplace_back("strip.png", stripTone.exposureEv);
         }
         writePictureOutputs(*snap, r, rep, cancel, tty);
     } catch (const std::exception& e) {

@@ -117,6 +117,7 @@ struct RenderOutputs {
     double fps = 24.0;        // --fps
     int contactSheet = 0;     // --contact-sheet N: contact_sheet.png of N frames (0 = none)
     ToneMap tone;             // the MP4's and contact sheet's mapping; its exposure is added to the automatic one
+    std::optional<float> previewEv;  // the EV preview.png was written with (for summary.json), if it was
     VolumeProvenance provenance;  // for transient.json; filled after the render (provenanceOf)
 };
 // The files RenderOutputs writes for a film of `bins` bins (preview.exr/png included).
@@ -127,6 +128,8 @@ struct OutputReport {
     std::vector<std::string> kept;  // files written completely, relative to `out`
     std::string error;              // the first write failure, or empty
     bool interrupted = false;       // a signal stopped the frame export
+    // The EV each picture was written with (picture_export.h's exposure rule), by file name.
+    std::vector<std::pair<std::string, float>> exposureEv;
 };
 
 // Before rendering: the number, size and estimated write time of the frames (from the time

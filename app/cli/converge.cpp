@@ -4,6 +4,7 @@
 // fitted slope, and an equal-time strip of frames (the paper's Figure 4 layout).
 // Also the path-tracer back end of `tpb render --method pt` (cli_converge.h).
 #include "cli/converge.h"
+#include "film/picture_export.h"
 #include "render/provenance.h"
 
 #include "cli/flags.h"
@@ -311,7 +312,7 @@ void runReference(ReferenceCmd& c) {
         if (interrupted() && ref.info.passes == 0) throwIfInterrupted("before the first pass finished");
     }
     writeReference(out, ref);
-    writePngPreview(out + ".steady.png", ref.info.width, ref.info.height, ref.steady);
+    writeAutoExposedPng(out + ".steady.png", ref.info.width, ref.info.height, ref.steady, ToneMap{});
     std::printf("wrote ");
     printReference(out, ref.info);
     if (interrupted()) exitCode() = exitCodeAfterInterrupt();

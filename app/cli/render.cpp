@@ -8,7 +8,9 @@
 #include "cli/resume.h"
 #include "base/error.h"
 #include "film/film_export.h"
+#include "film/picture_export.h"
 #include "io/image_io.h"
+#include "estimators/estimator.h"
 #include "integrators/preview.h"
 #include "io/video_encoder.h"
 #include "render/provenance.h"
@@ -103,6 +105,19 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
                    {"beam_flux_cut_fraction", luminance(emittedFlux) > 0 ? luminance(cutFlux) / luminance(emittedFlux) : 0.0},
                    {"peak_rss_bytes", peakRssBytes()}};
     return j;
+}
+
+// What this pass's photon map holds for the chosen estimators, for the progress line: beams
+// (beam2d, beam1d), photon points (point2d, point3d), surface photons (ppm); each when its stage runs.
+std::string storedPhotons(const PassStats& p, const Stages& stages, const VolumeEstimator::Needs& needs) {
+    std::string s;
+    const auto add = [&](int64_t n, const char* what) {
+        s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+    };
+    if (stages.beams && needs.beams) add(p.beams, "beams");
+    if (stages.beams && needs.points) add(p.points, "photon points");
+    if (stages.surfacePhotons) add(p.surfacePhotons, "surface photons");
+    return s.empty() ? "no photons stored" : s;
 }
 
 // Flags that contradict each other; checked before anything is loaded or written.
@@ -200,7 +215,8 @@ void run(RenderCmd& c) {
     const double tw = nowSec();
     writeExr(c.out + "/preview.exr", scene->camera.width, scene->camera.height, preview);
     const double previewExrSec = nowSec() - tw;
-    writePngPreview(c.out + "/preview.png", scene->camera.width, scene->camera.height, preview);
+    outputs.previewEv = writeAutoExposedPng(c.out + "/preview.png", scene->camera.width, scene->camera.height,
+                                            preview, ToneMap{});
     if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
     if (c.previewOnly) return;
     reportPlannedOutputs(prepared, outputs, previewExrSec);
@@ -243,6 +259,7 @@ void run(RenderCmd& c) {
     double lastCheckpoint = nowSec();
 
     const bool tty = isatty(STDERR_FILENO) && !c.quiet;
+    const VolumeEstimator::Needs needs = makeVolumeEstimator(ds.volumeEstimator)->needs();
     const double t0 = nowSec();
     drv.start([&](const PassStats& p) {
         // Between passes, on the driver's thread: no tile is being written.
@@ -257,13 +274,13 @@ void run(RenderCmd& c) {
             const double frac = total > 0 ? double(p.pass) / total
                                           : (ds.timeBudgetSec > 0 ? std::min(1.0, p.elapsedSec / ds.timeBudgetSec) : 0.0);
             const int fill = static_cast<int>(frac * width);
-            std::fprintf(stderr, "\r[%.*s%*s] pass %llu  r=%.3g m  %lld beams  %.2f s/pass  %.1f s ",
+            std::fprintf(stderr, "\r[%.*s%*s] pass %llu  r=%.3g m  %s  %.2f s/pass  %.1f s ",
                          fill, "##############################", width - fill, "",
-                         static_cast<unsigned long long>(p.pass), p.beamRadius, static_cast<long long>(p.beams),
-                         p.passSec, p.elapsedSec);
+                         static_cast<unsigned long long>(p.pass), p.beamRadius,
+                         storedPhotons(p, scene->stages, needs).c_str(), p.passSec, p.elapsedSec);
         } else if (p.pass == 1 || p.pass % 10 == 0 || (total > 0 && int64_t(p.pass) == total)) {
-            std::fprintf(stderr, "pass %llu: r=%.4g m, %lld beams, %.3f s\n", static_cast<unsigned long long>(p.pass),
-                         p.beamRadius, static_cast<long long>(p.beams), p.passSec);
+            std::fprintf(stderr, "pass %llu: r=%.4g m, %s, %.3f s\n", static_cast<unsigned long long>(p.pass),
+                         p.beamRadius, storedPhotons(p, scene->stages, needs).c_str(), p.passSec);
         }
     });
     // After start() (which clears a stop request): a signal from before is passed on here, a later

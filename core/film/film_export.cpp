@@ -90,12 +90,11 @@ std::vector<int> energeticBins(const FilmSnapshot& film, int count, TimeAxis axi
 }
 
 std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& path, int count, const ExportOptions& opt,
-                                double exposureEv) {
+                                const ToneMap& tone) {
     const std::vector<int> binsUsed = energeticBins(film, count, opt.axis);
     count = static_cast<int>(binsUsed.size());
     const int W = film.width(), H = film.height();
     std::vector<float> strip(static_cast<size_t>(W) * count * H * 3, 0.0f), img;
-    std::vector<float> lum;
     for (int i = 0; i < count; ++i) {
         img = frameImage(film, binsUsed[i], opt.axis, opt.mode, opt.response);
         for (int y = 0; y < H; ++y)
@@ -104,14 +103,7 @@ std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& pat
                     strip[((static_cast<size_t>(y) * W * count) + static_cast<size_t>(i) * W + x) * 3 + c] =
                         img[(static_cast<size_t>(y) * W + x) * 3 + c];
     }
-    for (size_t p = 0; p < strip.size(); p += 3) {
-        const float l = static_cast<float>(luminance(Color(strip[p], strip[p + 1], strip[p + 2])));
-        if (l > 0.0f) lum.push_back(l);  // lit pixels only: a small lit region must not read as black
-    }
-    std::sort(lum.begin(), lum.end());
-    const float ref = lum.empty() ? 0.0f : lum[static_cast<size_t>(0.995 * (lum.size() - 1))];
-    const double norm = ref > 0.0f ? std::log2(1.0 / ref) : 0.0;
-    writePngPreview(path, W * count, H, strip, norm + exposureEv);
+    writePng8(path, W * count, H, toneMapImage(strip, tone));
     return binsUsed;
 }
 

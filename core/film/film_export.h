@@ -5,6 +5,7 @@
 // goes on (the snapshot keeps the blocks it shows alive until the export returns).
 #pragma once
 #include "film/film_snapshot.h"
+#include "film/tone_map.h"
 #include "film/time_response.h"
 #include "scene/scene_desc.h"
 #include "io/image_io.h"
@@ -43,11 +44,11 @@ int exportFrameCount(int bins, const ExportOptions& opt);
 // whole film when it is black). strip.png and the contact sheet (picture_export.h) show these.
 std::vector<int> energeticBins(const FilmSnapshot& film, int count, TimeAxis axis);
 
-// A PNG strip of `count` frames side by side (sRGB), for a quick look or a README: evenly spaced
-// over the part of the time axis that carries the energy (0.5% to 90% of the arrival times).
-// Exposure: 2^exposureEv times a normalisation that maps the 99.5th percentile of the strip's
-// lit pixels' luminance to 1 (so strips of different scenes are comparable without tuning). Returns the bins used.
+// A PNG strip of `count` frames side by side, for a quick look or a README: evenly spaced over the
+// part of the time axis that carries the energy (0.5% to 90% of the arrival times), mapped by
+// `tone` (tone_map.h; tpb render passes picture_export.h's autoExposedToneMap, the exposure rule of
+// every picture). Returns the bins used.
 std::vector<int> exportStripPng(const FilmSnapshot& film, const std::string& path, int count, const ExportOptions& opt,
-                                double exposureEv = 0.0);
+                                const ToneMap& tone);
 
 }  // namespace tpb

@@ -74,6 +74,13 @@ ToneMap autoExposedToneMap(const FilmSnapshot& film, const ExportOptions& opt, T
     return base;
 }
 
+float writeAutoExposedPng(const std::string& path, int width, int height, const std::vector<float>& rgb, ToneMap base) {
+    const ExposureFit fit = fitExposure(rgb);
+    if (fit.found) base.exposureEv += fit.ev;
+    writePng8(path, width, height, toneMapImage(rgb, base));
+    return base.exposureEv;
+}
+
 int exportMp4(const FilmSnapshot& film, const std::string& path, const ExportOptions& opt, const ToneMap& tone,
               double fps, const std::function<void(int, int)>& progress, const std::atomic<bool>* cancel) {
     const int total = exportFrameCount(film.bins(), opt);

@@ -14,10 +14,20 @@
 
 namespace tpb {
 
+// The one exposure rule of every picture tpb writes (README, "Pictures and their exposure"): the
+// automatic exposure fitExposure (the 99th percentile of the lit pixels' luminance maps to 1) of
+// the picture's reference image, plus the user's extra EV (`base.exposureEv`). The reference image
+// of a single picture (steady.png, preview.png) is the picture itself; of a set of frames
+// (strip.png, contact_sheet.png, transient.mp4) the film's brightest frame, so that every frame of
+// the set has one exposure (no flicker, frames comparable). A black image gets the extra EV only.
+
 // `base` with its exposure raised by the automatic exposure (fitExposure) of the film's brightest
 // frame on opt's axis and emission: the delta frame of peak energy, or the last continuous frame
-// (the running sum only grows). One exposure for every frame of a video: no flicker.
+// (the running sum only grows).
 ToneMap autoExposedToneMap(const FilmSnapshot& film, const ExportOptions& opt, ToneMap base);
+// Writes one image (3 floats per pixel) as a PNG auto-exposed by the rule above; returns the EV
+// applied (the fit plus base.exposureEv).
+float writeAutoExposedPng(const std::string& path, int width, int height, const std::vector<float>& rgb, ToneMap base);
 
 // Encodes the frames exportFrames would write (opt's bins, axis, emission) at `fps` into `path`.
 // progress(done, total) after each frame; a set `cancel` stops, kills ffmpeg and leaves no file

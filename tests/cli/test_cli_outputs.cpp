@@ -3,6 +3,8 @@
 // and refuses --mp4 before rendering when ffmpeg is missing; `tpb info --json` prints one JSON
 // object with the keys the README documents.
 #include "support/temp_dir.h"
+#include "film/tone_map.h"
+#include "io/image_io.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -18,6 +20,9 @@
 #include <vector>
 
 #include <sys/wait.h>
+
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -78,6 +83,16 @@ std::pair<int, int> pngSize(const fs::path& p) {
                (static_cast<unsigned char>(b[i + 2]) << 8) | static_cast<unsigned char>(b[i + 3]);
     };
     return {static_cast<int>(be(16)), static_cast<int>(be(20))};
+}
+
+// An 8-bit RGB PNG's pixels (empty if unreadable).
+std::vector<unsigned char> pngPixels(const fs::path& p) {
+    int w = 0, h = 0, n = 0;
+    unsigned char* data = stbi_load(p.string().c_str(), &w, &h, &n, 3);
+    if (!data) return {};
+    std::vector<unsigned char> px(data, data + static_cast<size_t>(w) * h * 3);
+    stbi_image_free(data);
+    return px;
 }
 
 class CliOutputs : public ::testing::Test {
@@ -259,4 +274,52 @@ TEST_F(CliOutputs, ConvergenceJsonRowsAreTheCsvRows) {
     }
     EXPECT_GE(n, 2u) << "both methods measured";
     EXPECT_EQ(n, rows.size());
+}
+
+// Every picture is exposed by one rule (film/picture_export.h): the automatic exposure of its
+// reference image (steady.png, preview.png: itself; strip.png, contact_sheet.png: the brightest
+// frame), recorded in summary.json. A 5 mW light used to give a black steady.png (written at EV 0)
+// beside an auto-exposed strip.png.
+TEST_F(CliOutputs, EveryPictureIsAutoExposedByOneRuleRecordedInTheSummary) {
+    std::string dim = kScene;
+    const std::string from = "\"power\": 5}";
+    dim.replace(dim.find(from), from.size(), "\"power\": 0.005}");
+    const fs::path scene = tmp_->write("dim.json", dim), out = dir_ / "out";
+    const Proc p = runTpb("render " + q(scene) + " -o " + q(out) + " -q --no-frames --strip 4 --contact-sheet 4", dir_);
+    ASSERT_EQ(p.code, 0) << p.err;
+    const json ev = json::parse(slurp(out / "summary.json"))["outputs"]["exposure_ev"];
+    for (const char* f : {"preview.png", "steady.png", "strip.png", "contact_sheet.png"}) ASSERT_TRUE(ev.contains(f)) << f;
+    // steady.png's EV is the automatic exposure of steady.exr, and its brightest pixels are near white.
+    int w = 0, h = 0;
+    std::vector<float> steady;
+    tpb::readExr((out / "steady.exr").string(), w, h, steady);
+    const tpb::ExposureFit fit = tpb::fitExposure(steady);
+    ASSERT_TRUE(fit.found);
+    EXPECT_GT(fit.ev, 8.0f) << "a dim scene: EV 0 would be black";
+    EXPECT_FLOAT_EQ(ev["steady.png"].get<float>(), fit.ev);
+    const std::vector<unsigned char> px = pngPixels(out / "steady.png");
+    ASSERT_EQ(px.size(), steady.size());
+    EXPECT_GE(*std::max_element(px.begin(), px.end()), 200) << "steady.png is not black";
+    // The strip and the contact sheet (no extra EV given) share the brightest frame's exposure.
+    EXPECT_FLOAT_EQ(ev["strip.png"].get<float>(), ev["contact_sheet.png"].get<float>());
+    EXPECT_GT(ev["strip.png"].get<float>(), 8.0f);
+    const std::vector<unsigned char> strip = pngPixels(out / "strip.png");
+    ASSERT_FALSE(strip.empty());
+    EXPECT_GE(*std::max_element(strip.begin(), strip.end()), 200) << "strip.png is not black";
+}
+
+// The progress line names what the chosen estimator stores: photon points for point3d (it said
+// "0 beams"), beams for beam2d, and surface photons where the scene has diffuse surfaces.
+TEST_F(CliOutputs, ProgressLineNamesWhatTheEstimatorStores) {
+    const Proc points = runTpb("render " + q(scene_) + " -o " + q(dir_ / "a") + " --no-frames --estimator point3d", dir_);
+    ASSERT_EQ(points.code, 0) << points.err;
+    EXPECT_EQ(points.err.find(" beams"), std::string::npos) << points.err;
+    EXPECT_NE(points.err.find(" photon points, "), std::string::npos) << points.err;
+    EXPECT_NE(points.err.find(" surface photons"), std::string::npos) << points.err;
+    EXPECT_NE(points.err.find("pass 1: r="), std::string::npos) << points.err;
+    EXPECT_EQ(points.err.find(" 0 photon points"), std::string::npos) << points.err;
+    const Proc beams = runTpb("render " + q(scene_) + " -o " + q(dir_ / "b") + " --no-frames --estimator beam2d", dir_);
+    ASSERT_EQ(beams.code, 0) << beams.err;
+    EXPECT_NE(beams.err.find(" beams, "), std::string::npos) << beams.err;
+    EXPECT_EQ(beams.err.find("photon points"), std::string::npos) << beams.err;
 }
