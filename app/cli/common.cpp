@@ -574,6 +574,24 @@ OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     return f;
 }
 
+std::string writtenLine(const RenderOutputs& r, const OutputReport& rep) {
+    const char* axis = r.opt.axis == TimeAxis::Real ? "real time" : "unwarped";
+    const char* mode = r.opt.mode == EmissionMode::Delta ? "delta" : "continuous";
+    if (!r.noFrames)
+        return "wrote " + std::to_string(rep.framesWritten) + " frames (" + axis + ", " + mode + ") to " + r.out +
+               "/frames, steady.exr, summary.json";
+    std::string files;
+    for (const std::string& f : rep.kept) files += (files.empty() ? "" : ", ") + f;
+    return "wrote no frames (--no-frames): " + files + " in " + r.out;
+}
+
+std::string percentText(double fraction) {
+    const double p = 100.0 * fraction;
+    char b[32];
+    std::snprintf(b, sizeof b, p >= 9.95 ? "%.0f" : "%.2g", p);
+    return b;
+}
+
 void reportPlannedOutputs(const PreparedRender& p, const RenderOutputs& r, double previewExrSec) {
     if (r.noFrames) return;
     const Scene& scene = *p.scene;
@@ -782,15 +800,27 @@ double checkEnergyInsideFilm(const PreparedRender& p, const TransientFilm& film,
                   t.startOpl / kC_m_per_ns, t.endOpl() / kC_m_per_ns);
     if (in > 0.0 && fraction <= kOutsideWarnFraction) return fraction;
     if (in > 0.0) {
+        // The advice depends on who chose the range: the file's keys, or the pilot ("range": "auto",
+        // which keeps 98% of the arrivals it measured, so more missing means a tail it did not see).
+        const double before = film.stats.before[a].load();
+        const char* side = before > 0.5 * out ? "before its start" : "after its end";
+        const std::string fixIt =
+            p.film.autoRange
+                ? std::string("the range is already automatic (\"range\": \"auto\" fits it to the arrivals a pilot "
+                              "pass measured) and most of the rest arrived ") + side +
+                      ": set a fixed range that covers it with film.start_m and film.bin_width_m (and bins)"
+                : std::string("most of it arrived ") + side +
+                      ": fit the range with \"film\": {\"range\": \"auto\"} or widen start_m/bin_width_m (or bins)";
         std::fprintf(stderr,
                      "warning: %s: %.1f%% of the energy that reached the camera arrived outside the film's time range, "
-                     "%s on the %s axis: the frames miss it; fit the range with \"film\": {\"range\": \"auto\"} or "
-                     "widen start_m/bin_width_m (or bins)\n",
-                     d.keyWhere(key).c_str(), 100.0 * fraction, range, axisName);
+                     "%s on the %s axis: the frames miss it; %s\n",
+                     d.keyWhere(key).c_str(), 100.0 * fraction, range, axisName, fixIt.c_str());
         return fraction;
     }
     // Every frame is black. Measure where the energy arrives, to say which range would hold it.
-    std::string fix = "use \"film\": {\"range\": \"auto\"} to fit it to the scene";
+    std::string fix = p.film.autoRange ? "the range is already automatic and its pilot saw no light: set a fixed "
+                                         "range with film.start_m and film.bin_width_m"
+                                       : "use \"film\": {\"range\": \"auto\"} to fit it to the scene";
     PilotControl pc;
     pc.abort = &interruptFlag();
     const TimeRangeFit fit = measureArrivalRange(*p.scene, p.pilotSettings, 4000, pc);
@@ -798,9 +828,9 @@ double checkEnergyInsideFilm(const PreparedRender& p, const TransientFilm& film,
         char b[400];
         std::snprintf(b, sizeof b,
                       "a pilot pass measured arrivals from %.4g to %.4g m OPL: set \"film\": {\"start_m\": %.4g, "
-                      "\"bin_width_m\": %.4g} to cover them with the same %d bins, or \"range\": \"auto\" to fit "
-                      "the range automatically",
-                      fit.startOpl, fit.endOpl, fit.startOpl, (fit.endOpl - fit.startOpl) / t.bins, t.bins);
+                      "\"bin_width_m\": %.4g} to cover them with the same %d bins%s",
+                      fit.startOpl, fit.endOpl, fit.startOpl, (fit.endOpl - fit.startOpl) / t.bins, t.bins,
+                      p.film.autoRange ? "" : ", or \"range\": \"auto\" to fit the range automatically");
         fix = b;
     }
     std::fprintf(stderr,

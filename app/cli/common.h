@@ -132,6 +132,13 @@ struct OutputReport {
     std::vector<std::pair<std::string, float>> exposureEv;
 };
 
+// The last line's account of the outputs: "wrote 12 frames (real time, delta) to out/frames,
+// steady.exr, summary.json", or without frames what was written instead ("wrote no frames
+// (--no-frames): steady.exr, steady.png, strip.png, summary.json in out").
+std::string writtenLine(const RenderOutputs& r, const OutputReport& rep);
+// A share in percent for people: "100", "12", "3.4", "0.052" (never "1e+02").
+std::string percentText(double fraction);
+
 // Before rendering: the number, size and estimated write time of the frames (from the time
 // `previewExrSec` that writing preview.exr, an image of the same size, took), and a warning when
 // they may not fit in the free space of the output folder's file system.

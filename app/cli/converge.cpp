@@ -190,14 +190,11 @@ void renderPathTraced(const PreparedRender& prepared, const PathTracedRenderRequ
     warnFilmOverflow(prepared.source, film);
     const double outside = checkEnergyInsideFilm(prepared, film, req.opt.axis);
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
-    const int frames = rep.framesWritten;
     if (!req.quiet)
-        std::printf("path tracer: %zu passes x %d spp in %.2f s; wrote %d frames (%s, %s) to %s/frames, steady.exr, "
-                    "summary.json; %lld rejected samples; %.2g%% of the energy outside the film\n",
-                    passTimes.size(), ps.samplesPerPixel, wall, frames,
-                    req.opt.axis == TimeAxis::Real ? "real time" : "unwarped",
-                    req.opt.mode == EmissionMode::Delta ? "delta" : "continuous", req.out.c_str(),
-                    static_cast<long long>(film.stats.rejectedSamples.load()), 100.0 * outside);
+        std::printf("path tracer: %zu passes x %d spp in %.2f s; %s; %lld rejected samples; %s%% of the energy "
+                    "outside the film\n",
+                    passTimes.size(), ps.samplesPerPixel, wall, writtenLine(req, rep).c_str(),
+                    static_cast<long long>(film.stats.rejectedSamples.load()), percentText(outside).c_str());
 }
 
 namespace {

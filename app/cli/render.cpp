@@ -50,6 +50,8 @@ struct RenderCmd {
     double fps = 24.0, videoEv = 0.0;
     int contactSheet = 0;
     bool fpsGiven = false, videoEvGiven = false;  // on the command line (a flag without its output is refused)
+    bool sppGiven = false;
+    std::vector<std::string> outputFlagsGiven;  // flags that shape what the render writes (refused with --preview)
 };
 
 nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const ExportOptions& opt, double wallSec) {
@@ -142,6 +144,15 @@ void checkFlagConflicts(const RenderCmd& c) {
     if (look && !c.mp4 && c.contactSheet == 0)
         throw UserError(std::string(look) + " shapes transient.mp4 and contact_sheet.png, and neither is written: add "
                         "--mp4 or --contact-sheet N, or drop " + look);
+    // --preview stops before the render: a flag for the render's outputs would be silently dropped.
+    if (c.previewOnly && !c.outputFlagsGiven.empty())
+        throw UserError(c.outputFlagsGiven.front() + " shapes what the render writes, and --preview stops after "
+                        "preview.exr/png, before any photon: drop --preview to render, or drop " +
+                        c.outputFlagsGiven.front());
+    if (c.sppGiven && c.method != "pt")
+        throw UserError("--spp sets the path tracer's camera paths per pixel per pass; --method " + c.method +
+                        " traces one camera ray per pixel per pass (its progress comes from more passes or "
+                        "--photons): add --method pt, or drop --spp");
     if (c.continuous && c.delta)
         throw UserError("--continuous and --delta contradict each other: give one of them (frames are for a delta "
                         "pulse unless --continuous or the scene's render.emission asks for continuous emission)");
@@ -336,14 +347,11 @@ void run(RenderCmd& c) {
         exitCode() = kExitUserError;
     }
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
-    const int frames = rep.framesWritten;
     if (!c.quiet) {
         const FilmStats& fs = drv.film().stats;
-        std::printf("%llu passes in %.2f s; wrote %d frames (%s, %s) to %s/frames, steady.exr, summary.json; "
-                    "%lld rejected samples; %.2g%% of the energy outside the film\n",
-                    static_cast<unsigned long long>(drv.completedPasses()), wall, frames,
-                    opt.axis == TimeAxis::Real ? "real time" : "unwarped", opt.mode == EmissionMode::Delta ? "delta" : "continuous",
-                    c.out.c_str(), static_cast<long long>(fs.rejectedSamples.load()), 100.0 * outside);
+        std::printf("%llu passes in %.2f s; %s; %lld rejected samples; %s%% of the energy outside the film\n",
+                    static_cast<unsigned long long>(drv.completedPasses()), wall, writtenLine(outputs, rep).c_str(),
+                    static_cast<long long>(fs.rejectedSamples.load()), percentText(outside).c_str());
     }
 }
 
@@ -415,6 +423,10 @@ void registerRender(CLI::App& app) {
         c->outGiven = out->count() > 0;
         c->fpsGiven = cmd->get_option("--fps")->count() > 0;
         c->videoEvGiven = cmd->get_option("--video-ev")->count() > 0;
+        c->sppGiven = cmd->get_option("--spp")->count() > 0;
+        for (const char* f : {"--npy", "--mp4", "--contact-sheet", "--strip", "--strip-ev", "--half", "--frame-step",
+                              "--checkpoint", "--checkpoint-every", "--resume"})
+            if (cmd->get_option(f)->count() > 0) c->outputFlagsGiven.emplace_back(f);
         run(*c);
     });
 }

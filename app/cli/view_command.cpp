@@ -25,15 +25,35 @@ struct ViewCmd {
     std::string resume;  // --resume DIR
 };
 
+// --passes is the total pass count, as in `tpb render --resume` (README "Checkpoints and resume");
+// --after-passes counts the passes this run renders before the screenshot (beyond a resumed
+// checkpoint's). Both given and disagreeing: refused, instead of one silently winning.
+void checkScreenshotPasses(const ViewCmd& c, uint64_t resumedPasses) {
+    if (c.view.screenshot.empty() || !c.ov.passes) return;
+    const int64_t total = c.view.afterPasses + static_cast<int64_t>(resumedPasses);
+    if (*c.ov.passes == total) return;
+    const std::string after = std::to_string(c.view.afterPasses), passes = std::to_string(*c.ov.passes);
+    std::string msg = "--passes " + passes + " and --after-passes " + after + " disagree: --passes is the total (as in "
+                      "tpb render --resume) and --after-passes the passes rendered before the screenshot";
+    if (resumedPasses > 0)
+        msg += " beyond the checkpoint's " + std::to_string(resumedPasses) + ", so the render would go to pass " +
+               std::to_string(total);
+    const int64_t fit = *c.ov.passes - static_cast<int64_t>(resumedPasses);
+    msg += "; drop --passes" + (fit >= 1 ? ", or give --after-passes " + std::to_string(fit) : std::string());
+    throw UserError(msg);
+}
+
 void run(const ViewCmd& c) {
     if (c.scene.empty() && c.resume.empty())
         throw UserError("tpb view: give a scene file (tpb view SCENE), or --resume DIR to go on refining a checkpoint");
+    if (c.resume.empty()) checkScreenshotPasses(c, 0);
     ViewOptions view = c.view;
     view.launchedAt = nowSec();  // the viewer's timeline counts from here (the scene's loading included)
     view.flags = c.ov.settings();
     if (!c.resume.empty()) {  // the checkpoint's scene and settings (cli/resume.h), refined further
         if (c.method != "beams") throw UserError("--resume: checkpoints are of the photon beams; drop --method " + c.method);
         const ResumeSource src = findCheckpoint(c.resume);
+        checkScreenshotPasses(c, src.info.passes);
         view.flags = resumeOverrides(src.info.overrides, c.ov.settings());
         PreparedRender prepared = prepareResume(src, c.scene, c.ov.settings());
         checkTimeResponseFitsFilm(view.pulse, view.sensor, prepared.time);

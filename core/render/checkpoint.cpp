@@ -1,6 +1,8 @@
 // Checkpoints (see checkpoint.h for the format and the guarantees).
 #include "render/checkpoint.h"
 
+#include "base/text.h"
+
 #include "base/error.h"
 #include "io/atomic_file.h"
 
@@ -486,6 +488,7 @@ SettingsOverrides resumeOverrides(const SettingsOverrides& cp, const SettingsOve
     };
     auto str = [](const auto& v) {
         if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::string>) return v;
+        else if constexpr (std::is_floating_point_v<std::decay_t<decltype(v)>>) return shortest(v);
         else return std::to_string(v);
     };
     same("--photons", given.photons, cp.photons, str);

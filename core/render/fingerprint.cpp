@@ -1,5 +1,7 @@
 #include "render/fingerprint.h"
 
+#include "base/text.h"
+
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -194,11 +196,14 @@ std::vector<std::string> fingerprintChanges(const Fingerprint& checkpoint, const
         // same films, bit for bit) still name it: not a difference.
         if (k == "render.accel") continue;
         const auto it = b.find(k);
-        if (it == b.end()) out.push_back(k + ": only in the checkpoint (" + v + ")");
-        else if (it->second != v) out.push_back(k + ": the checkpoint has " + v + ", this run has " + it->second);
+        // Compared as stored (%.17g: bit-exact), shown in the shortest form that reads back the same.
+        if (it == b.end()) out.push_back(k + ": only in the checkpoint (" + withShortestNumbers(v) + ")");
+        else if (it->second != v)
+            out.push_back(k + ": the checkpoint has " + withShortestNumbers(v) + ", this run has " +
+                          withShortestNumbers(it->second));
     }
     for (const auto& [k, v] : now)
-        if (!a.count(k)) out.push_back(k + ": only in this run (" + v + ")");
+        if (!a.count(k)) out.push_back(k + ": only in this run (" + withShortestNumbers(v) + ")");
     return out;
 }
 

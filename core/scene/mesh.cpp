@@ -10,6 +10,7 @@
 #include "scene/mesh.h"
 #include "scene/ply.h"
 #include "base/error.h"
+#include "base/text.h"
 #include "scene/scene_desc.h"
 
 #include <tiny_obj_loader.h>
@@ -18,6 +19,8 @@
 #include <cctype>
 #include <array>
 #include <cerrno>
+#include <charconv>
+#include <climits>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -120,6 +123,33 @@ bool isDegenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
     throw UserError(path, line, std::string(), message);
 }
 
+// tinyobj reads a face's indices as int without a range check: 2^40 wrapped to 0 and was reported
+// as "zero value". Each index of an "f" line (v, v/t, v//n, v/t/n) must be a non-zero integer
+// within int (negative ones count back from the last vertex); the message names the line.
+void checkFaceLine(const std::string& path, int line, int verticesSoFar, const char* p, const char* e) {
+    while (p < e) {
+        while (p < e && (*p == ' ' || *p == '\t' || *p == '\r' || *p == '/')) ++p;
+        const char* t = p;
+        while (p < e && *p != ' ' && *p != '\t' && *p != '\r' && *p != '/') ++p;
+        if (p == t) continue;
+        const std::string token(t, p);
+        if (token[0] == '#') return;  // a comment ends the line
+        long long index = 0;
+        const char* digits = token.data() + (token[0] == '+' ? 1 : 0);
+        const auto [end, ec] = std::from_chars(digits, token.data() + token.size(), index);
+        const std::string where = "corrupt OBJ file: face (\"f\" line " + std::to_string(line) + ")";
+        if (ec == std::errc::result_out_of_range || (ec == std::errc() && (index > INT_MAX || index < -INT_MAX)))
+            objError(path, line, where + ": index " + clipped(token) + " is beyond the largest OBJ index tpb reads (" +
+                                     std::to_string(INT_MAX) + "); the file has " + std::to_string(verticesSoFar) +
+                                     " vertices before this line");
+        if (ec != std::errc() || end != token.data() + token.size())
+            objError(path, line, where + ": index \"" + clipped(token) + "\" is not an integer");
+        if (index == 0)
+            objError(path, line, where + ": index 0; OBJ indices start at 1 (negative ones count back from the last "
+                                         "vertex)");
+    }
+}
+
 // tinyobj reads a coordinate it cannot parse ("nan", "inf", "1,5", garbage) as 0 and a missing one
 // as 0, so a broken vertex silently moves to the origin (and a triangle of such vertices was then
 // reported as "degenerate"). Check the first three coordinates of every "v" line first: numbers,
@@ -135,6 +165,10 @@ void checkVertexLines(const std::string& path, const std::string& text) {
         const char* const e = text.data() + end;
         pos = end + 1;
         while (p < e && (*p == ' ' || *p == '\t')) ++p;
+        if (e - p >= 2 && p[0] == 'f' && (p[1] == ' ' || p[1] == '\t')) {
+            checkFaceLine(path, line, vertex, p + 2, e);
+            continue;
+        }
         if (e - p < 2 || p[0] != 'v' || (p[1] != ' ' && p[1] != '\t')) continue;
         ++vertex;
         p += 2;
@@ -171,7 +205,12 @@ void checkVertexLines(const std::string& path, const std::string& text) {
 TriangleMesh loadMeshFile(const std::string& path, size_t* droppedDegenerate) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return ext == ".ply" ? loadPly(path, droppedDegenerate) : loadObj(path, droppedDegenerate);
+    if (ext == ".ply") return loadPly(path, droppedDegenerate);
+    if (ext == ".obj") return loadObj(path, droppedDegenerate);
+    // By its extension only: another format read as OBJ used to say "no triangles".
+    objError(path, 0, "unsupported mesh format " + (ext.empty() ? std::string("(no extension)") : ext) +
+                          "; supported: .obj (Wavefront OBJ), .ply (PLY, ASCII or binary); convert the mesh to one "
+                          "of them (e.g. with Blender or MeshLab) or rename a file of that format");
 }
 
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {

@@ -24,7 +24,8 @@ struct TriangleMesh {
 // beyond +-kMaxSceneCoordinateM, with its line), or a mesh without triangles. Degenerate (zero-area)
 // triangles are dropped and counted in `droppedDegenerate` if non-null.
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate = nullptr);
-// A mesh file by its extension: ".ply" (any case) through loadPly (scene/ply.h), anything else as OBJ.
+// A mesh file by its extension (any case): ".ply" through loadPly (scene/ply.h), ".obj" through
+// loadObj; any other extension is refused (UserError naming the supported ones).
 TriangleMesh loadMeshFile(const std::string& path, size_t* droppedDegenerate = nullptr);
 
 // The edges of a mesh that no other triangle walks the opposite way (vertices compared by position,

@@ -17,6 +17,7 @@
 #include "scene/mitsuba_loader.h"
 
 #include "base/error.h"
+#include "base/text.h"
 #include "render/memory_budget.h"
 #include "render/render_settings.h"
 #include "scene/light.h"
@@ -398,7 +399,7 @@ void Props::finish() {
         if (asked_.count(name)) continue;
         std::string known;
         for (const std::string& a : asked_) known += (known.empty() ? "" : ", ") + a;
-        im_.warn(e, "unknown or unsupported parameter \"" + name + "\" of " + label(owner_) + ", ignored" +
+        im_.warn(e, "unknown or unsupported parameter \"" + clipped(name) + "\" of " + label(owner_) + ", ignored" +
                         (known.empty() ? "" : " (tpb reads: " + known + ")"));
     }
     for (const Elem& o : objects_)

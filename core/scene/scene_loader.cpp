@@ -101,6 +101,7 @@
 #include "render/render_settings.h"
 
 #include "base/error.h"
+#include "base/text.h"
 #include "io/json.h"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -132,40 +133,6 @@ std::string join(const std::vector<std::string>& words) {
     std::string s;
     for (const std::string& w : words) s += (s.empty() ? "" : ", ") + w;
     return s;
-}
-
-// Edit distance counting insertions, deletions, substitutions and swaps of neighbours (optimal
-// string alignment), case-insensitive.
-size_t editDistance(std::string_view a, std::string_view b) {
-    const auto low = [](char c) { return std::tolower(static_cast<unsigned char>(c)); };
-    const size_t n = a.size(), m = b.size();
-    std::vector<size_t> d((n + 1) * (m + 1));
-    const auto at = [&](size_t i, size_t j) -> size_t& { return d[i * (m + 1) + j]; };
-    for (size_t i = 0; i <= n; ++i) at(i, 0) = i;
-    for (size_t j = 0; j <= m; ++j) at(0, j) = j;
-    for (size_t i = 1; i <= n; ++i) {
-        for (size_t j = 1; j <= m; ++j) {
-            const size_t cost = low(a[i - 1]) == low(b[j - 1]) ? 0 : 1;
-            at(i, j) = std::min({at(i - 1, j) + 1, at(i, j - 1) + 1, at(i - 1, j - 1) + cost});
-            if (i > 1 && j > 1 && low(a[i - 1]) == low(b[j - 2]) && low(a[i - 2]) == low(b[j - 1]))
-                at(i, j) = std::min(at(i, j), at(i - 2, j - 2) + 1);
-        }
-    }
-    return at(n, m);
-}
-
-// " (did you mean \"x\"?)" when a candidate is close to `word`, else "".
-std::string suggestion(std::string_view word, const std::vector<std::string>& candidates) {
-    if (word.size() > 64) return "";
-    const std::string* best = nullptr;
-    size_t bestD = SIZE_MAX;
-    for (const std::string& c : candidates) {
-        const size_t d = editDistance(word, c);
-        if (d < bestD) { bestD = d; best = &c; }
-    }
-    const size_t longest = best ? std::max(word.size(), best->size()) : 0;
-    if (!best || bestD > 2 || 2 * bestD >= longest) return "";
-    return " (did you mean \"" + *best + "\"?)";
 }
 
 bool isPlainInteger(const std::string& lit) {
@@ -363,7 +330,7 @@ public:
         }
         std::vector<std::string> plain;
         for (const auto& o : options) plain.push_back(o.first);
-        fail(key, "unknown " + what + " \"" + *s + "\"" + suggestion(*s, plain) + "; allowed: " + join(names) + hint);
+        fail(key, "unknown " + what + " \"" + clipped(*s) + "\"" + suggestion(*s, plain) + "; allowed: " + join(names) + hint);
     }
 
     // A time given as "<base>_m" or "<base>_ns", returned as OPL in meters.
@@ -384,7 +351,7 @@ public:
             if (!what_.empty()) msg += " for " + what_;
             msg += suggestion(m.key, allowed_);
             msg += allowed_.empty() ? "; this object takes no keys" : "; allowed: " + join(allowed_);
-            throw UserError(ctx_.file, m.line, pathOf(m.key), msg);
+            throw UserError(ctx_.file, m.line, pathOf(clipped(m.key)), msg);
         }
     }
 
@@ -533,7 +500,7 @@ int readReference(Bag& b, std::string_view key, const std::map<std::string, int>
         if (quoted.size() < 20) quoted.push_back("\"" + name + "\"");
     }
     if (defined.size() > quoted.size()) quoted.push_back("...");
-    b.fail(key, "undefined " + what + " \"" + v->text + "\"" + suggestion(v->text, defined) +
+    b.fail(key, "undefined " + what + " \"" + clipped(v->text) + "\"" + suggestion(v->text, defined) +
                     (defined.empty() ? "; no " + plural + " are defined" : "; defined " + plural + ": " + join(quoted)));
 }
 
@@ -993,11 +960,16 @@ std::string readSceneFile(const std::string& path, const std::string& what) {
 }
 
 SceneDesc loadScene(const std::string& path) {
-    // Mitsuba 3 XML (scene/mitsuba_loader.h) by its extension; anything else is a JSON scene.
+    // Mitsuba 3 XML (scene/mitsuba_loader.h) by its extension or its content; anything else is a
+    // JSON scene.
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     if (ext == ".xml") return loadMitsubaScene(path);
-    return loadSceneFromString(readSceneFile(path), path);
+    // A Mitsuba XML scene under another extension (scene.txt): XML by its content, '<' first.
+    const std::string text = readSceneFile(path);
+    const size_t first = text.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && text[first] == '<') return loadMitsubaScene(path);
+    return loadSceneFromString(text, path);
 }
 
 }  // namespace tpb

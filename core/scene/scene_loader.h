@@ -9,7 +9,8 @@
 namespace tpb {
 
 // Reads and validates a scene file. Relative mesh paths are resolved against the file's folder.
-// A ".xml" file is read as a Mitsuba 3 scene (scene/mitsuba_loader.h), anything else as JSON.
+// A ".xml" file, or a file whose first non-blank character is "<" (XML under another name), is read
+// as a Mitsuba 3 scene (scene/mitsuba_loader.h), anything else as JSON.
 SceneDesc loadScene(const std::string& path);
 // Same, from text (for tests and tools); `virtualPath` names it in messages and sets the folder.
 SceneDesc loadSceneFromString(const std::string& text, const std::string& virtualPath);

@@ -1324,3 +1324,169 @@ TEST_F(CliErrors, SpecialFilesAndDeepNestingAreRefusedCleanly) {
     const fs::path deepJson = write("deep.json", std::string(50000, '[') + std::string(50000, ']'));
     expectUserError(render(deepJson), deepJson.string() + ":1", "", "nesting deeper than 256");
 }
+
+// ---- Issue 33, item 14: messages that misled or said nothing --------------------------------------
+
+// 100 % of the energy outside the film was printed "1e+02%" on the last line.
+TEST_F(CliErrors, LastLinePrintsPercentagesWithoutExponents) {
+    const fs::path f = write("scene.json", insideScene("{\"bins\": 8,\n \"start_m\": 100, \"bin_width_m\": 0.5}"));
+    const Proc p = render(f);
+    EXPECT_EQ(p.code, 2) << p.err;  // an all-black film (the test above)
+    EXPECT_NE(p.out.find("; 100% of the energy outside the film"), std::string::npos) << p.out;
+    EXPECT_EQ(p.out.find("e+0"), std::string::npos) << p.out;
+}
+
+// --no-frames ended with "wrote 0 frames (real time, delta) to out/frames": say what was written.
+TEST_F(CliErrors, NoFramesLastLineSaysWhatWasWrittenInstead) {
+    const fs::path f = write("scene.json", insideScene());
+    const Proc p = render(f);
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(p.out.find("wrote 0 frames"), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find("wrote no frames (--no-frames): steady.exr, steady.png, summary.json in " + (dir_ / "out").string()),
+              std::string::npos)
+        << p.out;
+}
+
+// Flags that were silently ignored: refused (exit 2, nothing written) with the reason.
+TEST_F(CliErrors, FlagsThatWouldBeIgnoredAreRefused) {
+    const fs::path f = write("scene.json", insideScene());
+    const std::string out = (dir_ / "out").string();
+    expectRefused({
+        {{"render", f.string(), "-o", out, "--preview", "--npy", "--mp4"},
+         "error: --npy shapes what the render writes, and --preview stops after preview.exr/png, before any photon: "
+         "drop --preview to render, or drop --npy"},
+        {{"render", f.string(), "-o", out, "--preview", "--contact-sheet", "4"}, "error: --contact-sheet shapes what"},
+        {{"render", f.string(), "-o", out, "--preview", "--checkpoint"}, "error: --checkpoint shapes what"},
+        {{"render", f.string(), "-o", out, "--spp", "4"},
+         "error: --spp sets the path tracer's camera paths per pixel per pass; --method beams traces one camera ray"},
+    });
+    // Still accepted: --preview alone, --spp with the path tracer.
+    EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--preview", "-q"}, dir_).code, 0);
+    EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--method", "pt", "--spp", "2", "--no-frames", "-q"}, dir_).code, 0);
+}
+
+// `view --resume DIR --passes 80 --after-passes 72` rendered 142 passes: --passes is the total (as
+// in `tpb render --resume`), --after-passes the passes rendered before the screenshot; when they
+// disagree the command is refused before a window opens (no display is needed to see it).
+TEST_F(CliErrors, ViewRefusesPassesThatDisagreeWithAfterPasses) {
+    const fs::path f = write("scene.json", insideScene());
+    const fs::path out = dir_ / "out", shot = dir_ / "shot.png";
+    Proc p = runTpb({"view", f.string(), "--screenshot", shot.string(), "--passes", "5", "--after-passes", "3"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --passes 5 and --after-passes 3 disagree: --passes is the total", 0), 0u)
+        << p.err;
+    EXPECT_NE(p.err.find("give --after-passes 5"), std::string::npos) << p.err;
+    ASSERT_EQ(runTpb({"render", f.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q"},
+                     dir_).code, 0);
+    p = runTpb({"view", "--resume", out.string(), "--screenshot", shot.string(), "--passes", "80", "--after-passes", "72"},
+               dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("beyond the checkpoint's 2, so the render would go to pass 74; drop --passes, or give "
+                         "--after-passes 78"),
+              std::string::npos)
+        << p.err;
+    EXPECT_FALSE(fs::exists(shot));
+}
+
+// A megabyte-long unknown key was echoed whole.
+TEST_F(CliErrors, LongUnknownKeyIsClippedInTheMessage) {
+    const std::string key(1 << 20, 'k');
+    const fs::path f = write("scene.json", sceneWith(4, "  \"film\": {\"bins\": 8, \"" + key + "\": 1},"));
+    const Proc p = render(f);
+    expectUserError(p, f.string() + ":4", "", "unknown key for the film");
+    EXPECT_NE(p.err.find("film." + key.substr(0, 60) + "... (1048576 characters): unknown key"), std::string::npos)
+        << p.err.substr(0, 400);
+    EXPECT_LT(p.err.size(), 1000u);
+}
+
+// An OBJ index of 2^40 was reported as "zero value"; an .stl mesh as "no triangles".
+TEST_F(CliErrors, ObjIndexOverflowAndUnsupportedMeshFormatsAreNamed) {
+    const fs::path f = dir_ / "scene.json";
+    const auto meshScene = [&](const std::string& file) {
+        return sceneWith(8, "  \"shapes\": [{\"type\": \"mesh\", \"file\": \"" + file + "\", \"material\": \"white\"}],");
+    };
+    write("big.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 1099511627776\n");
+    write("scene.json", meshScene("big.obj"));
+    expectUserError(render(f), f.string() + ":8", "shapes[0].file",
+                    "big.obj:4: corrupt OBJ file: face (\"f\" line 4): index 1099511627776 is beyond the largest OBJ index tpb reads "
+                    "(2147483647); the file has 3 vertices before this line");
+    write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 0/1\n");
+    write("scene.json", meshScene("zero.obj"));
+    expectUserError(render(f), f.string() + ":8", "shapes[0].file", "zero.obj:4: corrupt OBJ file: face (\"f\" line 4): index 0; OBJ indices start at 1");
+    write("m.stl", "solid m\nendsolid m\n");
+    write("scene.json", meshScene("m.stl"));
+    expectUserError(render(f), f.string() + ":8", "shapes[0].file",
+                    "m.stl: unsupported mesh format .stl; supported: .obj (Wavefront OBJ), .ply (PLY, ASCII or binary)");
+}
+
+// A Mitsuba XML scene named .txt was read as JSON ("unexpected '<'"): XML is told by its content.
+TEST_F(CliErrors, XmlSceneUnderAnotherExtensionIsReadAsXml) {
+    const fs::path f = write("scene.txt", "\n  <scene version=\"3.0.0\">\n<shape type=\"cube\"/>\n"
+                                          "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n"
+                                          "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,5\" "
+                                          "target=\"0,0,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
+                                          "value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor></scene>\n");
+    const Proc p = runTpb({"info", f.string()}, dir_);
+    EXPECT_EQ(p.code, 0) << p.err;
+    EXPECT_NE(p.out.find("8x8"), std::string::npos) << p.out;
+}
+
+// The resume diffs printed 0.29999999999999999 for 0.3: the shortest form that reads back the same.
+TEST_F(CliErrors, ResumeDiffsPrintTheShortestNumbers) {
+    std::string scene = insideScene();
+    scene.replace(scene.find("\"power\": 5"), 10, "\"power\": 0.3");
+    const fs::path f = write("scene.json", scene);
+    const fs::path out = dir_ / "out";
+    ASSERT_EQ(runTpb({"render", f.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q",
+                      "--alpha", "0.7"}, dir_).code, 0);
+    scene.replace(scene.find("\"power\": 0.3"), 12, "\"power\": 0.1");
+    write("scene.json", scene);
+    Proc p = runTpb({"render", "--resume", out.string()}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("lights[0].power: the checkpoint has (0.3, 0.3, 0.3), this run has (0.1, 0.1, 0.1)"),
+              std::string::npos)
+        << p.err;
+    EXPECT_EQ(p.err.find("0.2999"), std::string::npos) << p.err;
+    scene.replace(scene.find("\"power\": 0.1"), 12, "\"power\": 0.3");
+    write("scene.json", scene);
+    p = runTpb({"render", "--resume", out.string(), "--alpha", "0.6"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("--alpha 0.6: the checkpoint's render ran with 0.7;"), std::string::npos) << p.err;
+}
+
+// No "did you mean" for flags; no --version.
+TEST_F(CliErrors, UnknownFlagsAndCommandsSuggestTheClosestAndVersionIsPrinted) {
+    const fs::path f = write("scene.json", insideScene());
+    Proc p = runTpb({"render", f.string(), "-o", (dir_ / "out").string(), "--pases", "3"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("--pases: did you mean --passes?"), std::string::npos) << p.err;
+    p = runTpb({"render", f.string(), "-o", (dir_ / "out").string(), "--estimater=point3d"}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("--estimater: did you mean --estimator?"), std::string::npos) << p.err;
+    p = runTpb({"rendr", f.string()}, dir_);
+    EXPECT_EQ(p.code, 2) << p.err;
+    EXPECT_NE(p.err.find("rendr: did you mean render?"), std::string::npos) << p.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out"));
+    p = runTpb({"--version"}, dir_);
+    EXPECT_EQ(p.code, 0) << p.err;
+    EXPECT_EQ(p.out.rfind("tpb ", 0), 0u) << p.out;
+    EXPECT_NE(p.out.find(" (commit "), std::string::npos) << p.out;
+    EXPECT_NE(p.out.find(std::string(", ") + TPB_BUILD_TYPE + " build)"), std::string::npos) << p.out;
+}
+
+// The energy-outside warning advised "range": "auto" when the range was already automatic (a
+// white closed box: long surface paths past the pilot's window).
+TEST_F(CliErrors, EnergyOutsideAnAutomaticRangeIsNotToldToUseAuto) {
+    std::string scene = insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1, \"max_depth\": 200}");
+    scene.replace(scene.find(" \"media\""), scene.find(" \"materials\"") - scene.find(" \"media\""), "");
+    scene.replace(scene.find("\"albedo\": 0.7"), 13, "\"albedo\": 0.97");
+    const fs::path f = write("scene.json", scene);
+    const Proc p = render(f);
+    ASSERT_EQ(p.code, 0) << p.err;
+    EXPECT_NE(p.err.find("warning: " + f.string() + ":3: film: "), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("the range is already automatic (\"range\": \"auto\" fits it to the arrivals a pilot pass "
+                         "measured) and most of the rest arrived after its end: set a fixed range"),
+              std::string::npos)
+        << p.err;
+    EXPECT_EQ(p.err.find("fit the range with"), std::string::npos) << p.err;
+}
