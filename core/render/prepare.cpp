@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdio>
+#include <functional>
 
 namespace tpb {
 
@@ -40,6 +42,90 @@ void applyFilmShape(SceneDesc& d, const SettingsOverrides& o) {
                         " pixels, more than " + std::to_string(INT_MAX) + "; lower --width/--height");
 }
 
+namespace {
+
+bool contains(const Bounds3& outer, const Bounds3& inner) {
+    return glm::all(glm::lessThanEqual(outer.lo, inner.lo)) && glm::all(glm::greaterThanEqual(outer.hi, inner.hi));
+}
+
+// What sets the scene's size (its bounding box's diagonal: the relative kernel radius, the
+// automatic time range) and may be far from the rest: every shape, every light, the camera.
+struct SizeItem {
+    std::string key;  // "shapes[3]", "lights[0]", "camera.position"
+    Bounds3 box;
+};
+
+std::vector<SizeItem> sizeItems(const Scene& scene) {
+    std::vector<SizeItem> items;
+    for (size_t i = 0; i < scene.shapes.size(); ++i)
+        if (scene.shapes[i].bounds.valid()) items.push_back({"shapes[" + std::to_string(i) + "]", scene.shapes[i].bounds});
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const Light& l = scene.lights[i];
+        Bounds3 b;
+        b.expand(l.position);
+        if (l.type == LightType::AreaQuad) b.expand(l.corner + l.edgeU + l.edgeV);
+        items.push_back({"lights[" + std::to_string(i) + "]", b});
+    }
+    Bounds3 cam;
+    cam.expand(scene.camera.position);
+    items.push_back({"camera.position", cam});
+    return items;
+}
+
+// Warnings about the scene's scale, once it is built: one far object that makes the bounding box
+// (and with it the relative radius and the automatic time range) more than kFarObjectRatio times
+// larger than everything else, and a laser wider than the scene. An object that encloses the rest
+// (a room, a medium container) is the scene's size, not a stray.
+constexpr double kFarObjectRatio = 10.0;
+void warnAboutScale(const Scene& scene, const SceneDesc& desc, const std::function<void(const std::string&)>& warn) {
+    const std::vector<SizeItem> items = sizeItems(scene);
+    const size_t n = items.size();
+    std::vector<Bounds3> before(n + 1), after(n + 1);  // unions of items [0, i) and [i, n)
+    for (size_t i = 0; i < n; ++i) {
+        before[i + 1] = before[i];
+        before[i + 1].expand(items[i].box.lo), before[i + 1].expand(items[i].box.hi);
+    }
+    for (size_t i = n; i-- > 0;) {
+        after[i] = after[i + 1];
+        after[i].expand(items[i].box.lo), after[i].expand(items[i].box.hi);
+    }
+    const double whole = scene.bounds.diagonal();
+    const size_t shapes = static_cast<size_t>(std::count_if(items.begin(), items.end(), [](const SizeItem& it) {
+        return it.key.rfind("shapes[", 0) == 0;
+    }));
+    for (size_t i = 0; i < n; ++i) {
+        // The rest keeps a shape: a lone wall far from a co-located laser and camera is the scene.
+        const bool isShape = items[i].key.rfind("shapes[", 0) == 0;
+        if (shapes < (isShape ? 2u : 1u)) continue;
+        Bounds3 rest = before[i];
+        if (after[i + 1].valid()) rest.expand(after[i + 1].lo), rest.expand(after[i + 1].hi);
+        const double restDiag = rest.diagonal();
+        if (!(restDiag > 0.0) || whole <= kFarObjectRatio * restDiag || contains(items[i].box, rest)) continue;
+        char b[640];
+        std::snprintf(b, sizeof b,
+                      "%s makes the scene %.0fx larger than everything else (bounding diagonal %.4g m; %.4g m "
+                      "without it): the kernel radius when relative (render.radius_relative, the default) and the "
+                      "automatic time range (\"range\": \"auto\") scale with the whole box, so they may be far too "
+                      "large for what the camera sees; move or remove it if it is a stray, or give render.radius in "
+                      "m and the film's start_m/bin_width_m",
+                      items[i].key.c_str(), whole / restDiag, whole, restDiag);
+        warn(desc.where(items[i].key) + b);
+        break;  // one far object (with two, neither alone dominates)
+    }
+    const Bounds3 gb = scene.geometry.bounds();
+    const double geomDiag = gb.valid() ? gb.diagonal() : 0.0;
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const Light& l = scene.lights[i];
+        if (l.type != LightType::Laser || !(geomDiag > 0.0) || !(2.0 * l.laserRadius > geomDiag)) continue;
+        const std::string key = "lights[" + std::to_string(i) + "].radius";
+        warn(desc.where(key) + key + ": the laser's beam (radius " + shortNumber(l.laserRadius) +
+             " m) is wider than the whole scene (diagonal " + shortNumber(geomDiag) +
+             " m): most of its power misses the scene; a laser's radius is its beam's, typically millimetres");
+    }
+}
+
+}  // namespace
+
 PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides, const PrepareOptions& options) {
     const auto warn = [&](const std::string& w) {
         if (options.warn) options.warn(w);
@@ -51,6 +137,7 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     p.sceneFingerprint = sceneFingerprint(desc);
     p.scene = Scene::build(desc);
     const double diag = p.scene->bounds.diagonal() > 0.0 ? p.scene->bounds.diagonal() : 1.0;
+    warnAboutScale(*p.scene, desc, warn);
 
     // The settings: the file's, then the flags; checked once, now that the diagonal is known.
     p.settings = RenderSettings::fromDesc(desc.render, diag);

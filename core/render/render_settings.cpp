@@ -184,6 +184,10 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
                 c.warn(f, f.key + " " + shortNumber(fileValue) + " is large (above " +
                               shortNumber(kSlowRadiusFraction) + " of the scene's diagonal): passes get much slower "
                               "as the kernel grows; typical values are 0.001 to 0.02");
+            if (fileValue < kTinyRadiusFraction)
+                c.warn(f, f.key + " " + shortNumber(fileValue) + " is tiny (below " + shortNumber(kTinyRadiusFraction) +
+                              " of the scene's diagonal): the kernel almost never meets a photon, so the image stays "
+                              "black or spiky; typical values are 0.001 to 0.02");
             return;
         }
         if (!(src.sceneDiagonal > 0.0)) return;  // absolute: checked once the scene is built
@@ -198,6 +202,14 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
                           c.name(f).c_str(), radiusM, 100.0 * fraction, diag, 100.0 * kMaxRadiusFraction,
                           kMaxRadiusFraction * diag, 0.001 * diag, 0.02 * diag);
             c.fail(f, b);
+        }
+        if (fraction < kTinyRadiusFraction) {
+            std::snprintf(b, sizeof b,
+                          "%s %g m is %.2g of the scene's diagonal (%.4g m), below %g: the kernel almost never meets "
+                          "a photon, so the image stays black or spiky; typical radii are 0.1%% to 2%% of the "
+                          "diagonal (%.3g to %.3g m)",
+                          c.name(f).c_str(), radiusM, fraction, diag, kTinyRadiusFraction, 0.001 * diag, 0.02 * diag);
+            c.warn(f, b);
         }
         if (fraction > kSlowRadiusFraction) {
             std::snprintf(b, sizeof b,
@@ -224,6 +236,13 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
             "must be an integer from 0 (no warm-up) to " + std::to_string(kMaxWarmupPasses) +
                 " (warm-up passes with fewer photons)",
             std::to_string(warmupPasses));
+    // A warm-up as long as the render: pass 1 traces 1/2^W of the photons, and no pass a full load.
+    const Field warm = c.field("warmup", "--warmup", ov.warmup.has_value());
+    if (passes > 0 && warmupPasses > 0 && warmupPasses >= passes && c.given(warm))
+        c.warn(warm, c.name(warm) + " " + std::to_string(warmupPasses) + " is as long as the render (" +
+                         std::to_string(passes) + " passes): every pass is a warm-up pass with fewer photons (pass 1 "
+                         "traces 1/2^" + std::to_string(warmupPasses) + " of photons_per_pass); use fewer warm-up "
+                         "passes than passes, or 0");
     c.check(samplesPerPixel >= 1, c.field("samples_per_pixel", "--spp", ov.samplesPerPixel.has_value()),
             "must be >= 1", std::to_string(samplesPerPixel));
     // ---- the estimators and the time kernel (photon beams only) ----

@@ -254,7 +254,13 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d) {
         if (l.type == LightType::AreaQuad) s->bounds.expand(l.corner + l.edgeU + l.edgeV);
     }
     s->bounds.expand(s->camera.position);
-    s->rayEps = 1e-5 * std::max(1.0, s->geometry.bounds().valid() ? s->geometry.bounds().diagonal() : 1.0);
+    // Ray offsets scale with the geometry, so that a millimetre scene keeps its light: 1e-5 of its
+    // size, the larger of its diagonal and its farthest coordinate (float triangles resolve
+    // coordinates relative to the origin). A floor of 1 m made the offset 1% of a 1 mm scene.
+    const Bounds3 gb = s->geometry.bounds();
+    const Vec3 farthest = gb.valid() ? glm::max(glm::abs(gb.lo), glm::abs(gb.hi)) : Vec3(0.0);
+    const double size = gb.valid() ? std::max({gb.diagonal(), farthest.x, farthest.y, farthest.z}) : 1.0;
+    s->rayEps = 1e-5 * (size > 0.0 ? size : 1.0);
 
     // Where the camera and the lights sit (inside glass or a medium container, or outside).
     checkNesting(*s, d, probes);

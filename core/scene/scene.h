@@ -92,6 +92,7 @@ public:
     Bounds3 bounds;        // of geometry, lights and camera
     // Offset along the normal for rays leaving a surface: float triangles need ~1e-5 of the scene
     // size to never re-hit the surface they start on (measured in tests/scene/test_geometry.cpp).
+    // The size is the larger of the geometry's diagonal and its farthest coordinate (scene.cpp).
     double rayEps = 1e-5;
     Stages stages;
 

@@ -21,9 +21,11 @@ inline constexpr double kMaxSceneCoordinateM = 1e9;
 // (every camera ray gathers the beams within it: at a radius of the order of the diagonal every ray
 // meets every beam, rays x beams, and the automatic-range pilot alone took minutes); typical radii
 // are 0.1% - 2% of the diagonal. Larger than kMaxRadiusFraction is refused, larger than
-// kSlowRadiusFraction warned about (render.radius(_relative), surface_radius(_relative), --radius).
+// kSlowRadiusFraction warned about (render.radius(_relative), surface_radius(_relative), --radius),
+// and smaller than kTinyRadiusFraction warned about too: such a kernel almost never meets a photon.
 inline constexpr double kMaxRadiusFraction = 0.25;
 inline constexpr double kSlowRadiusFraction = 0.05;
+inline constexpr double kTinyRadiusFraction = 1e-6;
 
 struct SourceLoc {
     std::string file;

@@ -1474,6 +1474,92 @@ TEST_F(CliErrors, UnknownFlagsAndCommandsSuggestTheClosestAndVersionIsPrinted) {
     EXPECT_NE(p.out.find(std::string(", ") + TPB_BUILD_TYPE + " build)"), std::string::npos) << p.out;
 }
 
+namespace {
+
+// insideScene() scaled by `s`: lengths x s, the fog's coefficients / s and the power x s^2 keep
+// every pixel's radiance (optical depths and irradiance are scale-free).
+std::string scaledInsideScene(double s) {
+    const auto n = [](double v) {
+        char b[40];
+        std::snprintf(b, sizeof b, "%.17g", v);
+        return std::string(b);
+    };
+    return "{\"version\": 1,\n"
+           " \"camera\": {\"position\": [0, " + n(0.5 * s) + ", " + n(0.9 * s) + "], \"look_at\": [0, " + n(0.5 * s) +
+           ", 0], \"fov\": 60, \"resolution\": [16, 16]},\n"
+           " \"film\": {\"bins\": 8},\n"
+           " \"media\": {\"fog\": {\"sigma_s\": " + n(0.5 / s) + ", \"sigma_a\": " + n(0.05 / s) + "}}, \"global_medium\": \"fog\",\n"
+           " \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},\n"
+           " \"shapes\": [{\"type\": \"box\", \"min\": [" + n(-s) + ", 0, " + n(-s) + "], \"max\": [" + n(s) + ", " + n(s) +
+           ", " + n(s) + "], \"material\": \"white\", \"flip_normals\": true}],\n"
+           " \"lights\": [{\"type\": \"point\", \"position\": [0, " + n(0.8 * s) + ", 0], \"power\": " + n(5 * s * s) + "}],\n"
+           " \"render\": {\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}}\n";
+}
+
+double steadyLuminanceSum(const fs::path& exr) {
+    int w = 0, h = 0;
+    std::vector<float> rgb;
+    tpb::readExr(exr.string(), w, h, rgb);
+    double sum = 0.0;
+    for (size_t i = 0; i + 2 < rgb.size(); i += 3) sum += 0.2126 * rgb[i] + 0.7152 * rgb[i + 1] + 0.0722 * rgb[i + 2];
+    return sum;
+}
+
+}  // namespace
+
+// Scenes below ~1 mm lost energy silently: the ray offsets had a floor of 1e-5 m (a tenth of a
+// 0.1 mm box). They scale with the scene now: the same box at 1 m and at 0.1 mm gives the same
+// steady image (same seed; up to float rounding of the geometry).
+TEST_F(CliErrors, MillimetreSceneKeepsItsEnergy) {
+    std::vector<double> sums;
+    for (double s : {1.0, 1e-4}) {
+        const fs::path f = write("scene.json", scaledInsideScene(s));
+        const Proc p = render(f, {"-q"});
+        ASSERT_EQ(p.code, 0) << p.err;
+        sums.push_back(steadyLuminanceSum(dir_ / "out" / "steady.exr"));
+    }
+    ASSERT_GT(sums[0], 0.0);
+    EXPECT_NEAR(sums[1] / sums[0], 1.0, 0.01) << "1 m: " << sums[0] << ", 0.1 mm: " << sums[1];
+}
+
+// One far object inflated the relative radius and the automatic time range without a word;
+// --radius 1e-300, --warmup 20 --passes 1 and a laser wider than the scene ran without a warning.
+TEST_F(CliErrors, ScaleMistakesAreWarnedAbout) {
+    const fs::path plain = write("plain.json", insideScene());
+    const Proc quiet = render(plain, {"-q"});
+    ASSERT_EQ(quiet.code, 0) << quiet.err;
+    EXPECT_EQ(quiet.err.find("warning"), std::string::npos) << quiet.err;
+
+    // (A fixed film: no pilot over the 1 km range; `info` prints the warnings of a render.)
+    std::string far = insideScene("{\"bins\": 8, \"start_m\": 0, \"bin_width_m\": 0.5}");
+    far.replace(far.find("\"flip_normals\": true}"), 21,
+                "\"flip_normals\": true},\n {\"type\": \"sphere\", \"center\": [1000, 0, 0], \"radius\": 1, "
+                "\"material\": \"white\"}");
+    const fs::path farScene = write("far.json", far);
+    Proc p = runTpb({"info", farScene.string()}, dir_);
+    EXPECT_EQ(p.code, 0) << p.err;
+    EXPECT_NE(p.err.find("warning: " + farScene.string() + ":7: shapes[1] makes the scene 334x larger than everything "
+                         "else (bounding diagonal 1002 m; 3 m without it)"),
+              std::string::npos)
+        << p.err;
+
+    p = render(plain, {"-q", "--radius", "1e-300"});
+    EXPECT_NE(p.err.find("warning: --radius 1e-300 m is 3.3e-301 of the scene's diagonal (3 m)"), std::string::npos) << p.err;
+    p = render(plain, {"-q", "--warmup", "20", "--passes", "1"});
+    EXPECT_NE(p.err.find("warning: --warmup 20 is as long as the render (1 passes)"), std::string::npos) << p.err;
+
+    std::string laser = insideScene();
+    laser.replace(laser.find("\"power\": 5}"), 11,
+                  "\"power\": 5}, {\"type\": \"laser\", \"position\": [0, 0.5, 0], \"direction\": [1, 0, 0], "
+                  "\"radius\": 10, \"power\": 1}");
+    const fs::path laserScene = write("laser.json", laser);
+    p = render(laserScene, {"-q"});
+    EXPECT_NE(p.err.find("lights[1].radius: the laser's beam (radius 10 m) is wider than the whole scene (diagonal "
+                         "3 m)"),
+              std::string::npos)
+        << p.err;
+}
+
 // The energy-outside warning advised "range": "auto" when the range was already automatic (a
 // white closed box: long surface paths past the pilot's window).
 TEST_F(CliErrors, EnergyOutsideAnAutomaticRangeIsNotToldToUseAuto) {
