@@ -424,9 +424,11 @@ void registerRender(CLI::App& app) {
         c->fpsGiven = cmd->get_option("--fps")->count() > 0;
         c->videoEvGiven = cmd->get_option("--video-ev")->count() > 0;
         c->sppGiven = cmd->get_option("--spp")->count() > 0;
-        for (const char* f : {"--npy", "--mp4", "--contact-sheet", "--strip", "--strip-ev", "--half", "--frame-step",
-                              "--checkpoint", "--checkpoint-every", "--resume"})
-            if (cmd->get_option(f)->count() > 0) c->outputFlagsGiven.emplace_back(f);
+        // (An output asked for: "--strip 0" and "--contact-sheet 0" ask for none.)
+        for (const char* f : {"--npy", "--mp4", "--contact-sheet", "--strip", "--checkpoint", "--checkpoint-every"})
+            if (cmd->get_option(f)->count() > 0 && !(std::string(f) == "--strip" && c->strip == 0) &&
+                !(std::string(f) == "--contact-sheet" && c->contactSheet == 0))
+                c->outputFlagsGiven.emplace_back(f);
         run(*c);
     });
 }

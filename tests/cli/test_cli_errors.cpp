@@ -1360,8 +1360,8 @@ TEST_F(CliErrors, FlagsThatWouldBeIgnoredAreRefused) {
         {{"render", f.string(), "-o", out, "--spp", "4"},
          "error: --spp sets the path tracer's camera paths per pixel per pass; --method beams traces one camera ray"},
     });
-    // Still accepted: --preview alone, --spp with the path tracer.
-    EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--preview", "-q"}, dir_).code, 0);
+    // Still accepted: --preview alone or with "no strip", --spp with the path tracer.
+    EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--preview", "--strip", "0", "-q"}, dir_).code, 0);
     EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--method", "pt", "--spp", "2", "--no-frames", "-q"}, dir_).code, 0);
 }
 
