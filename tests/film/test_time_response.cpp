@@ -338,7 +338,7 @@ TEST(TimeResponse, KernelIsComputedOncePerResponseAndBinWidth) {
     const uint64_t n0 = binKernelComputations();
     const std::vector<float> first = frameImage(*snap, 9, TimeAxis::Real, EmissionMode::Delta, opt.response);
     EXPECT_EQ(exportFrames(*snap, tmp.path().string() + "/frames", opt), time.bins);
-    exportStripPng(*snap, tmp.path().string() + "/strip.png", 8, opt);
+    exportStripPng(*snap, tmp.path().string() + "/strip.png", 8, opt, ToneMap{});
     pixelProfile(*snap, 3, 4, TimeAxis::Real, EmissionMode::Delta, opt.response);
     streakImage(*snap, 5, TimeAxis::Real, EmissionMode::Continuous, opt.response);
     volume(*snap, TimeAxis::Real, EmissionMode::Delta, opt.response);
