@@ -27,11 +27,12 @@ struct ViewCmd {
 
 // --passes is the total pass count, as in `tpb render --resume` (README "Checkpoints and resume");
 // --after-passes counts the passes this run renders before the screenshot (beyond a resumed
-// checkpoint's). Both given and disagreeing: refused, instead of one silently winning.
+// checkpoint's). A screenshot after more passes than the total would never come: refused, instead
+// of one flag silently winning.
 void checkScreenshotPasses(const ViewCmd& c, uint64_t resumedPasses) {
     if (c.view.screenshot.empty() || !c.ov.passes) return;
     const int64_t total = c.view.afterPasses + static_cast<int64_t>(resumedPasses);
-    if (*c.ov.passes == total) return;
+    if (total <= *c.ov.passes) return;
     const std::string after = std::to_string(c.view.afterPasses), passes = std::to_string(*c.ov.passes);
     std::string msg = "--passes " + passes + " and --after-passes " + after + " disagree: --passes is the total (as in "
                       "tpb render --resume) and --after-passes the passes rendered before the screenshot";

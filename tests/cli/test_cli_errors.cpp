@@ -1371,17 +1371,17 @@ TEST_F(CliErrors, FlagsThatWouldBeIgnoredAreRefused) {
 TEST_F(CliErrors, ViewRefusesPassesThatDisagreeWithAfterPasses) {
     const fs::path f = write("scene.json", insideScene());
     const fs::path out = dir_ / "out", shot = dir_ / "shot.png";
-    Proc p = runTpb({"view", f.string(), "--screenshot", shot.string(), "--passes", "5", "--after-passes", "3"}, dir_);
+    Proc p = runTpb({"view", f.string(), "--screenshot", shot.string(), "--passes", "3", "--after-passes", "5"}, dir_);
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --passes 5 and --after-passes 3 disagree: --passes is the total", 0), 0u)
+    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --passes 3 and --after-passes 5 disagree: --passes is the total", 0), 0u)
         << p.err;
-    EXPECT_NE(p.err.find("give --after-passes 5"), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("give --after-passes 3"), std::string::npos) << p.err;
     ASSERT_EQ(runTpb({"render", f.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q"},
                      dir_).code, 0);
-    p = runTpb({"view", "--resume", out.string(), "--screenshot", shot.string(), "--passes", "80", "--after-passes", "72"},
+    p = runTpb({"view", "--resume", out.string(), "--screenshot", shot.string(), "--passes", "80", "--after-passes", "79"},
                dir_);
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_NE(p.err.find("beyond the checkpoint's 2, so the render would go to pass 74; drop --passes, or give "
+    EXPECT_NE(p.err.find("beyond the checkpoint's 2, so the render would go to pass 81; drop --passes, or give "
                          "--after-passes 78"),
               std::string::npos)
         << p.err;
