@@ -86,8 +86,7 @@ int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path,
         const Color L = path.beta * m.sigma_s * rho * b.power * T * (kernel / ca->sinTheta);
         // (1D-5): one instant on each axis.
         const double tBeam = b.opl0 + region.ior * ca->sb;
-        sink.instant(L, path.oplCam + tBeam + region.ior * ca->sr, tBeam,
-                     causalFloor(path.oplCam, b.fromOpl, region.ior, b.from, ray.o, tBeam));  // via the vertex before
+        sink.instant(L, path.oplCam + tBeam + region.ior * ca->sr, tBeam);
         ++estimates;
     }
     return estimates;

@@ -34,10 +34,7 @@ int64_t SurfacePpmEstimator::gather(const SurfaceQuery& q, const PathState& path
         if (!scene.surfacePointsSeeEachOther(anchor, q.ng, photonAnchor(scene, ph), ph.normal)) return;
         const Color L = path.beta * fr * ph.power * invArea;
         ++estimates;
-        // The photon's time is taken as the gather point's (up to eta r off, either way: the
-        // kernel's blur); the time kernel's box is cut at that instant on both axes, so it adds
-        // nothing earlier (docs/estimators.md, "Causality").
-        sink.instant(L, path.oplCam + ph.opl, ph.opl, ArrivalFloor{path.oplCam + ph.opl, ph.opl});
+        sink.instant(L, path.oplCam + ph.opl, ph.opl);
     });
     return estimates;
 }

@@ -120,14 +120,10 @@ private:
 // the same arguments, the same instant rule (an interval shorter than 1e-9 bin is an instant at its
 // middle), energy before/after the film returned. An inactive kernel calls splatTime itself, so
 // the films are bit-identical to the kernel-free code.
-// With a floor (time_splat.h, ArrivalFloor) the smoothed profile's part earlier than `floor` is
-// binned at the floor: its CDF becomes H_f(t) = 0 for t <= floor, H(t) after (the box is applied
-// first, then the floor: the box alone would move light up to tau earlier than any real path).
 template <class Sink>
 inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, const Color& kappa, double s0,
-                                     double s1, double a, double b, const TimeKernel& kernel, Sink&& sink,
-                                     double floor = -kInf) {
-    if (!kernel.active()) return splatTimeFloored(tb, energy, SegmentProfile(kappa, s0, s1), a, b, floor, sink);
+                                     double s1, double a, double b, const TimeKernel& kernel, Sink&& sink) {
+    if (!kernel.active()) return splatTime(tb, energy, kappa, s0, s1, a, b, sink);
     const double tau = kernel.halfWidth;
     const double tA0 = a + b * s0, tB0 = a + b * s1;
     double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
@@ -137,14 +133,10 @@ inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, co
     const double mirrorSum = tA + tB;  // t -> tA + tB - t swaps tA and tB
 
     OutsideFilm out;
-    // A floor above the support's start moves the support's start to the floor (and its end, if
-    // the floor lies beyond it: then all of it is an instant at the floor).
-    const bool floored = floor > tA - tau;
-    const double lowest = floored ? floor : tA - tau, highest = std::max(tB + tau, lowest);
-    const int k0 = std::max(tb.binOf(lowest), 0);
-    const int k1 = std::min(tb.binOf(highest), tb.bins - 1);
+    const int k0 = std::max(tb.binOf(tA - tau), 0);
+    const int k1 = std::min(tb.binOf(tB + tau), tb.bins - 1);
     if (k1 < k0) {  // the smoothed support lies wholly before or after the film
-        if (tb.binOf(highest) < 0) out.before = energy;
+        if (tb.binOf(tB + tau) < 0) out.before = energy;
         else out.after = energy;
         return out;
     }
@@ -174,29 +166,6 @@ inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, co
     const Channel cy = grey ? cx : channel(kappa.y);
     const Channel cz = grey ? cx : channel(kappa.z);
 
-    if (floored) {
-        // P(t < e_j) after the floor, per channel: 0 up to the floor, the smoothed CDF after it.
-        const auto below = [&](const Channel& c, int j) {
-            const double e = tb.startOpl + j * tb.binWidth;
-            if ((j == k0 && k0 > 0) || !(e > floor)) return 0.0;
-            if (j == k1 + 1 && k1 < tb.bins - 1) return 1.0;
-            return std::clamp(c.below(c.at(tb, j, k0, k1, mirrorSum)), 0.0, 1.0);
-        };
-        const auto belowAll = [&](int j) {
-            const double x = below(cx, j);
-            return grey ? Color(x) : Color(x, below(cy, j), below(cz, j));
-        };
-        Color lo = belowAll(k0);
-        if (k0 == 0) out.before = energy * lo;
-        for (int k = k0; k <= k1; ++k) {
-            const Color hi = belowAll(k + 1);
-            const Color f(std::max(0.0, hi.x - lo.x), std::max(0.0, hi.y - lo.y), std::max(0.0, hi.z - lo.z));
-            if (!isBlack(f)) sink(k, energy * f);
-            lo = hi;
-        }
-        if (k1 == tb.bins - 1) out.after = energy * (Color(1.0) - lo);
-        return out;
-    }
     Color lo(cx.at(tb, k0, k0, k1, mirrorSum));
     if (!grey) lo = Color(lo.x, cy.at(tb, k0, k0, k1, mirrorSum), cz.at(tb, k0, k0, k1, mirrorSum));
     if (k0 == 0) out.before = energy * Color(cx.below(lo.x), cy.below(lo.y), cz.below(lo.z));

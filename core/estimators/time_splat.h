@@ -260,54 +260,6 @@ TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, co
     return out;
 }
 
-// The earliest time, per axis (OPL, m), at which a real path through an estimate's photon can
-// arrive (docs/estimators.md, "Causality"): no part of the estimate's time profile is binned
-// earlier; the part that would be is binned at the floor instead. -inf: no floor (the default).
-struct ArrivalFloor {
-    double real = -kInf;
-    double unwarped = -kInf;
-    bool active() const { return real > -kInf || unwarped > -kInf; }
-};
-
-// splatTime with the profile's part earlier than `floor` moved to `floor` (an instant there): the
-// minimal change of the profile that keeps it causal. When nothing is earlier than the floor it is
-// splatTime itself (the same bins, bit for bit).
-template <class Sink>
-TPB_HOT_INLINE OutsideFilm splatTimeFloored(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a,
-                                            double b, double floor, Sink&& sink) {
-    const double tA0 = a + b * p.s0, tB0 = a + b * p.s1;
-    const double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
-    // (A floor within rounding of the profile's start, as the unwarped floor of a beam at its
-    // overlap's first point, changes nothing.)
-    if (!(floor > tA + 1e-12 * (1.0 + std::abs(tA)))) return splatTime(tb, energy, p, a, b, sink);
-    const auto instantAt = [&](double t, const Color& e) {
-        OutsideFilm out;
-        const int k = tb.binOf(t);
-        if (k < 0) out.before = e;
-        else if (k >= tb.bins) out.after = e;
-        else if (!isBlack(e)) sink(k, e);
-        return out;
-    };
-    const double len = p.s1 - p.s0;
-    const bool collapsed = !(len > 0.0) || (tB - tA) <= 1e-9 * tb.binWidth;  // splatTime's instant rule
-    if (collapsed) return instantAt(std::max(0.5 * (tA + tB), floor), energy);
-    if (!(floor < tB)) return instantAt(floor, energy);
-    // t(s) = floor at s_c inside the segment (b != 0 here): the early part is [s0, s_c] when time
-    // grows along s, [s_c, s1] when it falls. Its share per channel, from the profile's mass.
-    const double sc = std::clamp((floor - a) / b, p.s0, p.s1);
-    const auto earlyShare = [&](const ExpProfile& e) {
-        const double below = e.reflect ? 1.0 - splat_detail::massTo(e, p.s1 - sc) * e.invTotal()
-                                       : splat_detail::massTo(e, sc - p.s0) * e.invTotal();
-        return std::clamp(b > 0.0 ? below : 1.0 - below, 0.0, 1.0);
-    };
-    const double fx = earlyShare(p.x);
-    const Color early = p.grey ? Color(fx) : Color(fx, earlyShare(p.y), earlyShare(p.z));
-    const OutsideFilm outEarly = instantAt(floor, energy * early);
-    const SegmentProfile late(p.kappa, b > 0.0 ? sc : p.s0, b > 0.0 ? p.s1 : sc);
-    const OutsideFilm outLate = splatTime(tb, energy * (Color(1.0) - early), late, a, b, sink);
-    return {outEarly.before + outLate.before, outEarly.after + outLate.after};
-}
-
 template <class Sink>
 inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Color& kappa, double s0, double s1,
                              double a, double b, Sink&& sink) {

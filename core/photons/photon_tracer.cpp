@@ -68,14 +68,7 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
     NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
     const size_t beams0 = out.beams.size(), photons0 = out.photons.size(), points0 = out.points.size();
 
-    // The start of the previous segment (the emission point at first): a beam's `from`.
-    Vec3 prevStart = ray.o;
-    double prevStartOpl = opl;
     for (int depth = 0; depth < s.maxDepth; ++depth) {
-        const Vec3 from = prevStart;
-        const double fromOpl = prevStartOpl;
-        prevStart = ray.o;
-        prevStartOpl = opl;
         if ((depth & 4095) == 4095) {  // a long photon: the memory guard and the abort flag
             const uint64_t mine =
                 mapBytes(out.beams.size() - beams0, out.photons.size() - photons0, out.points.size() - points0);
@@ -101,8 +94,7 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                     out.cutFlux += power * m.transmittance(len);  // what flows on past the beam's end
                 }
                 if (len > 0.0 && std::isfinite(len))
-                    out.beams.push_back(
-                        {ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth), from, fromOpl});
+                    out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
             }
             if (s.storePoints && ff.scattered) {
                 // The point at the end of this segment (header): Phi T(d) / (sigma_bar Tbar(d)) per
@@ -111,7 +103,7 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                 const Color w(std::exp((sigmaBar - m.sigma_t.x) * d), std::exp((sigmaBar - m.sigma_t.y) * d),
                               std::exp((sigmaBar - m.sigma_t.z) * d));
                 out.points.push_back({ray.at(d), ray.d, power * w / sigmaBar, opl + ff.opl, regions.top(),
-                                      static_cast<uint32_t>(depth), d});
+                                      static_cast<uint32_t>(depth)});
             }
             if (!std::isfinite(ff.distance)) break;
             // Weight: T(d) sigma_s / (sigma_bar T_bar(d)) at a scattering event, T / T_bar at a surface.

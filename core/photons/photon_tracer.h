@@ -45,11 +45,6 @@ struct Beam {
     double opl0;     // OPL at the origin (m), emission time included
     int region;      // region whose medium the beam lives in
     uint32_t depth;  // number of scattering/reflection events before this segment
-    // The photon's vertex before the origin (the origin itself for a beam leaving a light) and its
-    // OPL: the causal floor's start (estimators/estimator.h, causalFloor). -inf: unknown (a beam
-    // built by hand), no floor on the real axis.
-    Vec3 from{0.0};
-    double fromOpl = -kInf;
 };
 
 // A photon at a scattering event inside a scattering medium (see the header: weight and depth).
@@ -60,7 +55,6 @@ struct VolumePhoton {
     double opl;      // OPL at the scattering point (m), emission time included
     int region;      // region whose medium it scatters in
     uint32_t depth;  // that of the segment (beam) it ends: scattering/reflection events before it
-    double length = 0.0;  // m, from the segment's start (the event before, OPL opl - ior length) to here
 };
 
 struct SurfacePhoton {
