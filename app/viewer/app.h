@@ -212,6 +212,16 @@ private:
 
     std::shared_ptr<Driver> driver_;           // null until the first one is prepared (waitForFilm)
     std::future<PreparedDriver> prepareJob_;  // the first driver, made while the window shows
+    // The steady-state preview (issue 33 item 11): the same passes into a one-bin film, run while
+    // the first driver's film is allocated (seconds on the default scene), so the scene shows
+    // within a second of opening. Its steady image is the film's after as many passes (the steady
+    // sums do not depend on the bins: RenderDriver.SteadyImageDoesNotDependOnTheBins), shown until
+    // the film has caught up; then dropped. Null when not running or done.
+    std::shared_ptr<Driver> preview_;
+    uint64_t previewFetched_ = 0;  // the preview passes image_ shows while preparing
+    void updatePreparingImage();
+    std::shared_ptr<const FilmSnapshot> shownSnapshot(bool steady);  // the preview's or the film's
+    uint64_t shownPasses(bool steady) const;
     uint64_t generation_ = 0;
     RenderSettings edit_;  // the settings panel's copy
     std::string status_;

@@ -52,7 +52,34 @@ std::future<PreparedDriver> prepareDriver(const Scene& scene, const RenderSettin
     });
 }
 
+void Viewer::updatePreparingImage() {
+    // While the film is allocated: the preview's steady image, fetched after each of its passes.
+    if (!preview_ || preview_->completedPasses() == previewFetched_) return;
+    std::shared_ptr<const FilmSnapshot> snap = preview_->snapshot();
+    previewFetched_ = snap->minPasses();
+    frameRgb_ = steadyImage(*snap);
+    snap.reset();
+    image_.upload(scene_.camera.width, scene_.camera.height, frameRgb_.data());
+    const ExposureFit fit = fitExposure(frameRgb_);
+    if (fit.found && st_.autoSteady) st_.evSteady = fit.ev;  // refitted to the film's picture later
+    DisplayParams p = st_.display;
+    p.exposureEv = st_.evSteady;
+    program_.apply(image_, p);
+    imageDirty_ = true;  // the film's first fetch applies the display again
+}
+
+std::shared_ptr<const FilmSnapshot> Viewer::shownSnapshot(bool steady) {
+    if (preview_ && driver_->completedPasses() >= preview_->completedPasses()) preview_.reset();  // caught up
+    return steady && preview_ ? preview_->snapshot() : driver_->snapshot();
+}
+
+uint64_t Viewer::shownPasses(bool steady) const {
+    const uint64_t film = driver_->completedPasses();
+    return steady && preview_ ? std::max(film, preview_->completedPasses()) : film;
+}
+
 void Viewer::restart(const RenderSettings& s, const std::string& why) {
+    preview_.reset();  // of the old settings
     if (checkpointStage_ == CheckpointStage::Writing) {  // finish it (it holds the old driver)
         checkpointJob_.wait();
         pollCheckpoint();
@@ -171,8 +198,8 @@ float Viewer::binCentreOpl(int bin) const {
 FetchKey Viewer::frameKey() const {
     FetchKey k;
     k.generation = generation_;
-    k.passes = driver_->completedPasses();
     k.steady = st_.showSteady;
+    k.passes = shownPasses(k.steady);
     if (!k.steady) {
         k.bin = st_.bin;
         k.axis = st_.axis;
@@ -214,7 +241,7 @@ void Viewer::updateFrame() {
     const bool rendering = driver_->running() && !driver_->paused();
     const double gap = std::max(frameComplete_ ? 0.25 : 1.0 / 30.0, 10.0 * fetchSec_);
     if (changed || ((!frameComplete_ || rendering) && now - lastFetch_ >= gap)) {
-        std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+        std::shared_ptr<const FilmSnapshot> snap = shownSnapshot(key.steady);
         frameRgb_ = key.steady ? steadyImage(*snap) : frameImage(*snap, key.bin, key.axis, key.mode, key.response);
         frameComplete_ = snap->minPasses() == snap->maxPasses();
         const int width = snap->width(), height = snap->height();

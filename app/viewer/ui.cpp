@@ -197,14 +197,26 @@ void Viewer::drawPreparing() {
     ImGui::SetNextWindowSize(ds);
     if (ImGui::Begin("Preparing", nullptr, kPanel | ImGuiWindowFlags_NoTitleBar)) {
         const int w = scene_.camera.width, h = scene_.camera.height;
-        ImGui::SetCursorPos(ImVec2(std::floor(ds.x * 0.3f), std::floor(ds.y * 0.4f)));
+        const bool picture = previewFetched_ > 0;
+        if (!picture) ImGui::SetCursorPos(ImVec2(std::floor(ds.x * 0.3f), std::floor(ds.y * 0.4f)));
         ImGui::BeginGroup();
         ImGui::Text("%s", scenePath_.c_str());
+        if (picture)
+            ImGui::Text("Steady state (all time), %llu passes: a preview while the time-resolved film is prepared",
+                        static_cast<unsigned long long>(previewFetched_));
         ImGui::Text("preparing the film: %d x %d px, %d bins (%s) ...", w, h, time_.bins,
                     humanBytes(filmBytes(w, h, time_.bins)).c_str());
-        ImGui::TextDisabled("the first pass starts as soon as it is allocated (%.1f s)",
+        ImGui::TextDisabled("the time frames, the streak and the controls come as soon as it is allocated (%.1f s)",
                             nowSec() - opt_.launchedAt);
         ImGui::EndGroup();
+        if (picture) {  // the preview, fitted to the rest of the window
+            const ImVec2 c0 = ImGui::GetCursorScreenPos();
+            const ImVec2 avail = ImGui::GetContentRegionAvail();
+            const ImagePlacement pl = placeImage(ImageViewport{}, avail.x, avail.y, w, h);
+            const ImVec2 p0(c0.x + pl.x, c0.y + pl.y);
+            ImGui::GetWindowDrawList()->AddImage(texId(image_.texture()), p0,
+                                                 ImVec2(p0.x + w * pl.zoom, p0.y + h * pl.zoom));
+        }
     }
     ImGui::End();
 }
@@ -826,7 +838,9 @@ void Viewer::drawImagePanel() {
                            ImGui::GetStyle().ItemSpacing.x;
     ImGui::PushTextWrapPos(ImGui::GetContentRegionMax().x - buttonsW - ImGui::GetStyle().ItemSpacing.x);
     if (st_.showSteady) {
-        ImGui::TextWrapped("Steady state (all time), %llu passes%s", static_cast<unsigned long long>(frameKey_.passes),
+        const bool fromPreview = preview_ && frameKey_.passes > driver_->completedPasses();
+        ImGui::TextWrapped("Steady state (all time), %llu passes%s%s", static_cast<unsigned long long>(frameKey_.passes),
+                           fromPreview ? " (the preview's, until the film catches up)" : "",
                            st_.steadyUntilTime ? "  -  pick a time (slider, Left/Right, Play) to see the pulse" : "");
     } else {
         const double opl = binCentreOpl(st_.bin);

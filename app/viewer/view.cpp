@@ -199,6 +199,18 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
     if (!resumePath.empty()) ownCheckpoints_.push_back(resumePath);  // "Save checkpoint" may replace it
     prepareJob_ = prepareDriver(scene_, settings, time_, resumePath);  // run() waits for it (waitForFilm)
+    // The steady preview while the film is allocated (app.h, preview_): not on a resume (the
+    // checkpoint has passes to show) nor in screenshot mode (the picture is of --after-passes).
+    if (resumePath.empty() && opt.screenshot.empty()) {
+        RenderSettings ps = settings;
+        const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+        ps.threads = std::max(1, (settings.threads > 0 ? settings.threads : cores) - 1);  // a core for the allocation
+        TimeBins one = time_;
+        one.binWidth = time_.binWidth * time_.bins;
+        one.bins = 1;
+        preview_ = std::make_shared<Driver>(scene_, ps, one);
+        preview_->start([](const PassStats&) { glfwPostEmptyEvent(); });
+    }
 }
 
 Viewer::~Viewer() {
@@ -208,6 +220,7 @@ Viewer::~Viewer() {
     if (checkpointJob_.valid()) checkpointJob_.wait();  // a checkpoint being written is finished, not cut
     if (profileJob_.valid()) profileJob_.wait();
     if (binEnergyJob_.valid()) binEnergyJob_.wait();
+    if (preview_) preview_->stop();
     if (prepareJob_.valid()) prepareJob_.wait();  // closed while preparing: the film is dropped once made
     if (driver_) driver_->stop();
 }
@@ -392,6 +405,7 @@ bool Viewer::waitForFilm() {
             ImGui_ImplOpenGL3_NewFrame();
             ImGui_ImplGlfw_NewFrame();
             ImGui::NewFrame();
+            updatePreparingImage();
             drawPreparing();
             ImGui::Render();
             glViewport(0, 0, fbw, fbh);
@@ -403,6 +417,7 @@ bool Viewer::waitForFilm() {
         }
         prepareJob_.wait_for(100ms);  // a few frames a second: the cores are the allocation's
     }
+    if (preview_) preview_->requestStop();  // after its pass in progress: a complete picture
     adopt(prepareJob_.get(), "");
     filmReadySec_ = nowSec() - opt_.launchedAt;
     std::printf("film ready %.2f s after the launch (window shown after %.2f s)\n", filmReadySec_, windowShownSec_);

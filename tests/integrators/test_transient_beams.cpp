@@ -351,6 +351,51 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
     EXPECT_GT(litValues, a.volume.size() / 4) << "of " << a.volume.size() << " pixel-bin channels";
 }
 
+// The viewer's preview (app/viewer/app.h, preview_) runs the first passes into a one-bin film
+// while the real film is allocated and shows its steady image as the film's: the steady sums must
+// not depend on the time bins, bit for bit, for every method (a bin-dependent clamp, cut or
+// kernel would make the preview a different picture from the film's).
+TEST(TransientBeams, SteadyImageDoesNotDependOnTheBins) {
+    const char* scene = R"({
+      "version": 1,
+      "camera": {"position": [0, 1.1, 0.95], "look_at": [0, 0.8, -1], "fov": 70, "resolution": [24, 20]},
+      "film": {"bins": 48},
+      "media": {"fog": {"sigma_s": 0.5, "sigma_a": 0.05, "g": 0.2}},
+      "global_medium": "fog",
+      "materials": {"white": {"type": "diffuse", "albedo": 0.7}, "glass": {"type": "dielectric", "ior": 1.5}},
+      "shapes": [
+        {"type": "box", "min": [-1, 0, -1], "max": [1, 2, 1], "material": "white", "flip_normals": true},
+        {"type": "sphere", "center": [-0.4, 0.5, 0], "radius": 0.35, "material": "glass"}
+      ],
+      "lights": [{"type": "point", "position": [0, 1.8, 0], "power": 20}],
+      "render": {"photons_per_pass": 2000, "radius_relative": 0.01, "surface_radius_relative": 0.03, "seed": 5,
+                 "time_kernel": "box", "warmup": 2}
+    })";
+    auto sc = sceneFrom(scene);
+    TimeBins one = sc.time;
+    one.binWidth = sc.time.binWidth * sc.time.bins;
+    one.bins = 1;
+    for (const Method m : {Method::Beams, Method::PathTracer}) {
+        RenderSettings ds = sc.settings;
+        ds.method = m;
+        Driver full(*sc, ds, sc.time), preview(*sc, ds, one);
+        for (int p = 1; p <= 3; ++p) {
+            ASSERT_TRUE(full.runPass(p));
+            ASSERT_TRUE(preview.runPass(p));
+        }
+        std::vector<float> a, b;
+        full.film().steadyImage(a);
+        preview.film().steadyImage(b);
+        ASSERT_EQ(a.size(), b.size());
+        size_t lit = 0;
+        for (size_t i = 0; i < a.size(); ++i) {
+            ASSERT_EQ(a[i], b[i]) << methodName(m) << " value " << i;
+            lit += a[i] > 0.0f;
+        }
+        EXPECT_GT(lit, a.size() * 9 / 10) << methodName(m) << ": too few lit values to compare";
+    }
+}
+
 // The warm-up (render_settings.h): pass i <= W traces photons/2^(W+1-i) photons, each with a full
 // pass's power (divided by photonsPerPass), and counts as that share of a pass in the film's
 // average. Photon k of a pass is drawn from (seed, pass, k) alone, so warm-up pass 1 of a render
