@@ -3,6 +3,7 @@
 // signals a user's session sends; its outputs and checkpoint must survive, be verified before they
 // get their final name, and every failure must name its file and end with a non-zero exit code.
 #include "support/temp_dir.h"
+#include "support/tpb_process.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -25,89 +26,22 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Proc {
-    int code = -1;   // exit code, -1 when killed by a signal
-    int signal = 0;  // terminating signal, 0 when it exited
-    bool timedOut = false;
-    std::string out, err;
-};
+using tpb::test::now;
+using tpb::test::Proc;
+using tpb::test::slurp;
+using tpb::test::spawnTpb;
+using tpb::test::tpbBinary;
 
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::ostringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
-
-double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-const char* tpbBinary() {
-    const char* e = std::getenv("TPB_TEST_BINARY");
-    return e && *e ? e : TPB_BINARY;
-}
-
-// Starts tpb with `args`, stdout/stderr to files in `dir`; `env` entries "NAME=value" replace or add.
-pid_t spawnTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env = {}) {
-    std::vector<std::string> argv{tpbBinary()};
-    argv.insert(argv.end(), args.begin(), args.end());
-    std::vector<char*> cargv;
-    for (std::string& a : argv) cargv.push_back(a.data());
-    cargv.push_back(nullptr);
-    std::vector<std::string> envs;
-    for (char** e = environ; *e; ++e) {
-        const std::string kv(*e);
-        bool replaced = false;
-        for (const std::string& x : env) replaced |= kv.compare(0, x.find('=') + 1, x, 0, x.find('=') + 1) == 0;
-        if (!replaced) envs.push_back(kv);
-    }
-    envs.insert(envs.end(), env.begin(), env.end());
-    std::vector<char*> cenv;
-    for (std::string& e : envs) cenv.push_back(e.data());
-    cenv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, (dir / "stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, (dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    pid_t pid = -1;
-    const int rc = posix_spawn(&pid, cargv[0], &fa, nullptr, cargv.data(), cenv.data());
-    posix_spawn_file_actions_destroy(&fa);
-    EXPECT_EQ(rc, 0) << std::strerror(rc);
-    return rc == 0 ? pid : -1;
-}
-
-Proc waitTpb(pid_t pid, const fs::path& dir, double timeoutSec) {
-    Proc p;
-    int status = 0;
-    const double t0 = now();
-    for (;;) {
-        if (waitpid(pid, &status, WNOHANG) == pid) break;
-        if (now() - t0 > timeoutSec) {
-            kill(pid, SIGKILL);
-            waitpid(pid, &status, 0);
-            p.timedOut = true;
-            break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    if (WIFEXITED(status)) p.code = WEXITSTATUS(status);
-    if (WIFSIGNALED(status)) p.signal = WTERMSIG(status);
-    p.out = slurp(dir / "stdout.txt");
-    p.err = slurp(dir / "stderr.txt");
-    return p;
-}
+Proc waitTpb(pid_t pid, const fs::path& dir, double timeoutSec) { return tpb::test::waitTpb(pid, dir, now(), timeoutSec); }
 
 Proc runTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env = {},
             double timeoutSec = 120.0) {
-    const pid_t pid = spawnTpb(args, dir, env);
-    if (pid < 0) return {};
-    return waitTpb(pid, dir, timeoutSec);
+    return tpb::test::runTpb(args, dir, env, timeoutSec);
 }
 
 // Polls `file` until it contains `text` (true), the process has ended or `timeoutSec` passed.
