@@ -2,8 +2,7 @@
 // `tpb converge`: error of the photon-beam renderer and/or the path tracer against a reference as
 // a function of render time: convergence.csv, convergence.json, a log-log plot (gnuplot), the
 // fitted slope, and an equal-time strip of frames (the paper's Figure 4 layout).
-// Also the path-tracer back end of `tpb render --method pt` (cli_converge.h).
-#include "cli/converge.h"
+#include "cli/common.h"
 #include "film/picture_export.h"
 #include "render/provenance.h"
 
@@ -103,99 +102,7 @@ void referenceFrame(const ReferenceVolume& ref, TimeAxis axis, int k, std::vecto
         for (int c = 0; c < 3; ++c) img[p * 3 + c] = v[(p * i.bins + k) * 3 + c];
 }
 
-// ============================================================================================
-// tpb render --method pt
-// ============================================================================================
-
-json ptSummary(const PreparedRender& p, const RenderSettings& ps, const TransientFilm& film, const ExportOptions& opt,
-               const PathTracerStats& st, const std::vector<std::pair<double, double>>& passTimes, double wall) {
-    json j = summaryHeader(p, "pt", passTimes.size(), wall, film, opt);
-    j["settings"] = {{"samples_per_pixel", ps.samplesPerPixel}, {"max_depth", ps.maxDepth}, {"seed", ps.seed},
-                     {"threads", ps.threads}, {"equiangular", ps.equiangular}};
-    json per = json::array();
-    double renderSec = 0.0;
-    for (size_t i = 0; i < passTimes.size(); ++i) {
-        per.push_back({{"pass", i + 1}, {"pass_s", passTimes[i].first}, {"elapsed_s", passTimes[i].second}});
-        renderSec += passTimes[i].first;
-    }
-    j["per_pass"] = per;
-    const FilmStats& fs = film.stats;
-    const double in0 = fs.inside[0].load(), out0 = fs.outside[0].load();
-    const double in1 = fs.inside[1].load(), out1 = fs.outside[1].load();
-    j["totals"] = {{"camera_paths", st.cameraPaths}, {"contributions", st.contributions},
-                   {"shadow_rays", st.shadowRays}, {"laser_samples", st.laserSamples},
-                   {"depth_limited", st.depthLimited}, {"render_seconds", renderSec},
-                   {"region_stack_overflows", st.regionOverflows},
-                   {"paths_per_second", renderSec > 0 ? st.cameraPaths / renderSec : 0.0},
-                   {"rejected_samples", fs.rejectedSamples.load()},
-                   {"energy_outside_film_fraction_real", in0 + out0 > 0 ? out0 / (in0 + out0) : 0.0},
-                   {"energy_outside_film_fraction_unwarped", in1 + out1 > 0 ? out1 / (in1 + out1) : 0.0},
-                   {"peak_rss_bytes", peakRssBytes()}};
-    return j;
-}
-
 }  // namespace
-
-void checkPathTracedRequest(const PreparedRender&, const PathTracedRenderRequest& req) {
-    // (the passes and the time budget were validated with the other settings: prepareRender)
-    if (req.spp < 1) throw UserError("--spp must be >= 1");
-}
-
-void renderPathTraced(const PreparedRender& prepared, const PathTracedRenderRequest& req) {
-    checkPathTracedRequest(prepared, req);
-    const Scene& scene = *prepared.scene;
-    const RenderSettings ps = ptSettings(prepared, req.spp);
-    const int64_t passes = ps.passes;
-    const double budget = ps.timeBudgetSec;
-    if (passes == 0 && budget == 0.0) std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
-    // The path tracer through the same Driver as every integrator (threads, tiles, passes, time
-    // budget; a first Ctrl-C/SIGTERM stops after the pass in progress).
-    RenderSettings ds = ps;
-    ds.method = Method::PathTracer;
-    Driver drv(scene, ds, prepared.time);
-    std::vector<std::pair<double, double>> passTimes;  // (pass seconds, elapsed)
-    const bool tty = isatty(STDERR_FILENO) && !req.quiet;
-    const double t0 = nowSec();
-    drv.start([&](const PassStats& p) {
-        passTimes.emplace_back(p.passSec, p.elapsedSec);
-        if (req.quiet) return;
-        if (tty)
-            std::fprintf(stderr, "\rpass %llu  %d spp/pass  %.2f s/pass  %.1f s ", static_cast<unsigned long long>(p.pass),
-                         ps.samplesPerPixel, p.passSec, p.elapsedSec);
-        else if (p.pass == 1 || p.pass % 10 == 0 || (passes > 0 && static_cast<int64_t>(p.pass) == passes))
-            std::fprintf(stderr, "pass %llu: %.3f s\n", static_cast<unsigned long long>(p.pass), p.passSec);
-    });
-    setInterruptDriver(&drv);
-    drv.wait();
-    setInterruptDriver(nullptr);
-    if (drv.failure()) std::rethrow_exception(drv.failure());
-    if (tty) std::fprintf(stderr, "\n");
-    if (interrupted() && !req.quiet)
-        std::fprintf(stderr, "interrupted by %s: writing the %zu finished passes\n", interruptName().c_str(),
-                     passTimes.size());
-    PathTracerStats st;
-    for (const PassStats& p : drv.history()) st += p.paths;
-    const TransientFilm& film = drv.film();
-    const bool stoppedBySignal = interrupted();
-    const double wall = nowSec() - t0;
-    if (st.laserSamples > 0)
-        std::fprintf(stderr, "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
-                             "light is missing from this render\n", static_cast<long long>(st.laserSamples));
-
-    PathTracedRenderRequest outputs = req;
-    outputs.provenance = provenanceOf(drv, prepared.source.path);
-    const OutputReport rep = writeRenderOutputs(film, outputs, [&] {
-        return ptSummary(prepared, ps, film, req.opt, st, passTimes, wall);
-    });
-    warnFilmOverflow(prepared.source, film);
-    const double outside = checkEnergyInsideFilm(prepared, film, req.opt.axis);
-    if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
-    if (!req.quiet)
-        std::printf("path tracer: %zu passes x %d spp in %.2f s; %s; %lld rejected samples; %s%% of the energy "
-                    "outside the film\n",
-                    passTimes.size(), ps.samplesPerPixel, wall, writtenLine(req, rep).c_str(),
-                    static_cast<long long>(film.stats.rejectedSamples.load()), percentText(outside).c_str());
-}
 
 namespace {
 

@@ -2,7 +2,6 @@
 #include "cli/common.h"
 #include "cli/flags.h"
 #include "cli/summary.h"
-#include "cli/converge.h"
 #include "cli/interrupt.h"
 #include "cli/commands.h"
 #include "cli/resume.h"
@@ -50,7 +49,7 @@ struct RenderCmd {
     double fps = 24.0, videoEv = 0.0;
     int contactSheet = 0;
     bool fpsGiven = false, videoEvGiven = false;  // on the command line (a flag without its output is refused)
-    bool sppGiven = false;
+    bool sppGiven = false, methodGiven = false;
     std::vector<std::string> outputFlagsGiven;  // flags that shape what the render writes (refused with --preview)
 };
 
@@ -88,7 +87,7 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
         passSec += p.passSec;
         emittedFlux += p.emittedFlux;
         cutFlux += p.cutFlux;
-        regionOverflows += p.regionOverflows + p.camera.regionOverflows;
+        regionOverflows += p.regionOverflows + p.camera.regionOverflows + p.paths.regionOverflows;
     }
     j["per_pass"] = per;
     const FilmStats& fs = drv.film().stats;
@@ -105,6 +104,38 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
                    // carry there is missing from the steady image only (photon_tracer.cpp).
                    {"region_stack_overflows", regionOverflows},
                    {"beam_flux_cut_fraction", luminance(emittedFlux) > 0 ? luminance(cutFlux) / luminance(emittedFlux) : 0.0},
+                   {"peak_rss_bytes", peakRssBytes()}};
+    return j;
+}
+
+// summary.json of a path-traced render (--method pt): its settings and its paths.
+nlohmann::json summaryJsonPt(const PreparedRender& p, const Driver& drv, const ExportOptions& opt, double wallSec) {
+    using nlohmann::json;
+    const auto hist = drv.history();
+    const RenderSettings& s = drv.settings();
+    json j = summaryHeader(p, "pt", hist.size(), wallSec, drv.film(), opt);
+    j["settings"] = {{"samples_per_pixel", s.samplesPerPixel}, {"max_depth", s.maxDepth}, {"seed", s.seed},
+                     {"threads", s.threads}, {"equiangular", s.equiangular}};
+    json per = json::array();
+    double renderSec = 0.0;
+    PathTracerStats st;
+    for (const PassStats& ps : hist) {
+        per.push_back({{"pass", ps.pass}, {"pass_s", ps.passSec}, {"elapsed_s", ps.elapsedSec}});
+        renderSec += ps.passSec;
+        st += ps.paths;
+    }
+    j["per_pass"] = per;
+    const FilmStats& fs = drv.film().stats;
+    const double in0 = fs.inside[0].load(), out0 = fs.outside[0].load();
+    const double in1 = fs.inside[1].load(), out1 = fs.outside[1].load();
+    j["totals"] = {{"camera_paths", st.cameraPaths}, {"contributions", st.contributions},
+                   {"shadow_rays", st.shadowRays}, {"laser_samples", st.laserSamples},
+                   {"depth_limited", st.depthLimited}, {"render_seconds", renderSec},
+                   {"region_stack_overflows", st.regionOverflows},
+                   {"paths_per_second", renderSec > 0 ? st.cameraPaths / renderSec : 0.0},
+                   {"rejected_samples", fs.rejectedSamples.load()},
+                   {"energy_outside_film_fraction_real", in0 + out0 > 0 ? out0 / (in0 + out0) : 0.0},
+                   {"energy_outside_film_fraction_unwarped", in1 + out1 > 0 ? out1 / (in1 + out1) : 0.0},
                    {"peak_rss_bytes", peakRssBytes()}};
     return j;
 }
@@ -128,10 +159,6 @@ void checkFlagConflicts(const RenderCmd& c) {
     if (c.unwarp && c.realTime)
         throw UserError("--unwarp and --real-time contradict each other: give one of them (frames are in real time "
                         "unless --unwarp or the scene's render.unwarp asks for unwarped time)");
-    if (c.method == "pt" && (c.checkpoint || c.checkpointEveryMin > 0.0 || !c.resume.empty()))
-        throw UserError(std::string(!c.resume.empty() ? "--resume" : c.checkpoint ? "--checkpoint" : "--checkpoint-every") +
-                        " applies to the photon beams only so far; --method pt renders its reference passes in one "
-                        "go: drop the flag or use --method beams");
     if (c.noCheckpoint && (c.checkpoint || c.checkpointEveryMin > 0.0))
         throw UserError("--no-checkpoint contradicts --checkpoint / --checkpoint-every: give one of them");
     if (c.scene.empty() && c.resume.empty())
@@ -173,12 +200,17 @@ void run(RenderCmd& c) {
         if (!c.outGiven) c.out = std::filesystem::path(resume->path).parent_path().string();
         if (c.out.empty()) c.out = ".";
     }
-    const SettingsOverrides flags =
-        resume ? resumeOverrides(resume->info.overrides, c.ov.settings()) : c.ov.settings();
-    const PreparedRender prepared = resume ? prepareResume(*resume, c.scene, c.ov.settings(), LoadOptions{c.quiet})
-                                           : loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
+    // The method is a setting like any other (one render path for every method; a checkpoint
+    // records it, so a resume continues with the method it was written by).
+    SettingsOverrides given = c.ov.settings();
+    if (c.methodGiven) given.method = parseMethod(c.method);
+    if (c.sppGiven) given.samplesPerPixel = c.spp;
+    const SettingsOverrides flags = resume ? resumeOverrides(resume->info.overrides, given) : given;
+    const PreparedRender prepared = resume ? prepareResume(*resume, c.scene, given, LoadOptions{c.quiet})
+                                           : loadAndBuild(c.scene, given, LoadOptions{c.quiet});
     const Scene* scene = prepared.scene.get();
     const RenderSettings& ds = prepared.settings;
+    const bool pt = ds.method == Method::PathTracer;
 
     ExportOptions opt;
     opt.axis = (ds.unwarp || c.unwarp) && !c.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
@@ -188,14 +220,13 @@ void run(RenderCmd& c) {
     opt.response = *parseSensor(c.sensor, *parsePulse(c.pulse));  // (each checked when parsed)
     checkTimeResponseFitsFilm(c.pulse, c.sensor, prepared.time);   // against the bins: before any pass or file
     opt.step = c.frameStep;
-    PathTracedRenderRequest outputs;
+    RenderOutputs outputs;
     outputs.out = c.out;
     outputs.opt = opt;
     outputs.noFrames = c.noFrames;
     outputs.quiet = c.quiet;
     outputs.strip = c.strip;
     outputs.stripEv = c.stripEv;
-    outputs.spp = c.spp;
     outputs.npy = c.npy;
     outputs.mp4 = c.mp4;
     outputs.fps = c.fps;
@@ -204,12 +235,10 @@ void run(RenderCmd& c) {
     outputs.tone.falseColor = c.falseColour;
     outputs.tone.srgb = !c.noSrgb;
 
-    if (c.method == "pt") checkPathTracedRequest(prepared, outputs);
-
     // The folder is this render's from here on: locked, the previous render's outputs removed.
     const std::string checkpointPath = (std::filesystem::path(c.out) / kCheckpointFile).string();
     OutputFiles files = renderOutputFiles(outputs, prepared.time.bins);
-    if (c.method != "pt" && !(c.noCheckpoint && !resume)) files.files.push_back(kCheckpointFile);
+    if (!(c.noCheckpoint && !resume)) files.files.push_back(kCheckpointFile);
     std::error_code ec;
     if (resume && std::filesystem::equivalent(resume->path, checkpointPath, ec)) files.keep.push_back(kCheckpointFile);
     files.replaceCheckpoint = c.overwriteCheckpoint;
@@ -231,11 +260,6 @@ void run(RenderCmd& c) {
     if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
     if (c.previewOnly) return;
     reportPlannedOutputs(prepared, outputs, previewExrSec);
-
-    if (c.method == "pt") {  // same outputs, rendered by the path tracer (converge.cpp)
-        renderPathTraced(prepared, outputs);
-        return;
-    }
 
     if (ds.passes == 0 && ds.timeBudgetSec == 0.0)
         std::fprintf(stderr, "note: no pass limit and no time budget: rendering until Ctrl-C\n");
@@ -270,7 +294,8 @@ void run(RenderCmd& c) {
     double lastCheckpoint = nowSec();
 
     const bool tty = isatty(STDERR_FILENO) && !c.quiet;
-    const VolumeEstimator::Needs needs = makeVolumeEstimator(ds.volumeEstimator)->needs();
+    const std::unique_ptr<VolumeEstimator> volume = makeVolumeEstimator(ds.volumeEstimator);
+    const VolumeEstimator::Needs needs = volume ? volume->needs() : VolumeEstimator::Needs{};
     const double t0 = nowSec();
     drv.start([&](const PassStats& p) {
         // Between passes, on the driver's thread: no tile is being written.
@@ -280,7 +305,13 @@ void run(RenderCmd& c) {
         }
         if (c.quiet) return;
         const int64_t total = ds.passes;
-        if (tty) {
+        if (pt) {  // no kernel, no photons: its samples per pixel
+            if (tty)
+                std::fprintf(stderr, "\rpass %llu  %d spp/pass  %.2f s/pass  %.1f s ",
+                             static_cast<unsigned long long>(p.pass), ds.samplesPerPixel, p.passSec, p.elapsedSec);
+            else if (p.pass == 1 || p.pass % 10 == 0 || (total > 0 && int64_t(p.pass) == total))
+                std::fprintf(stderr, "pass %llu: %.3f s\n", static_cast<unsigned long long>(p.pass), p.passSec);
+        } else if (tty) {
             const int width = 30;
             const double frac = total > 0 ? double(p.pass) / total
                                           : (ds.timeBudgetSec > 0 ? std::min(1.0, p.elapsedSec / ds.timeBudgetSec) : 0.0);
@@ -324,15 +355,20 @@ void run(RenderCmd& c) {
     if (c.checkpoint || c.checkpointEveryMin > 0.0 || (stoppedBySignal && !c.noCheckpoint) ||
         (resume && c.checkpointEveryMin == 0.0 && !c.noCheckpoint))
         writeCheckpointNow(stoppedBySignal ? "interrupted" : "end of the render");
+    PathTracerStats paths;
+    for (const PassStats& p : drv.history()) paths += p.paths;
+    if (paths.laserSamples > 0)
+        std::fprintf(stderr, "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
+                             "light is missing from this render\n", static_cast<long long>(paths.laserSamples));
     const OutputReport rep = writeRenderOutputs(drv.film(), outputs, [&] {
-        nlohmann::json j = summaryJson(prepared, drv, opt, wall);
+        nlohmann::json j = pt ? summaryJsonPt(prepared, drv, opt, wall) : summaryJson(prepared, drv, opt, wall);
         if (resume) j["resumed"] = {{"checkpoint", resume->path}, {"passes", resumedPasses}, {"written", resume->info.created}};
         j["checkpoint"] = checkpointWritten;
         return j;
     });
     warnFilmOverflow(prepared.source, drv.film());
     int64_t regionOverflows = 0;
-    for (const PassStats& p : drv.history()) regionOverflows += p.regionOverflows + p.camera.regionOverflows;
+    for (const PassStats& p : drv.history()) regionOverflows += p.regionOverflows + p.camera.regionOverflows + p.paths.regionOverflows;
     if (regionOverflows > 0)
         std::fprintf(stderr,
                      "warning: %lld paths were ended because they entered more than 7 nested dielectric/null shapes "
@@ -349,8 +385,9 @@ void run(RenderCmd& c) {
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
     if (!c.quiet) {
         const FilmStats& fs = drv.film().stats;
-        std::printf("%llu passes in %.2f s; %s; %lld rejected samples; %s%% of the energy outside the film\n",
-                    static_cast<unsigned long long>(drv.completedPasses()), wall, writtenLine(outputs, rep).c_str(),
+        std::printf("%s%llu passes in %.2f s; %s; %lld rejected samples; %s%% of the energy outside the film\n",
+                    pt ? "path tracer: " : "", static_cast<unsigned long long>(drv.completedPasses()), wall,
+                    writtenLine(outputs, rep).c_str(),
                     static_cast<long long>(fs.rejectedSamples.load()), percentText(outside).c_str());
     }
 }
@@ -424,6 +461,7 @@ void registerRender(CLI::App& app) {
         c->fpsGiven = cmd->get_option("--fps")->count() > 0;
         c->videoEvGiven = cmd->get_option("--video-ev")->count() > 0;
         c->sppGiven = cmd->get_option("--spp")->count() > 0;
+        c->methodGiven = cmd->get_option("--method")->count() > 0;
         // (An output asked for: "--strip 0" and "--contact-sheet 0" ask for none.)
         for (const char* f : {"--npy", "--mp4", "--contact-sheet", "--strip", "--checkpoint", "--checkpoint-every"})
             if (cmd->get_option(f)->count() > 0 && !(std::string(f) == "--strip" && c->strip == 0) &&

@@ -7,6 +7,7 @@
 #include "scene/scene_loader.h"
 #include "render/time_range.h"
 #include "support/temp_dir.h"
+#include "support/tpb_process.h"
 
 #include "support/checkpoint_payload.h"
 
@@ -34,7 +35,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char** environ;
 
 namespace fs = std::filesystem;
 
@@ -48,89 +48,13 @@ std::string fromErrorLine(const std::string& err) {
     return at == std::string::npos ? err : err.substr(at + 1);
 }
 
-struct Proc {
-    int code = -1;    // exit code, -1 when killed by a signal
-    int signal = 0;   // terminating signal, 0 when it exited
-    bool timedOut = false;
-    std::string out, err;
-    double seconds = 0.0;
-};
-
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::ostringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
-
-double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-// The tpb under test: TPB_BINARY, or $TPB_TEST_BINARY (to run these tests against another build,
-// e.g. to see a new test fail on an older tpb).
-const char* tpbBinary() {
-    const char* e = std::getenv("TPB_TEST_BINARY");
-    return e && *e ? e : TPB_BINARY;
-}
-
-// Starts TPB_BINARY with `args` (stdout, stderr to files in `dir`), extra "NAME=value" environment.
-pid_t spawnTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env) {
-    std::vector<std::string> argv{tpbBinary()};
-    argv.insert(argv.end(), args.begin(), args.end());
-    std::vector<char*> cargv;
-    for (std::string& a : argv) cargv.push_back(a.data());
-    cargv.push_back(nullptr);
-    std::vector<std::string> envs;
-    for (char** e = environ; *e; ++e) {
-        const std::string kv(*e);
-        bool overridden = false;
-        for (const std::string& x : env) overridden |= kv.compare(0, x.find('=') + 1, x, 0, x.find('=') + 1) == 0;
-        if (!overridden) envs.push_back(kv);
-    }
-    envs.insert(envs.end(), env.begin(), env.end());
-    std::vector<char*> cenv;
-    for (std::string& e : envs) cenv.push_back(e.data());
-    cenv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, (dir / "stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, (dir / "stderr.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    pid_t pid = -1;
-    const int rc = posix_spawn(&pid, cargv[0], &fa, nullptr, cargv.data(), cenv.data());
-    posix_spawn_file_actions_destroy(&fa);
-    EXPECT_EQ(rc, 0) << std::strerror(rc);
-    return rc == 0 ? pid : -1;
-}
-
-Proc waitTpb(pid_t pid, const fs::path& dir, double t0, double timeoutSec) {
-    Proc p;
-    int status = 0;
-    for (;;) {
-        const pid_t r = waitpid(pid, &status, WNOHANG);
-        if (r == pid) break;
-        if (now() - t0 > timeoutSec) {
-            kill(pid, SIGKILL);
-            waitpid(pid, &status, 0);
-            p.timedOut = true;
-            break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    p.seconds = now() - t0;
-    if (WIFEXITED(status)) p.code = WEXITSTATUS(status);
-    if (WIFSIGNALED(status)) p.signal = WTERMSIG(status);
-    p.out = slurp(dir / "stdout.txt");
-    p.err = slurp(dir / "stderr.txt");
-    return p;
-}
-
-Proc runTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env = {},
-            double timeoutSec = 60.0) {
-    const double t0 = now();
-    const pid_t pid = spawnTpb(args, dir, env);
-    if (pid < 0) return {};
-    return waitTpb(pid, dir, t0, timeoutSec);
-}
+using tpb::test::now;
+using tpb::test::Proc;
+using tpb::test::runTpb;
+using tpb::test::slurp;
+using tpb::test::spawnTpb;
+using tpb::test::tpbBinary;
+using tpb::test::waitTpb;
 
 class CliErrors : public ::testing::Test {
 protected:
@@ -1256,6 +1180,42 @@ TEST_F(CliErrors, SigtermWritesACheckpointAndTheResumeEqualsAnUninterruptedRun) 
     EXPECT_TRUE(a == b) << "the resumed film differs from the uninterrupted one";
     EXPECT_EQ(slurp(out / "steady.exr"), slurp(whole / "steady.exr"));
     EXPECT_EQ(slurp(out / "frames" / "frame_00004.exr"), slurp(whole / "frames" / "frame_00004.exr"));
+}
+
+// Issue 34: one render path for every method. The path tracer (--method pt) writes a checkpoint
+// and resumes from it like the photon beams (refused before: "applies to the photon beams only
+// so far"): 2 passes, then a resume to 4 without --method (the checkpoint records it), equal bit
+// for bit to 4 passes in one go; a resume that asks for another method is refused.
+TEST_F(CliErrors, PathTracerCheckpointResumesToTheFilmOfOneUninterruptedRun) {
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"seed\": 3}"));
+    const fs::path out = dir_ / "out", whole = dir_ / "whole";
+    const std::vector<std::string> pt{"--method", "pt", "--spp", "2", "--strip", "0", "-q"};
+    std::vector<std::string> first{"render", scene.string(), "-o", out.string(), "--passes", "2", "--checkpoint"};
+    first.insert(first.end(), pt.begin(), pt.end());
+    const Proc a = runTpb(first, dir_, {}, 300.0);
+    ASSERT_EQ(a.code, 0) << a.err;
+    ASSERT_TRUE(fs::exists(out / "checkpoint.tpbck")) << a.err;
+
+    const Proc r = runTpb({"render", "--resume", out.string(), "--passes", "4", "--strip", "0"}, dir_, {}, 300.0);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("resumed 2 passes from "), std::string::npos) << r.out;
+    const nlohmann::json sum = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_EQ(sum["method"], "pt");
+    EXPECT_EQ(sum["passes"].get<int>(), 4);
+    EXPECT_EQ(sum["settings"]["samples_per_pixel"].get<int>(), 2);
+
+    std::vector<std::string> once{"render", scene.string(), "-o", whole.string(), "--passes", "4", "--checkpoint"};
+    once.insert(once.end(), pt.begin(), pt.end());
+    ASSERT_EQ(runTpb(once, dir_, {}, 300.0).code, 0);
+    const std::string ca = checkpointPayload(out / "checkpoint.tpbck"), cb = checkpointPayload(whole / "checkpoint.tpbck");
+    ASSERT_FALSE(ca.empty());
+    EXPECT_TRUE(ca == cb) << "the resumed path-traced film differs from the uninterrupted one";
+    EXPECT_EQ(slurp(out / "steady.exr"), slurp(whole / "steady.exr"));
+    EXPECT_EQ(slurp(out / "frames" / "frame_00004.exr"), slurp(whole / "frames" / "frame_00004.exr"));
+
+    const Proc m = runTpb({"render", "--resume", out.string(), "--method", "beams", "--passes", "6"}, dir_);
+    EXPECT_EQ(m.code, 2) << m.err;
+    EXPECT_NE(m.err.find("--method"), std::string::npos) << m.err;
 }
 
 TEST_F(CliErrors, ResumeRefusesAChangedSceneOrSettingAndNamesWhatChanged) {
