@@ -1,5 +1,5 @@
 // Subcommands of the tpb executable. Each command's file in app/cli/ (render.cpp, info.cpp, bench.cpp,
-// converge.cpp, view_command.cpp) registers one.
+// converge.cpp, reference.cpp, view_command.cpp) registers one.
 #pragma once
 
 namespace CLI {
@@ -11,7 +11,8 @@ namespace tpb::app {
 void registerRender(CLI::App& app);
 void registerInfo(CLI::App& app);
 void registerBench(CLI::App& app);
-void registerConverge(CLI::App& app);  // app/cli/converge.cpp: converge and reference
+void registerConverge(CLI::App& app);
+void registerReference(CLI::App& app);
 void registerView(CLI::App& app);  // app/cli/view_command.cpp (only when built with the viewer)
 
 // Exit codes: 0 success, 1 internal failure, 2 user error (bad scene, bad flag, unwritable or locked

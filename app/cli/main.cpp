@@ -67,6 +67,7 @@ int main(int argc, char** argv) {
     tpb::app::registerRender(app);
     tpb::app::registerInfo(app);
     tpb::app::registerBench(app);
+    tpb::app::registerReference(app);
     tpb::app::registerConverge(app);
 #ifdef TPB_HAVE_VIEWER
     tpb::app::registerView(app);
