@@ -14,6 +14,8 @@
 
 namespace tpb::app {
 
+static_assert(kViewerExitUserError == kExitUserError, "the viewer's exit code for a user error is the CLI's");
+
 namespace {
 
 struct ViewCmd {
@@ -59,7 +61,7 @@ void run(const ViewCmd& c) {
         PreparedRender prepared = prepareResume(src, c.scene, c.ov.settings());
         checkTimeResponseFitsFilm(view.pulse, view.sensor, prepared.time);
         if (view.exportFolder.empty()) view.exportFolder = std::filesystem::path(src.path).parent_path().string();
-        runViewer(prepared, view, src.path);
+        if (const int code = runViewer(prepared, view, src.path)) exitCode() = code;
         return;
     }
     PreparedRender prepared = loadAndBuild(c.scene, c.ov);
@@ -69,7 +71,7 @@ void run(const ViewCmd& c) {
     prepared.settings.samplesPerPixel = c.spp;
     // The viewer warms up (a first picture sooner, render_settings.h) unless told otherwise.
     if (!c.ov.warmup && !prepared.source.wrote("render.warmup")) prepared.settings.warmupPasses = kViewerWarmupPasses;
-    runViewer(prepared, view);
+    if (const int code = runViewer(prepared, view)) exitCode() = code;
 }
 
 }  // namespace

@@ -1,15 +1,17 @@
-// The interactive viewer (`tpb view`): a Driver renders in the background while the UI thread
-// shows the film. The UI thread owns everything GL/ImGui; the driver's workers only write the film
-// (and wake the UI with glfwPostEmptyEvent after each pass); exports and the streak/profile reads
-// run on their own threads and hold the driver alive through a shared_ptr.
+// The interactive viewer (`tpb view`), in three parts:
+//   session.h/.cpp  the render session, no window: drivers, the steady preview, checkpoints, exports;
+//   this class      the UI: the window's panels (ui.cpp), the data path from the film to the
+//                   textures (data.cpp), the main loop (view.cpp);
+//   script.cpp      the screenshot mode's scripted input and report (the tests drive it).
+// The UI thread owns everything GL/ImGui; the driver's workers only write the film (and wake the
+// UI after each pass); exports and the streak/profile reads run on their own threads and hold the
+// driver alive through a shared_ptr.
 //
-// Its own CMake target (tpb_viewer): no CLI11, no nlohmann. `tpb view`'s flags are registered in
-// app/cli/view_command.cpp, which prepares the render (prepareRender) and calls runViewer.
+// Its own CMake target (tpb_viewer): no CLI11, no nlohmann, nothing from app/cli. `tpb view`'s
+// flags are registered in app/cli/view_command.cpp, which prepares the render (prepareRender)
+// and calls runViewer.
 #pragma once
-#include "render/checkpoint.h"
-#include "render/driver.h"
-#include "render/prepare.h"
-#include "viewer/export.h"
+#include "viewer/session.h"
 #include "viewer/gl.h"
 #include "viewer/image_view.h"
 #include "viewer/instrument.h"
@@ -27,6 +29,7 @@ struct GLFWwindow;
 
 namespace tpb::app {
 
+inline constexpr int kViewerExitUserError = 2;   // the CLI's kExitUserError (view_command.cpp checks)
 inline constexpr double kMaxExposureEv = 40.0;  // the Display section's exposure slider spans -40 to 40 EV
 inline constexpr int64_t kMaxWindowPx = 16384;   // beyond any OpenGL 3.3 framebuffer
 // The automatic bin (the brightest one, chosen while the first passes render) is found from every
@@ -123,16 +126,6 @@ struct ControlRect {
     bool visible = true;  // not scrolled out of view
 };
 
-// The automatic exposure: fitExposure (core/film/tone_map.h).
-
-// A driver made off the UI thread (its film allocated, a checkpoint read into it), not started yet.
-struct PreparedDriver {
-    std::shared_ptr<Driver> driver;
-    uint64_t resumedPasses = 0;  // from the checkpoint of `tpb view --resume` (0: none)
-};
-std::future<PreparedDriver> prepareDriver(const Scene& scene, const RenderSettings& s, const TimeBins& time,
-                                          const std::string& resumePath);
-
 class Viewer {
 public:
     // `resumePath`: a checkpoint of this render to go on from (tpb view --resume, checked by
@@ -145,25 +138,24 @@ public:
     // its progress on stderr; a new Ctrl-C/SIGTERM (closeSignals() grows) cancels the export. What
     // was written, and what was not, is printed.
     void finishBeforeClosing(const std::function<int()>& closeSignals);
+    int exitCode() const { return exitCode_; }
 
 private:
-    // session (data.cpp)
+    // the render session (session.h) and the data path from its film (data.cpp)
+    Driver& driver() { return session_.driver(); }
+    const Driver& driver() const { return session_.driver(); }
     void restart(const RenderSettings& s, const std::string& why);
-    void adopt(PreparedDriver p, const std::string& why);  // starts its passes
+    void adopted(const std::string& why, uint64_t resumedPasses);  // a new driver started: reset the UI's view of it
     void updateFrame();
     void updateProfile();
     void updateBinEnergy();
     void fitPendingExposure(const FetchKey& key);
     void fitHiddenFrameExposure();
     void trackNoise(const FetchKey& key);  // after a frame fetch
-    void pollExport();
     void drawTimeResponse();   // View section: pulse shape and sensor response
     std::string responseNote() const;
     const char* emissionLabel() const;  // "delta pulse", "pulse response" or "continuous emission"  // " (gaussian pulse, FWHM 1 ns; ideal sensor)" or ""
 
-    void requestCheckpoint();  // "Save checkpoint": pauses, then writes once the pass in progress ends
-    void pollCheckpoint();
-    void startExport(const ExportRequest& req);
     FetchKey frameKey() const;
     FetchKey profileKey() const;
     FetchKey binEnergyKey() const;
@@ -193,7 +185,7 @@ private:
     void showFrameOnce();  // the steady image shown by default gives way to the frame
     void setAutoBin(int bin);
 
-    // main loop (view.cpp)
+    // main loop (view.cpp); the screenshot-mode script (script.cpp)
     bool waitForFilm();  // draws "preparing" frames until the first driver is made; false: closed
     void drawPreparing();
     bool settled();  // nothing left to fetch, render or export
@@ -210,21 +202,10 @@ private:
     GLFWwindow* window_;
     ViewState st_;
 
-    std::shared_ptr<Driver> driver_;           // null until the first one is prepared (waitForFilm)
-    std::future<PreparedDriver> prepareJob_;  // the first driver, made while the window shows
-    // The steady-state preview (issue 33 item 11): the same passes into a one-bin film, run while
-    // the first driver's film is allocated (seconds on the default scene), so the scene shows
-    // within a second of opening. Its steady image is the film's after as many passes (the steady
-    // sums do not depend on the bins: RenderDriver.SteadyImageDoesNotDependOnTheBins), shown until
-    // the film has caught up; then dropped. Null when not running or done.
-    std::shared_ptr<Driver> preview_;
-    uint64_t previewFetched_ = 0;  // the preview passes image_ shows while preparing
+    ViewerSession session_;
+    uint64_t previewFetched_ = 0;  // the preview's passes image_ shows while preparing
     void updatePreparingImage();
-    std::shared_ptr<const FilmSnapshot> shownSnapshot(bool steady);  // the preview's or the film's
-    uint64_t shownPasses(bool steady) const;
-    uint64_t generation_ = 0;
     RenderSettings edit_;  // the settings panel's copy
-    std::string status_;
 
     DisplayProgram program_;
     DisplayImage image_, streak_;
@@ -248,26 +229,12 @@ private:
     FetchKey profileRequested_, profileKey_;
     std::vector<float> profileRgb_, profileLum_;
 
-    // The checkpoint being written (the driver stays paused until it is on disk).
-    // The checkpoints this viewer resumed from or wrote: the only ones "Save checkpoint" overwrites
-    // (another render's checkpoint in the export folder is refused, never replaced silently).
-    std::vector<std::string> ownCheckpoints_;
-    enum class CheckpointStage { Idle, WaitingForPassEnd, Writing } checkpointStage_ = CheckpointStage::Idle;
-    bool checkpointWasPaused_ = false;
-    bool checkpointFailed_ = false;  // a checkpoint was refused or failed (screenshot mode: exit 2)
-    std::future<std::string> checkpointJob_;  // "" or the error
-
     // The confirmation asked (its popup opens on the next drawUi), and the restart it would do.
     static constexpr const char* kRestartPopup = "Restart the accumulation?";
     static constexpr const char* kQuitPopup = "Quit during the export?";
     const char* openPopup_ = nullptr;
     std::optional<RenderSettings> pendingRestart_;
     std::string pendingWhat_;
-
-    ExportJob export_;
-    std::vector<std::string> exportLog_;  // the last export's files
-    std::vector<std::string> exported_;   // every file exported in this session
-    std::string exportError_;
 
     // Controls drawn this frame, and in the first frame (screenshot mode reports both).
     const char* section_ = "";
@@ -309,8 +276,14 @@ private:
 };
 
 
+// Keys pressed (GLFW codes) since the UI last handled them: the GLFW key callback's and the
+// script's (view.cpp).
+std::vector<int>& pressedKeys();
+
 // Opens the window and runs the viewer on a prepared render until it is closed (or, with
 // --screenshot, until the picture is taken).
-void runViewer(const PreparedRender& prepared, const ViewOptions& options, const std::string& resumePath = "");
+// Returns the exit code: 0, kViewerExitUserError (an export or checkpoint failed, a bad --click),
+// 1 (a screenshot not taken, a check failed), 128 + the signal that closed it (SIGTERM, SIGHUP).
+int runViewer(const PreparedRender& prepared, const ViewOptions& options, const std::string& resumePath = "");
 
 }  // namespace tpb::app

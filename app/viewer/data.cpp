@@ -1,4 +1,4 @@
-// Viewer: the driver session and the data path from the film to the textures. The viewer never
+// Viewer: the data path from the film to the textures (the render session: session.h). The viewer never
 // reads the live film: it takes a snapshot (film_snapshot.h: a pointer per tile, never waits for a
 // tile being rendered) for each fetch and reads the images from it (film_view.h). The frame is read
 // on the UI thread; the streak, the pixel profile and the energy per bin on helper threads, from
@@ -7,7 +7,6 @@
 #include "viewer/app.h"
 
 #include "base/error.h"
-#include "io/folder_lock.h"
 
 #include <chrono>
 #include <filesystem>
@@ -35,27 +34,11 @@ int peakEnergyBin(const std::vector<double>& energy) {
     return best;
 }
 
-// The first driver: its film (hundreds of MiB on the default scene: seconds to allocate) and the
-// checkpoint it resumes from are made on a helper thread while the window already shows a
-// "preparing" screen (Viewer::waitForFilm); the driver only starts once it is adopted.
-std::future<PreparedDriver> prepareDriver(const Scene& scene, const RenderSettings& s, const TimeBins& time,
-                                          const std::string& resumePath) {
-    return std::async(std::launch::async, [&scene, s, time, resumePath] {
-        PreparedDriver p;
-        p.driver = std::make_shared<Driver>(scene, s, time);
-        if (!resumePath.empty()) {  // `tpb view --resume`: go on from the checkpoint's passes
-            Checkpoint c = readCheckpoint(resumePath, &p.driver->film());  // into the driver's film: one film in memory
-            p.resumedPasses = c.info.passes;
-            p.driver->restore(nullptr, std::move(c.history));
-        }
-        return p;
-    });
-}
-
 void Viewer::updatePreparingImage() {
     // While the film is allocated: the preview's steady image, fetched after each of its passes.
-    if (!preview_ || preview_->completedPasses() == previewFetched_) return;
-    std::shared_ptr<const FilmSnapshot> snap = preview_->snapshot();
+    const Driver* preview = session_.preview();
+    if (!preview || preview->completedPasses() == previewFetched_) return;
+    std::shared_ptr<const FilmSnapshot> snap = preview->snapshot();
     previewFetched_ = snap->minPasses();
     frameRgb_ = steadyImage(*snap);
     snap.reset();
@@ -68,127 +51,24 @@ void Viewer::updatePreparingImage() {
     imageDirty_ = true;  // the film's first fetch applies the display again
 }
 
-std::shared_ptr<const FilmSnapshot> Viewer::shownSnapshot(bool steady) {
-    if (preview_ && driver_->completedPasses() >= preview_->completedPasses()) preview_.reset();  // caught up
-    return steady && preview_ ? preview_->snapshot() : driver_->snapshot();
-}
-
-uint64_t Viewer::shownPasses(bool steady) const {
-    const uint64_t film = driver_->completedPasses();
-    return steady && preview_ ? std::max(film, preview_->completedPasses()) : film;
-}
-
 void Viewer::restart(const RenderSettings& s, const std::string& why) {
-    preview_.reset();  // of the old settings
-    if (checkpointStage_ == CheckpointStage::Writing) {  // finish it (it holds the old driver)
-        checkpointJob_.wait();
-        pollCheckpoint();
-    }
-    checkpointStage_ = CheckpointStage::Idle;
-    if (driver_) driver_->stop();  // an export or a profile read may still hold the old one
-    driver_.reset();               // before the new film is allocated: one film in memory, not two
-    adopt(prepareDriver(scene_, s, time_, "").get(), why);
+    session_.restart(s);
+    adopted(why, 0);
 }
 
-void Viewer::adopt(PreparedDriver p, const std::string& why) {
-    driver_ = std::move(p.driver);
-    if (p.resumedPasses > 0)
-        std::printf("resumed %llu passes from the checkpoint\n", static_cast<unsigned long long>(p.resumedPasses));
-    ++generation_;
-    edit_ = driver_->settings();
-    driver_->start([](const PassStats&) { glfwPostEmptyEvent(); });  // wake the UI; no GL here
+void Viewer::adopted(const std::string& why, uint64_t resumedPasses) {
+    if (resumedPasses > 0)
+        std::printf("resumed %llu passes from the checkpoint\n", static_cast<unsigned long long>(resumedPasses));
+    edit_ = driver().settings();
     startedAt_ = glfwGetTime();
     firstLightSec_ = -1.0;
-    status_ = why;
-    const RenderSettings& s = driver_->settings();
+    session_.setStatus(why);
+    const RenderSettings& s = driver().settings();
     if (!why.empty()) {
         std::printf("%s (photons/pass %lld, alpha %.4g, initial radius %.6g m, pass limit %lld)\n", why.c_str(),
                     static_cast<long long>(s.photonsPerPass), s.alpha, s.beamRadius0, static_cast<long long>(s.passes));
     }
     std::fflush(stdout);
-}
-
-namespace {
-
-// Throws UserError when `path` is a checkpoint none of `own` names (another render's: saving would
-// replace it silently).
-void refuseForeignCheckpoint(const std::string& path, const std::vector<std::string>& own) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) return;
-    for (const std::string& o : own)
-        if (std::filesystem::equivalent(o, path, ec)) return;
-    std::string what = "a checkpoint that cannot be read";
-    try {
-        const CheckpointInfo info = readCheckpointInfo(path);
-        what = "the checkpoint of another render (" + std::to_string(info.passes) + " passes of " + info.scene +
-               ", written " + info.created + ")";
-    } catch (const UserError&) {
-    }
-    throw UserError(path, 0, "",
-                    "holds " + what + "; the viewer does not replace it: choose another folder in the Export "
-                    "section, or continue that render with `tpb view --resume " +
-                        std::filesystem::path(path).parent_path().string() + "`");
-}
-
-}  // namespace
-
-void Viewer::requestCheckpoint() {
-    if (checkpointStage_ != CheckpointStage::Idle) return;
-    checkpointWasPaused_ = driver_->paused();
-    driver_->pause();  // between passes: the checkpoint is written once the pass in progress ends
-    checkpointStage_ = CheckpointStage::WaitingForPassEnd;
-    status_ = "checkpoint: waiting for the pass in progress to end";
-}
-
-void Viewer::pollCheckpoint() {
-    if (checkpointStage_ == CheckpointStage::WaitingForPassEnd) {
-        const std::vector<PassStats> history = driver_->history();
-        const auto snap = driver_->snapshot();
-        const bool between = snap->minPasses() == snap->maxPasses() &&
-                             snap->minPasses() == static_cast<int64_t>(history.size());
-        if (!between) return;  // a pass is still being added (paused takes effect after it)
-        const std::string path = (std::filesystem::path(st_.outDir) / kCheckpointFile).string();
-        std::shared_ptr<FolderLock> lock;
-        try {
-            // The export folder's lock, as `tpb render` holds it on its output folder.
-            lock = FolderLock::acquire(st_.outDir, "tpb view", "choose another folder in the Export section");
-            refuseForeignCheckpoint(path, ownCheckpoints_);
-        } catch (const std::exception& e) {
-            status_ = std::string("checkpoint not written: ") + e.what();
-            std::fprintf(stderr, "error: %s\n", status_.c_str());
-            checkpointFailed_ = true;
-            checkpointStage_ = CheckpointStage::Idle;
-            if (!checkpointWasPaused_) driver_->resume();
-            return;
-        }
-        const CheckpointInfo info = checkpointInfoFor(prepared_, driver_->settings(), opt_.flags, history.size());
-        checkpointStage_ = CheckpointStage::Writing;
-        status_ = "checkpoint: writing " + path;
-        checkpointJob_ = std::async(std::launch::async, [d = driver_, path, info, history, lock]() -> std::string {
-            try {
-                writeCheckpoint(path, info, d->film(), history);
-                return "";
-            } catch (const std::exception& e) {
-                return std::string("error: ") + e.what();
-            }
-        });
-        return;
-    }
-    if (checkpointStage_ != CheckpointStage::Writing ||
-        checkpointJob_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
-        return;
-    const std::string err = checkpointJob_.get();
-    const std::string path = (std::filesystem::path(st_.outDir) / kCheckpointFile).string();
-    status_ = err.empty() ? "checkpoint of " + std::to_string(driver_->history().size()) + " passes written to " + path +
-                                " (tpb render --resume " + st_.outDir + ")"
-                          : "checkpoint failed: " + err;
-    if (err.empty()) ownCheckpoints_.push_back(path);
-    else checkpointFailed_ = true;
-    std::fprintf(err.empty() ? stdout : stderr, "%s\n", status_.c_str());
-    std::fflush(stdout);
-    checkpointStage_ = CheckpointStage::Idle;
-    if (!checkpointWasPaused_) driver_->resume();
-    glfwPostEmptyEvent();
 }
 
 float Viewer::binCentreOpl(int bin) const {
@@ -197,9 +77,9 @@ float Viewer::binCentreOpl(int bin) const {
 
 FetchKey Viewer::frameKey() const {
     FetchKey k;
-    k.generation = generation_;
+    k.generation = session_.generation();
     k.steady = st_.showSteady;
-    k.passes = shownPasses(k.steady);
+    k.passes = session_.shownPasses(k.steady);
     if (!k.steady) {
         k.bin = st_.bin;
         k.axis = st_.axis;
@@ -211,8 +91,8 @@ FetchKey Viewer::frameKey() const {
 
 FetchKey Viewer::profileKey() const {
     FetchKey k;
-    k.generation = generation_;
-    k.passes = driver_->completedPasses();
+    k.generation = session_.generation();
+    k.passes = driver().completedPasses();
     k.x = st_.selX;
     k.y = st_.selY;
     k.axis = st_.axis;
@@ -223,8 +103,8 @@ FetchKey Viewer::profileKey() const {
 
 FetchKey Viewer::binEnergyKey() const {
     FetchKey k;
-    k.generation = generation_;
-    k.passes = driver_->completedPasses();
+    k.generation = session_.generation();
+    k.passes = driver().completedPasses();
     k.axis = st_.axis;
     return k;
 }
@@ -238,10 +118,10 @@ void Viewer::updateFrame() {
     // times a second, and at most a tenth of the UI thread's time (a continuous frame reads the
     // prefix sums, computed once per tile block on the first continuous read).
     const bool changed = !(key == frameKey_);
-    const bool rendering = driver_->running() && !driver_->paused();
+    const bool rendering = driver().running() && !driver().paused();
     const double gap = std::max(frameComplete_ ? 0.25 : 1.0 / 30.0, 10.0 * fetchSec_);
     if (changed || ((!frameComplete_ || rendering) && now - lastFetch_ >= gap)) {
-        std::shared_ptr<const FilmSnapshot> snap = shownSnapshot(key.steady);
+        std::shared_ptr<const FilmSnapshot> snap = session_.shownSnapshot(key.steady);
         frameRgb_ = key.steady ? steadyImage(*snap) : frameImage(*snap, key.bin, key.axis, key.mode, key.response);
         frameComplete_ = snap->minPasses() == snap->maxPasses();
         const int width = snap->width(), height = snap->height();
@@ -278,7 +158,7 @@ void Viewer::trackNoise(const FetchKey& key) {
         noise_.reset(frameRgb_.size() / 3);
     }
     if (!frameComplete_ || key.passes == 0) return;
-    const RenderSettings& s = driver_->settings();
+    const RenderSettings& s = driver().settings();
     double weight = 0.0;  // the film's divisor after key.passes passes (render_settings.h passWeight)
     for (uint64_t i = 1; i <= key.passes; ++i) weight += s.passWeight(i);
     std::vector<float> lum(frameRgb_.size() / 3);
@@ -291,10 +171,10 @@ void Viewer::fitHiddenFrameExposure() {
     // The steady image is shown, the frames' exposure still automatic: fit it to the frame of the
     // automatic bin once that bin is decided (a complete pass), so that the frame the user switches
     // to, the streak image and the MP4/contact sheet exports are exposed for frames.
-    const uint64_t passes = driver_->completedPasses();
+    const uint64_t passes = driver().completedPasses();
     if (!st_.showSteady || !st_.autoFrame || st_.autoBin || passes == 0 || passes == hiddenFitPasses_) return;
     hiddenFitPasses_ = passes;
-    std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+    std::shared_ptr<const FilmSnapshot> snap = driver().snapshot();
     const std::vector<float> rgb = frameImage(*snap, st_.bin, st_.axis, st_.mode, st_.response);
     snap.reset();
     const ExposureFit fit = fitExposure(rgb);
@@ -328,7 +208,7 @@ void Viewer::updateBinEnergy() {
     if (binEnergyJob_.valid() && binEnergyJob_.wait_for(0s) == std::future_status::ready) {
         const BinEnergyResult r = binEnergyJob_.get();
         binEnergySec_ = glfwGetTime() - binEnergyLaunched_;
-        if (st_.autoBin && r.key.generation == generation_ && r.key.axis == st_.axis) {
+        if (st_.autoBin && r.key.generation == session_.generation() && r.key.axis == st_.axis) {
             const int k = peakEnergyBin(r.energy);
             if (k >= 0) setAutoBin(k);
             if (r.complete && r.key.passes > 0) {  // the first pass is in: keep this bin
@@ -346,12 +226,12 @@ void Viewer::updateBinEnergy() {
     // Again when a pass completes, and a few times a second during the first pass (as its tiles
     // finish), taking at most a tenth of one core (it reads every bin of the film once).
     const double now = glfwGetTime();
-    const bool rendering = driver_->running() && !driver_->paused();
+    const bool rendering = driver().running() && !driver().paused();
     const bool due = rendering && now - binEnergyLaunched_ >= std::max(0.25, 10.0 * binEnergySec_);
     if (key == binEnergyRequested_ && !due) return;
     binEnergyRequested_ = key;
     binEnergyLaunched_ = now;
-    std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+    std::shared_ptr<const FilmSnapshot> snap = driver().snapshot();
     // The job lets go of its snapshot as soon as it has read it: the callable (and what it holds)
     // lives in the future's state until the UI thread collects the result, a frame or more later,
     // and every tile a render thread finished meanwhile would be copied (tile blocks held by a
@@ -370,7 +250,7 @@ void Viewer::updateProfile() {
     using namespace std::chrono_literals;
     if (profileJob_.valid() && profileJob_.wait_for(0s) == std::future_status::ready) {
         ProfileResult r = profileJob_.get();
-        if (r.key.generation == generation_) {
+        if (r.key.generation == session_.generation()) {
             profileKey_ = r.key;
             profileRgb_ = std::move(r.profile);
             profileLum_.resize(profileRgb_.size() / 3);
@@ -384,7 +264,7 @@ void Viewer::updateProfile() {
     const FetchKey key = profileKey();
     if (!profileJob_.valid() && !(key == profileRequested_)) {
         profileRequested_ = key;
-        std::shared_ptr<const FilmSnapshot> snap = driver_->snapshot();
+        std::shared_ptr<const FilmSnapshot> snap = driver().snapshot();
         profileJob_ = std::async(std::launch::async, [snap = std::move(snap), key]() mutable {
             ProfileResult r;
             r.key = key;
@@ -405,26 +285,6 @@ void Viewer::updateProfile() {
         lastStreakParams_ = p;
         streakDirty_ = false;
     }
-}
-
-void Viewer::startExport(const ExportRequest& req) {
-    if (export_.busy()) {
-        status_ = "an export is already running";
-        return;
-    }
-    exportError_.clear();
-    exportLog_.clear();
-    export_.start(driver_, req);
-}
-
-void Viewer::pollExport() {
-    if (!export_.collect()) return;
-    exportLog_ = export_.written();
-    exported_.insert(exported_.end(), exportLog_.begin(), exportLog_.end());
-    exportError_ = export_.error();
-    for (const std::string& w : exportLog_) std::printf("exported: %s\n", w.c_str());
-    if (!exportError_.empty()) std::fprintf(stderr, "export failed: %s\n", exportError_.c_str());
-    std::fflush(stdout);
 }
 
 }  // namespace tpb::app

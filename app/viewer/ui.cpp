@@ -185,8 +185,8 @@ void Viewer::drawUi() {
     if (!firstRecorded_) {  // the layout the user first aims at (screenshot mode reports it)
         firstRecorded_ = true;
         firstControls_ = controls_;
-        firstPasses_ = driver_->completedPasses();
-        firstRunning_ = driver_->running();
+        firstPasses_ = driver().completedPasses();
+        firstRunning_ = driver().running();
     }
 }
 
@@ -356,13 +356,13 @@ void drawFilmStats(const FilmStats& fs, TimeAxis shownAxis) {
 
 void Viewer::drawProgressSection() {
     if (!section("Progress", ImGuiTreeNodeFlags_DefaultOpen)) return;
-    const RenderSettings& s = driver_->settings();
-    const uint64_t done = driver_->completedPasses();
-    const PassStats last = driver_->lastPass();
-    const bool running = driver_->running();
-    const bool failed = !running && driver_->failure();
+    const RenderSettings& s = driver().settings();
+    const uint64_t done = driver().completedPasses();
+    const PassStats last = driver().lastPass();
+    const bool running = driver().running();
+    const bool failed = !running && driver().failure();
     const char* state = failed ? "stopped by an error, see below" : !running ? "finished"
-                        : driver_->paused() ? "paused" : "rendering";
+                        : driver().paused() ? "paused" : "rendering";
     if (s.passes > 0)
         ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes), state);
     else
@@ -421,24 +421,26 @@ void Viewer::drawProgressSection() {
         ImGui::TextDisabled("trace -, build -, camera -");
         ImGui::TextDisabled("total time -");
     }
-    drawFilmStats(driver_->film().stats, st_.axis);
+    drawFilmStats(driver().film().stats, st_.axis);
     // Pause/Resume stays (disabled) when the render has finished, so the rows below keep their place.
-    const char* pause = running && driver_->paused() ? "Resume###render" : "Pause###render";
+    const char* pause = running && driver().paused() ? "Resume###render" : "Pause###render";
     ImGui::BeginDisabled(!running);
     if (ImGui::Button(pause, ImVec2(80, 0))) {
-        if (driver_->paused()) driver_->resume();
-        else driver_->pause();
+        if (driver().paused()) driver().resume();
+        else driver().pause();
     }
     ImGui::EndDisabled();
     track(pause);
     if (running && ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
         ImGui::SetTooltip("takes effect between passes");
     ImGui::SameLine();
-    if (ImGui::Button("Restart", ImVec2(80, 0))) restart(driver_->settings(), "accumulation restarted");
+    if (ImGui::Button("Restart", ImVec2(80, 0))) restart(driver().settings(), "accumulation restarted");
     track("Restart");
     ImGui::SameLine();
-    ImGui::BeginDisabled(checkpointStage_ != CheckpointStage::Idle || driver_->settings().method != Method::Beams);
-    if (ImGui::Button("Save checkpoint")) requestCheckpoint();
+    // Any progressive method (the preview's one pass is its answer: nothing to resume).
+    ImGui::BeginDisabled(session_.checkpointStage() != ViewerSession::CheckpointStage::Idle ||
+                         driver().settings().method == Method::Preview);
+    if (ImGui::Button("Save checkpoint")) session_.requestCheckpoint(st_.outDir);
     ImGui::EndDisabled();
     track("Save checkpoint");
     if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
@@ -523,7 +525,7 @@ void Viewer::drawTimeResponse() {
         char b[200];
         std::snprintf(b, sizeof b, "pulse/sensor not applied: it spans %.3g bins of this film, the limit is 2^20; "
                       "narrow it (or render with fewer --bins)", span);
-        status_ = b;
+        session_.setStatus(b);
         return;
     }
     if (!(r == st_.response)) {
@@ -536,7 +538,7 @@ void Viewer::drawTimeResponse() {
 // change restarts the accumulation (an average over passes of different estimators means nothing)
 // and says so. Returns true when it restarted.
 bool Viewer::drawEstimatorSettings() {
-    const RenderSettings& cur = driver_->settings();
+    const RenderSettings& cur = driver().settings();
     const std::vector<std::string>& names = volumeEstimatorNames();
     int e = 0;
     for (size_t i = 0; i < names.size(); ++i)
@@ -578,10 +580,10 @@ bool Viewer::drawEstimatorSettings() {
     try {
         const double diag = scene_.bounds.diagonal() > 0.0 ? scene_.bounds.diagonal() : 1.0;
         for (const std::string& w : s.validate({nullptr, &o, diag})) std::fprintf(stderr, "warning: %s\n", w.c_str());
-        const TimeBins& t = driver_->film().time();
+        const TimeBins& t = driver().film().time();
         s.validateAgainstFilm(t.binWidth * t.bins, {nullptr, &o, diag});
     } catch (const UserError& err) {
-        status_ = std::string("invalid setting: ") + err.what() + ": not applied";
+        session_.setStatus(std::string("invalid setting: ") + err.what() + ": not applied");
         edit_.timeKernel = cur.timeKernel;
         return false;
     }
@@ -598,16 +600,16 @@ void Viewer::drawSettingsSection() {
     // scrubbing, toggles and exports work the same for each.
     const Method methods[] = {Method::Beams, Method::PathTracer, Method::Preview};
     const char* methodLabels[] = {"photon beams", "path tracer", "geometry preview"};
-    int m = static_cast<int>(driver_->settings().method);
-    if (ImGui::Combo("method", &m, methodLabels, 3) && methods[m] != driver_->settings().method) {
-        RenderSettings s = driver_->settings();
+    int m = static_cast<int>(driver().settings().method);
+    if (ImGui::Combo("method", &m, methodLabels, 3) && methods[m] != driver().settings().method) {
+        RenderSettings s = driver().settings();
         s.method = methods[m];
         edit_.method = s.method;
         askRestart(s, std::string("method ") + methodName(s.method));
         return;
     }
     track("method");
-    if (driver_->settings().method == Method::Beams && drawEstimatorSettings()) return;
+    if (driver().settings().method == Method::Beams && drawEstimatorSettings()) return;
     bool apply = false;
     const int64_t step = 1000, stepFast = 10000;
     ImGui::InputScalar("photons / pass", ImGuiDataType_S64, &edit_.photonsPerPass, &step, &stepFast);
@@ -635,7 +637,7 @@ void Viewer::drawSettingsSection() {
             edit_.beamRadius0 = std::min(rp.radius, kMaxRadiusFraction * scene_.bounds.diagonal());
             apply = true;
         }
-        status_ = "auto radius: " + rp.why;
+        session_.setStatus("auto radius: " + rp.why);
     }
     if (ImGui::IsItemHovered())
         ImGui::SetTooltip("the initial radius from a pilot pass's photon density: a camera ray through the\n"
@@ -647,7 +649,7 @@ void Viewer::drawSettingsSection() {
     apply |= ImGui::IsItemDeactivatedAfterEdit();
     track("pass limit (0: none)");
     if (!apply) return;
-    const RenderSettings& cur = driver_->settings();
+    const RenderSettings& cur = driver().settings();
     if (edit_.photonsPerPass == cur.photonsPerPass && edit_.warmupPasses == cur.warmupPasses && edit_.alpha == cur.alpha &&
         edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
         return;
@@ -666,7 +668,7 @@ void Viewer::drawSettingsSection() {
         const double diag = scene_.bounds.diagonal() > 0.0 ? scene_.bounds.diagonal() : 1.0;
         warnings = s.validate({nullptr, &o, diag});
     } catch (const UserError& e) {
-        status_ = std::string("invalid setting: ") + e.what() + ": not applied";
+        session_.setStatus(std::string("invalid setting: ") + e.what() + ": not applied");
         edit_ = cur;
         return;
     }
@@ -676,7 +678,7 @@ void Viewer::drawSettingsSection() {
 
 void Viewer::askRestart(const RenderSettings& s, const std::string& what) {
     // Nothing to lose yet: restart at once. Otherwise ask (drawPopups): the passes are discarded.
-    if (driver_->completedPasses() == 0) {
+    if (driver().completedPasses() == 0) {
         restart(s, what + ": accumulation restarted");
         return;
     }
@@ -687,7 +689,7 @@ void Viewer::askRestart(const RenderSettings& s, const std::string& what) {
 
 void Viewer::requestQuit() {
     // A keyboard quit (Esc, Q): at once, unless an export would be cut short.
-    if (export_.busy()) {
+    if (session_.exportJob().busy()) {
         openPopup_ = kQuitPopup;
         std::printf("quit: asked first, an export is running\n");
         std::fflush(stdout);
@@ -705,7 +707,7 @@ void Viewer::drawPopups() {
     }
     if (ImGui::BeginPopupModal(kRestartPopup, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
         section_ = kRestartPopup;
-        const unsigned long long done = driver_->completedPasses();
+        const unsigned long long done = driver().completedPasses();
         ImGui::Text("%s: this restarts the accumulation.", pendingWhat_.c_str());
         ImGui::Text("The %llu pass%s rendered so far will be discarded.", done, done == 1 ? "" : "es");
         if (ImGui::Button("Restart##confirm")) {
@@ -717,8 +719,8 @@ void Viewer::drawPopups() {
         ImGui::SameLine();
         if (ImGui::Button("Keep the accumulation") || ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
             pendingRestart_.reset();
-            edit_ = driver_->settings();
-            status_ = pendingWhat_ + ": not applied, the accumulation is kept";
+            edit_ = driver().settings();
+            session_.setStatus(pendingWhat_ + ": not applied, the accumulation is kept");
             ImGui::CloseCurrentPopup();
         }
         track("Keep the accumulation");
@@ -726,7 +728,7 @@ void Viewer::drawPopups() {
     }
     if (ImGui::BeginPopupModal(kQuitPopup, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
         section_ = kQuitPopup;
-        ImGui::Text("An export is running (%s).", export_.progressLabel().c_str());
+        ImGui::Text("An export is running (%s).", session_.exportJob().progressLabel().c_str());
         if (ImGui::Button("Quit after the export")) {  // finishBeforeClosing finishes it
             ImGui::CloseCurrentPopup();
             glfwSetWindowShouldClose(window_, GLFW_TRUE);
@@ -734,13 +736,13 @@ void Viewer::drawPopups() {
         track("Quit after the export");
         ImGui::SameLine();
         if (ImGui::Button("Cancel it and quit")) {  // a cancelled MP4 or volume leaves no file
-            export_.cancel();
+            session_.exportJob().cancel();
             ImGui::CloseCurrentPopup();
             glfwSetWindowShouldClose(window_, GLFW_TRUE);
         }
         track("Cancel it and quit");
         ImGui::SameLine();
-        if (ImGui::Button("Keep exporting") || !export_.busy()) ImGui::CloseCurrentPopup();
+        if (ImGui::Button("Keep exporting") || !session_.exportJob().busy()) ImGui::CloseCurrentPopup();
         track("Keep exporting");
         ImGui::EndPopup();
     }
@@ -770,7 +772,7 @@ void Viewer::drawExportSection() {
     r.sheetFrames = st_.sheetFrames;
     r.scenePath = scenePath_;
     r.response = st_.response;
-    const bool busy = export_.busy();
+    const bool busy = session_.exportJob().busy();
     ImGui::BeginDisabled(busy);
     bool go = false;
     if (ImGui::Button("Current frame")) go = r.frame = true;
@@ -804,31 +806,31 @@ void Viewer::drawExportSection() {
     ImGui::EndDisabled();
     if (ImGui::Button("Window screenshot (F12)")) snapRequested_ = true;
     track("Window screenshot (F12)");
-    if (go) startExport(r);  // its progress bar and Cancel button are in the messages, below
+    if (go) session_.startExport(r);  // its progress bar and Cancel button are in the messages, below
 }
 
 void Viewer::drawMessages() {
     // The export in progress, the render's error, the last action's status, the last export.
-    if (export_.busy()) {
-        ImGui::ProgressBar(export_.progress(), ImVec2(-70, 0), export_.progressLabel().c_str());
+    if (session_.exportJob().busy()) {
+        ImGui::ProgressBar(session_.exportJob().progress(), ImVec2(-70, 0), session_.exportJob().progressLabel().c_str());
         ImGui::SameLine();
-        if (ImGui::Button("Cancel")) export_.cancel();
+        if (ImGui::Button("Cancel")) session_.exportJob().cancel();
         track("Cancel");
     }
-    if (!driver_->running() && driver_->failure()) {
+    if (!driver().running() && driver().failure()) {
         // The render thread caught it (core/render/driver.h): the finished passes stay on screen.
-        wrappedColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "error: " + driver_->failureMessage());
+        wrappedColored(ImVec4(1.0f, 0.4f, 0.35f, 1.0f), "error: " + driver().failureMessage());
         track("error");
     }
-    if (!status_.empty()) {
-        wrappedColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), status_);
+    if (!session_.status().empty()) {
+        wrappedColored(ImVec4(1.0f, 0.85f, 0.3f, 1.0f), session_.status());
         track("status");
     }
-    if (!exportError_.empty() && !export_.busy()) {
-        wrappedColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), exportError_);
+    if (!session_.exportError().empty() && !session_.exportJob().busy()) {
+        wrappedColored(ImVec4(1.0f, 0.4f, 0.4f, 1.0f), session_.exportError());
         track("export error");
     }
-    for (const std::string& w : exportLog_) ImGui::TextWrapped("wrote %s", w.c_str());
+    for (const std::string& w : session_.exportLog()) ImGui::TextWrapped("wrote %s", w.c_str());
 }
 
 void Viewer::drawImagePanel() {
@@ -838,7 +840,7 @@ void Viewer::drawImagePanel() {
                            ImGui::GetStyle().ItemSpacing.x;
     ImGui::PushTextWrapPos(ImGui::GetContentRegionMax().x - buttonsW - ImGui::GetStyle().ItemSpacing.x);
     if (st_.showSteady) {
-        const bool fromPreview = preview_ && frameKey_.passes > driver_->completedPasses();
+        const bool fromPreview = session_.preview() && frameKey_.passes > driver().completedPasses();
         ImGui::TextWrapped("Steady state (all time), %llu passes%s%s", static_cast<unsigned long long>(frameKey_.passes),
                            fromPreview ? " (the preview's, until the film catches up)" : "",
                            st_.steadyUntilTime ? "  -  pick a time (slider, Left/Right, Play) to see the pulse" : "");

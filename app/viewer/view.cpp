@@ -1,7 +1,6 @@
 // `tpb view`: the interactive viewer (GLFW window, OpenGL 3.3 core, Dear ImGui). The driver
 // renders in the background; this file holds the command line, the window and the main loop,
 // including the headless screenshot mode used by the tests (--screenshot, --after-passes).
-#include "cli/commands.h"
 #include "base/error.h"
 #include "io/image_io.h"
 #include "viewer/app.h"
@@ -78,7 +77,7 @@ private:
 
 // Key presses (and auto-repeats), recorded by a GLFW key callback: ImGui 1.86 samples key states
 // once per frame, so a press and release between two frames would be lost. ImGui chains to it.
-std::vector<int> gKeys;
+std::vector<int> gKeys;  // (pressedKeys())
 void onKey(GLFWwindow*, int key, int, int action, int) {
     const bool arrow = key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT;  // the only keys that repeat
     if (action == GLFW_PRESS || (action == GLFW_REPEAT && arrow)) gKeys.push_back(key);
@@ -145,9 +144,16 @@ public:
 
 }  // namespace
 
+std::vector<int>& pressedKeys() { return gKeys; }
+
 Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt,
                GLFWwindow* window, const std::string& resumePath)
-    : prepared_(prepared), scene_(*prepared.scene), time_(prepared.time), scenePath_(prepared.source.path), opt_(opt), window_(window) {
+    : prepared_(prepared), scene_(*prepared.scene), time_(prepared.time), scenePath_(prepared.source.path), opt_(opt),
+      window_(window),
+      // The steady preview while the film is allocated (session.h): not on a resume (the checkpoint
+      // has passes to show) nor in screenshot mode (the picture is of --after-passes).
+      session_(prepared, settings, opt.flags, resumePath, resumePath.empty() && opt.screenshot.empty(),
+               [] { glfwPostEmptyEvent(); }) {
     const Scene& scene = scene_;
     program_.load(TPB_SHADER_DIR);
     const int maxTex = maxTextureSize();
@@ -197,168 +203,14 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     }
     frameRgb_.assign(static_cast<size_t>(scene.camera.width) * scene.camera.height * 3, 0.0f);
     image_.upload(scene.camera.width, scene.camera.height, frameRgb_.data());
-    if (!resumePath.empty()) ownCheckpoints_.push_back(resumePath);  // "Save checkpoint" may replace it
-    prepareJob_ = prepareDriver(scene_, settings, time_, resumePath);  // run() waits for it (waitForFilm)
-    // The steady preview while the film is allocated (app.h, preview_): not on a resume (the
-    // checkpoint has passes to show) nor in screenshot mode (the picture is of --after-passes).
-    if (resumePath.empty() && opt.screenshot.empty()) {
-        RenderSettings ps = settings;
-        const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-        ps.threads = std::max(1, (settings.threads > 0 ? settings.threads : cores) - 1);  // a core for the allocation
-        TimeBins one = time_;
-        one.binWidth = time_.binWidth * time_.bins;
-        one.bins = 1;
-        preview_ = std::make_shared<Driver>(scene_, ps, one);
-        preview_->start([](const PassStats&) { glfwPostEmptyEvent(); });
-    }
 }
 
 Viewer::~Viewer() {
-    // Helper threads first (they only read the film), then the render workers; the GL objects
-    // (members) are deleted afterwards, while the context still exists.
-    export_.cancelAndJoin();
-    if (checkpointJob_.valid()) checkpointJob_.wait();  // a checkpoint being written is finished, not cut
+    // Helper threads first (they only read the film); the session then finishes a checkpoint being
+    // written, cancels an export and stops the render; the GL objects (members declared after the
+    // session) are deleted first, while the context still exists.
     if (profileJob_.valid()) profileJob_.wait();
     if (binEnergyJob_.valid()) binEnergyJob_.wait();
-    if (preview_) preview_->stop();
-    if (prepareJob_.valid()) prepareJob_.wait();  // closed while preparing: the film is dropped once made
-    if (driver_) driver_->stop();
-}
-
-bool Viewer::settled() {
-    if (driver_->running() || export_.busy() || profileJob_.valid() || binEnergyJob_.valid() ||
-        checkpointStage_ != CheckpointStage::Idle)
-        return false;
-    if (st_.autoBin && !(binEnergyRequested_ == binEnergyKey())) return false;
-    if (!(frameKey_ == frameKey()) || !frameComplete_) return false;
-    return profileKey_ == profileKey();
-}
-
-namespace {
-
-// The keys a script can press (--click key:NAME), as GLFW codes; -1 for another name.
-int scriptedKey(const std::string& name) {
-    const std::pair<const char*, int> keys[] = {{"Escape", GLFW_KEY_ESCAPE}, {"Q", GLFW_KEY_Q},   {"F", GLFW_KEY_F},
-                                                {"1", GLFW_KEY_1},           {"Left", GLFW_KEY_LEFT}, {"Right", GLFW_KEY_RIGHT},
-                                                {"Space", GLFW_KEY_SPACE}};
-    for (const auto& [n, code] : keys)
-        if (name == n) return code;
-    return -1;
-}
-
-// "Export (EXR)/Current frame" may be written "Export/Current frame" (a section without its note).
-bool controlNamed(const ControlRect& c, const std::string& want) {
-    if (c.name == want) return true;
-    const size_t slash = c.name.find('/'), paren = c.name.find(" (");
-    return slash != std::string::npos && paren < slash && c.name.substr(0, paren) + c.name.substr(slash) == want;
-}
-
-}  // namespace
-
-void Viewer::scriptedInput() {
-    // Screenshot mode: the pointer stays off the window (no hover in the picture) except to do the
-    // --click and --export clicks, as ImGui mouse input, so they go where a user's clicks go: the
-    // control's hit test and ID. Each waits until the previous one's effect is over.
-    ImGuiIO& io = ImGui::GetIO();
-    io.MousePos = ImVec2(-FLT_MAX, -FLT_MAX);
-    for (bool& down : io.MouseDown) down = false;
-    if (clickIndex_ >= clicks_.size() || !scriptError_.empty()) return;
-    const std::string& want = clicks_[clickIndex_];
-    if (want.rfind("key:", 0) == 0) {  // a key press, on the frame after the previous click
-        if (clickIndex_ == 0 && settleFrames_ < 3) return;
-        const int key = scriptedKey(want.substr(4));
-        if (key < 0) {
-            scriptError_ = "--click '" + want + "': no such key; the keys are Escape, Q, F, 1, Left, Right, Space";
-            return;
-        }
-        std::printf("key: %s\n", want.c_str() + 4);
-        std::fflush(stdout);
-        gKeys.push_back(key);
-        ++clickIndex_;
-        settleFrames_ = 0;
-        return;
-    }
-    if (clickPhase_ == 0) {
-        if (settleFrames_ < 3) return;
-        const auto c = std::find_if(controls_.begin(), controls_.end(),
-                                    [&](const ControlRect& r) { return controlNamed(r, want); });
-        if (c == controls_.end()) {
-            scriptError_ = "--click '" + want + "': no such control in the window; the controls are:";
-            for (const ControlRect& r : controls_) scriptError_ += "\n  " + r.name;
-            return;
-        }
-        if (!c->visible) {
-            scriptError_ = "--click '" + want + "': the control is scrolled out of view; use a taller --window-size";
-            return;
-        }
-        clickPos_ = ImVec2(std::floor(0.5f * (c->min.x + c->max.x)), std::floor(0.5f * (c->min.y + c->max.y)));
-        std::printf("click: %s at %.0f %.0f\n", c->name.c_str(), clickPos_.x, clickPos_.y);
-        std::fflush(stdout);
-    }
-    // Frames: 1 hover, 2 press, 3 release (a button fires on release over it).
-    ++clickPhase_;
-    io.MousePos = clickPos_;
-    io.MouseDown[0] = clickPhase_ == 2;
-    if (clickPhase_ == 3) {
-        clickPhase_ = 0;
-        ++clickIndex_;
-        settleFrames_ = 0;
-    }
-}
-
-void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
-    const std::vector<unsigned char> px = readBackBuffer(fbWidth, fbHeight);
-    const std::filesystem::path parent = std::filesystem::path(opt_.screenshot).parent_path();
-    if (!parent.empty()) ensureWritableDir(parent.string());
-    writePng8(opt_.screenshot, fbWidth, fbHeight, px);
-    screenshotTaken_ = true;
-    const uint64_t passes = driver_->completedPasses();
-    if (passes < static_cast<uint64_t>(opt_.afterPasses))
-        std::fprintf(stderr, "warning: the render stopped after %llu passes (asked: %lld)\n",
-                     static_cast<unsigned long long>(passes), static_cast<long long>(opt_.afterPasses));
-    std::printf("screenshot: %s (%dx%d) after %llu passes\n", opt_.screenshot.c_str(), fbWidth, fbHeight,
-                static_cast<unsigned long long>(passes));
-    // Machine-readable: where the film image is in the screenshot and how it was mapped.
-    std::printf("image_area %.3f %.3f %.3f %.3f zoom %.6f exposure_ev %.9g bin %d steady %d mode %s axis %s\n",
-                imageMin_.x, imageMin_.y, imageSize_.x, imageSize_.y, imageZoom_,
-                static_cast<double>(st_.showSteady ? st_.evSteady : st_.evFrame), st_.bin, st_.showSteady ? 1 : 0,
-                st_.mode == EmissionMode::Delta ? "delta" : "continuous",
-                st_.axis == TimeAxis::Real ? "real" : "unwarped");
-    std::printf("image_panel %.3f %.3f %.3f %.3f fit %d\n", canvasMin_.x, canvasMin_.y, canvasSize_.x, canvasSize_.y,
-                view_.fit ? 1 : 0);
-    // The time axes' ticks (ns) and the colour bar's labels, as drawn.
-    const auto labels = [](const char* what, const std::vector<AxisTick>& ticks) {
-        std::printf("%s", what);
-        for (const AxisTick& t : ticks) std::printf(" %s", t.label.c_str());
-        std::printf("\n");
-    };
-    labels("ticks streak_ns", streakTicksNs_);
-    labels("ticks profile_ns", profileTicksNs_);
-    labels("colour_bar", colourBarTicks_);
-    std::printf("profile_log %d\n", st_.profileLog ? 1 : 0);
-    std::printf("noise relative_error %.6g batches %d\n", noise_.relativeError(), noise_.batches());
-    // How fast the picture came: seconds from the driver's start to the first fetched image with
-    // light, and to the end of each pass (the warm-up's effect; issue 15's targets: light within 1 s,
-    // four passes within 3 s).
-    std::printf("timeline first_light_s %.3f warmup %d pass_end_s", firstLightSec_, driver_->settings().warmupPasses);
-    for (const PassStats& ps : driver_->history()) std::printf(" %.3f", ps.elapsedSec);
-    // Tile adds that had to copy their block because the viewer held a snapshot of it, of all.
-    const FilmStats& fs = driver_->film().stats;
-    std::printf(" copied_tiles %lld of %lld\n", static_cast<long long>(fs.copiedTiles.load()),
-                static_cast<long long>(fs.stagedTiles.load()));
-    // From the launch of `tpb view`: the window's first frame, the film ready (the passes start).
-    std::printf("opening window_s %.3f film_ready_s %.3f\n", windowShownSec_, filmReadySec_);
-    // The controls (window pixels) now and in the first frame, drawn while the first pass rendered.
-    std::printf("messages_area %.1f %.1f\n", controlsMinX_, controlsMaxX_);
-    std::printf("layout_first passes %llu running %d\n", static_cast<unsigned long long>(firstPasses_),
-                firstRunning_ ? 1 : 0);
-    for (const ControlRect& c : firstControls_)
-        std::printf("control_first %.1f %.1f %.1f %.1f %s\n", c.min.x, c.min.y, c.max.x - c.min.x, c.max.y - c.min.y,
-                    c.name.c_str());
-    for (const ControlRect& c : controls_)
-        std::printf("control %.1f %.1f %.1f %.1f %s\n", c.min.x, c.min.y, c.max.x - c.min.x, c.max.y - c.min.y,
-                    c.name.c_str());
-    std::fflush(stdout);
 }
 
 void Viewer::saveSnapshot(int fbWidth, int fbHeight) {
@@ -369,34 +221,19 @@ void Viewer::saveSnapshot(int fbWidth, int fbHeight) {
     try {
         ensureWritableDir(dir);
         writePng8(dir + name, fbWidth, fbHeight, readBackBuffer(fbWidth, fbHeight));
-        status_ = "saved " + dir + name;
+        session_.setStatus("saved " + dir + name);
         std::printf("saved %s%s\n", dir.c_str(), name);
         std::fflush(stdout);
     } catch (const std::exception& e) {
-        status_ = e.what();
+        session_.setStatus(e.what());
     }
-}
-
-void Viewer::endFrameChecks() {
-    // Screenshot mode: the film is final, every click done and its effect over. Checks, then the
-    // picture is taken by the caller.
-    if (!exportError_.empty() || checkpointFailed_) exitCode() = kExitUserError;
-    if (!opt_.exportDir.empty()) {
-        const std::string frame = st_.outDir + "/" + exportFrameName(st_.bin, st_.axis, st_.mode, st_.response);
-        for (const std::string& want : {frame, st_.outDir + "/steady.exr"})
-            if (std::find(exported_.begin(), exported_.end(), want) == exported_.end()) {
-                std::fprintf(stderr, "error: --export: the Export buttons did not write %s\n", want.c_str());
-                exitCode() = 1;
-            }
-    }
-    if (!idClashes_.empty()) exitCode() = 1;  // reported on stderr when found
 }
 
 bool Viewer::waitForFilm() {
     // The window is open: show what is being prepared while the film is allocated (and a
     // checkpoint read) on a helper thread, instead of a black window for seconds.
     using namespace std::chrono_literals;
-    while (prepareJob_.wait_for(0s) != std::future_status::ready) {
+    while (!session_.filmReady()) {
         if (glfwWindowShouldClose(window_) || gCloseSignal.load() != 0) return false;
         glfwPollEvents();
         int fbw = 0, fbh = 0;
@@ -415,10 +252,9 @@ bool Viewer::waitForFilm() {
             glfwSwapBuffers(window_);
             if (windowShownSec_ < 0.0) windowShownSec_ = nowSec() - opt_.launchedAt;
         }
-        prepareJob_.wait_for(100ms);  // a few frames a second: the cores are the allocation's
+        std::this_thread::sleep_for(100ms);  // a few frames a second: the cores are the allocation's
     }
-    if (preview_) preview_->requestStop();  // after its pass in progress: a complete picture
-    adopt(prepareJob_.get(), "");
+    adopted("", session_.adoptFirst());
     filmReadySec_ = nowSec() - opt_.launchedAt;
     std::printf("film ready %.2f s after the launch (window shown after %.2f s)\n", filmReadySec_, windowShownSec_);
     std::fflush(stdout);
@@ -430,16 +266,16 @@ void Viewer::run() {
     if (!waitForFilm()) {
         if (shot) {
             std::fprintf(stderr, "error: the viewer was closed before the screenshot was taken\n");
-            exitCode() = 1;
+            exitCode_ = 1;
         }
         return;
     }
     double last = glfwGetTime();
     int extraFrames = 3;  // after an event, draw a few frames so ImGui settles
     while (!glfwWindowShouldClose(window_) && gCloseSignal.load() == 0) {
-        const bool busyDriver = driver_->running() && !driver_->paused();
+        const bool busyDriver = driver().running() && !driver().paused();
         const bool animate =
-            shot || st_.playing || export_.busy() || profileJob_.valid() || binEnergyJob_.valid() || !frameComplete_;
+            shot || st_.playing || session_.exportJob().busy() || profileJob_.valid() || binEnergyJob_.valid() || !frameComplete_;
         if (animate || extraFrames > 0) {
             glfwPollEvents();
             if (extraFrames > 0) --extraFrames;
@@ -451,8 +287,8 @@ void Viewer::run() {
         int fbw = 0, fbh = 0;
         glfwGetFramebufferSize(window_, &fbw, &fbh);
         if (fbw <= 0 || fbh <= 0 || glfwGetWindowAttrib(window_, GLFW_ICONIFIED)) {  // minimised: nothing to draw
-            pollExport();
-            pollCheckpoint();
+            session_.pollExport();
+            session_.pollCheckpoint();
             glfwWaitEventsTimeout(0.1);
             continue;
         }
@@ -464,11 +300,11 @@ void Viewer::run() {
         const double now = glfwGetTime();
         const double dt = now - last;
         last = now;
-        handleKeys(gKeys);
-        gKeys.clear();
+        handleKeys(pressedKeys());
+        pressedKeys().clear();
         advancePlayback(dt);
-        pollExport();
-        pollCheckpoint();
+        session_.pollExport();
+        session_.pollCheckpoint();
         updateFrame();
         updateProfile();
         updateBinEnergy();
@@ -483,7 +319,7 @@ void Viewer::run() {
         if (shot) {
             if (!scriptError_.empty()) {
                 std::fprintf(stderr, "error: %s\n", scriptError_.c_str());
-                exitCode() = kExitUserError;
+                exitCode_ = kViewerExitUserError;
                 screenshotTaken_ = true;  // nothing to take: the error says why
                 break;
             }
@@ -507,7 +343,7 @@ void Viewer::run() {
     if (shot && !screenshotTaken_) {
         std::fprintf(stderr, "error: the viewer was closed before the screenshot was taken\n");
         const int sig = gCloseSignal.load();
-        exitCode() = sig ? 128 + sig : 1;  // closed by a signal: 128 + it, as a killed process would report
+        exitCode_ = sig ? 128 + sig : 1;  // closed by a signal: 128 + it, as a killed process would report
     }
 }
 
@@ -516,33 +352,32 @@ void Viewer::finishBeforeClosing(const std::function<int()>& closeSignals) {
     // short: half the frames with no note, an MP4 dropped without a word. They are finished, with
     // their progress on stderr; a new Ctrl-C or SIGTERM cancels the export (which then names what
     // it did not write). The render stops unless the checkpoint still waits for its pass to end.
-    if (export_.busy() || checkpointStage_ != CheckpointStage::Idle) {
+    using Stage = ViewerSession::CheckpointStage;
+    ExportJob& exp = session_.exportJob();
+    if (exp.busy() || session_.checkpointStage() != Stage::Idle) {
         glfwHideWindow(window_);
         const int signalsAtClose = closeSignals();
         std::fprintf(stderr, "closing: finishing the %s before quitting (Ctrl-C again cancels the export)\n",
-                     export_.busy() ? ("export (" + export_.progressLabel() + ")").c_str() : "checkpoint");
+                     exp.busy() ? ("export (" + exp.progressLabel() + ")").c_str() : "checkpoint");
         bool cancelled = false;
         double lastReport = glfwGetTime();
-        while (export_.busy() || checkpointStage_ != CheckpointStage::Idle) {
-            if (checkpointStage_ == CheckpointStage::Idle) driver_->requestStop();
-            if (!cancelled && export_.busy() && closeSignals() > signalsAtClose) {
-                export_.cancel();
+        while (exp.busy() || session_.checkpointStage() != Stage::Idle) {
+            if (session_.checkpointStage() == Stage::Idle) driver().requestStop();
+            if (!cancelled && exp.busy() && closeSignals() > signalsAtClose) {
+                exp.cancel();
                 cancelled = true;
                 std::fprintf(stderr, "closing: cancelling the export\n");
             }
-            pollCheckpoint();
-            if (checkpointStage_ == CheckpointStage::WaitingForPassEnd && !driver_->running()) {
-                std::fprintf(stderr, "error: checkpoint not written: the render stopped inside a pass\n");
-                checkpointStage_ = CheckpointStage::Idle;
-            }
-            if (export_.busy() && glfwGetTime() - lastReport >= 2.0) {
+            session_.pollCheckpoint();
+            if (!driver().running()) session_.abandonCheckpointWait();
+            if (exp.busy() && glfwGetTime() - lastReport >= 2.0) {
                 lastReport = glfwGetTime();
-                std::fprintf(stderr, "closing: %s\n", export_.progressLabel().c_str());
+                std::fprintf(stderr, "closing: %s\n", exp.progressLabel().c_str());
             }
             std::this_thread::sleep_for(std::chrono::milliseconds(20));
         }
     }
-    pollExport();  // what the last export wrote, or why it stopped (stdout, stderr)
+    session_.pollExport();  // what the last export wrote, or why it stopped (stdout, stderr)
 }
 
 namespace {
@@ -568,7 +403,7 @@ void checkShownTime(const ViewOptions& o, const TimeBins& tb) {
 
 }  // namespace
 
-void runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::string& resumePath) {
+int runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::string& resumePath) {
     const Scene* scene = prepared.scene.get();
     RenderSettings ds = prepared.settings;
     const bool shot = !o.screenshot.empty();
@@ -588,16 +423,19 @@ void runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::
     GlfwWindow window(o.windowSize[0], o.windowSize[1], "tpb view - " + prepared.source.path, !shot);
     ImGuiSession gui(window.get());
     const CloseSignals signals;  // Ctrl-C, SIGTERM, SIGHUP close the window like the close button
+    int code = 0;
     {
         Viewer viewer(prepared, ds, o, window.get(), resumePath);
         std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n", prepared.source.path.c_str());
         std::fflush(stdout);
         viewer.run();
         viewer.finishBeforeClosing([] { return gStopSignals.load(); });
+        code = viewer.exitCode();
     }
     // As `tpb render`: 0 after Ctrl-C, 128 + the signal after SIGTERM (143) or SIGHUP (129).
     const int sig = gCloseSignal.load();
-    if ((sig == SIGTERM || sig == SIGHUP) && exitCode() == 0) exitCode() = 128 + sig;
+    if ((sig == SIGTERM || sig == SIGHUP) && code == 0) code = 128 + sig;
+    return code;
     // ~Viewer stopped the driver; ~ImGuiSession and ~GlfwWindow now release ImGui and the window.
 }
 
