@@ -19,6 +19,25 @@ double wallSec() {
 
 }  // namespace
 
+PhotonPassParams photonPassFor(const Scene& scene, const RenderSettings& s, const VolumeEstimator::Needs& needs,
+                               uint64_t pass, int threads, double filmEndOpl) {
+    PhotonPassParams pt;
+    pt.seed = s.seed;
+    pt.pass = pass;
+    pt.photons = s.photonsForPass(pass);  // fewer during the warm-up,
+    pt.powerPhotons = s.photonsPerPass;   // each with a full pass's power (passWeight)
+    pt.maxDepth = s.maxDepth;
+    // Only what the volume estimator reads (beams, points at scattering events, or both).
+    pt.storeBeams = scene.stages.beams && needs.beams;
+    pt.storePoints = scene.stages.beams && needs.points;
+    pt.storeSurfacePhotons = scene.stages.surfacePhotons;
+    pt.beamLength = s.beamLength;
+    pt.filmEndOpl = filmEndOpl;
+    pt.threads = threads;
+    pt.maxMapBytes = s.maxPhotonMapBytes > 0 ? s.maxPhotonMapBytes : maxFilmBytes();
+    return pt;
+}
+
 PhotonBeamsIntegrator::PhotonBeamsIntegrator(const Scene& scene, const RenderSettings& settings)
     : scene_(scene), settings_(settings), volume_(makeVolumeEstimator(settings.volumeEstimator)),
       surface_(makeSurfaceEstimator(settings.surfaceEstimator)) {
@@ -50,21 +69,8 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     const double t0 = wallSec();
 
     // 1. Photon pass (only the stages the scene needs).
-    PhotonPassParams pt;
-    pt.seed = settings_.seed;
-    pt.pass = ctx.pass;
-    pt.photons = settings_.photonsForPass(ctx.pass);  // fewer during the warm-up,
-    pt.powerPhotons = settings_.photonsPerPass;       // each with a full pass's power (passWeight)
-    pt.maxDepth = settings_.maxDepth;
-    // Only what the volume estimator reads (beams, points at scattering events, or both).
     const VolumeEstimator::Needs needs = volume_->needs();
-    pt.storeBeams = scene_.stages.beams && needs.beams;
-    pt.storePoints = scene_.stages.beams && needs.points;
-    pt.storeSurfacePhotons = scene_.stages.surfacePhotons;
-    pt.beamLength = settings_.beamLength;
-    pt.filmEndOpl = ctx.time->endOpl();
-    pt.threads = ctx.threads;
-    pt.maxMapBytes = settings_.maxPhotonMapBytes > 0 ? settings_.maxPhotonMapBytes : maxFilmBytes();
+    const PhotonPassParams pt = photonPassFor(scene_, settings_, needs, ctx.pass, ctx.threads, ctx.time->endOpl());
     map_ = tracer_.trace(scene_, pt, ctx.abort);
     if (ctx.abort && ctx.abort->load()) return false;
     ps.photons = map_.emitted;

@@ -29,6 +29,12 @@
 
 namespace tpb {
 
+// The photon pass of pass `pass` (1-based; the pilots' probe passes are pass 0) for these settings
+// and a volume estimator that reads `needs`: the one place its parameters are filled. `threads`:
+// the workers that trace; `filmEndOpl`: the film's end (0 before the film exists).
+PhotonPassParams photonPassFor(const Scene& scene, const RenderSettings& s, const VolumeEstimator::Needs& needs,
+                               uint64_t pass, int threads, double filmEndOpl = 0.0);
+
 class PhotonBeamsIntegrator final : public Integrator {
 public:
     PhotonBeamsIntegrator(const Scene& scene, const RenderSettings& settings);

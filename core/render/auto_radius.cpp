@@ -2,6 +2,7 @@
 
 #include "base/error.h"
 #include "estimators/estimator.h"
+#include "integrators/photon_beams.h"
 #include "photons/photon_tracer.h"
 #include "render/memory_budget.h"
 
@@ -60,21 +61,17 @@ RadiusPilot pilotRadius(const Scene& scene, const RenderSettings& settings, cons
         out.why = "no scattering medium: the volume radius is not used";
         return out;
     }
-    PhotonPassParams pt;
-    pt.seed = settings.seed;
-    pt.pass = 0;  // not a pass of the render (those are 1, 2, ...)
+    // A probe pass (pass 0, not one of the render's 1, 2, ...) that stores beams and points, no
+    // surface photons.
+    PhotonPassParams pt = photonPassFor(scene, settings, VolumeEstimator::Needs{true, true}, 0,
+                                        settings.threads > 0 ? settings.threads : 1);
     pt.photons = std::min<int64_t>(settings.photonsPerPass, kAutoPilotPhotons);
-    out.scale = static_cast<double>(settings.photonsPerPass) / static_cast<double>(std::max<int64_t>(pt.photons, 1));
-    pt.maxDepth = settings.maxDepth;
-    pt.storeBeams = true;
-    pt.storePoints = true;
+    pt.powerPhotons = 0;
     pt.storeSurfacePhotons = false;
-    pt.beamLength = settings.beamLength;
-    pt.threads = settings.threads > 0 ? settings.threads : 1;
+    out.scale = static_cast<double>(settings.photonsPerPass) / static_cast<double>(std::max<int64_t>(pt.photons, 1));
     // At most 64 MiB (~30x a typical 4000-photon map): a medium where photons never die (albedo 1,
     // a huge max_depth) is reported as unmeasured within a second instead of filling the budget.
-    const uint64_t budget = settings.maxPhotonMapBytes > 0 ? settings.maxPhotonMapBytes : maxFilmBytes();
-    pt.maxMapBytes = std::min<uint64_t>(budget, kAutoPilotMaxMapBytes);
+    pt.maxMapBytes = std::min<uint64_t>(pt.maxMapBytes, kAutoPilotMaxMapBytes);
     PhotonMap map;
     try {
         map = tracePhotons(scene, pt, abort);

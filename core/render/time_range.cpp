@@ -4,6 +4,7 @@
 
 #include "accel/beam_accel.h"
 #include "integrators/camera_pass.h"
+#include "integrators/photon_beams.h"
 #include "base/parallel.h"
 #include "accel/photon_grid.h"
 #include "photons/photon_tracer.h"
@@ -48,16 +49,12 @@ TimeRangeFit measureArrivalRange(const Scene& scene, const RenderSettings& setti
     // Histogram over a window 4x wider than the heuristic one.
     TimeBins wide{t0, 4.0 * (t1 - t0) / 4096.0, 4096};
     const int threads = resolveThreads(settings.threads);
-    PhotonPassParams pt;
+    // A probe pass of the beam2d estimator (beams, no points), its own seed, pass 0, no power
+    // scaling and no film yet.
+    PhotonPassParams pt = photonPassFor(scene, settings, makeVolumeEstimator("beam2d")->needs(), 0, threads);
     pt.seed = settings.seed ^ 0x9E3779B97F4A7C15ull;
-    pt.pass = 0;
     pt.photons = pilotPhotons;
-    pt.maxDepth = settings.maxDepth;
-    pt.storeBeams = scene.stages.beams;
-    pt.storeSurfacePhotons = scene.stages.surfacePhotons;
-    pt.beamLength = settings.beamLength;
-    pt.threads = threads;
-    pt.maxMapBytes = maxFilmBytes();
+    pt.powerPhotons = 0;
     progress(0.0);
     const PhotonMap map = tracePhotons(scene, pt, control.abort);
     if (aborted()) {
