@@ -189,7 +189,7 @@ void RenderOverrides::add(CLI::App* cmd) {
     for (const std::string& n : volumeEstimatorNames()) volumeNames += (volumeNames.empty() ? "" : " | ") + n;
     for (const std::string& n : surfaceEstimatorNames()) surfaceNames += (surfaceNames.empty() ? "" : " | ") + n;
     cmd->add_option("--estimator", estimator,
-                    "Volume density estimator of the photon-beams method: " + volumeNames + " (README \"Estimators\")");
+                    "Volume density estimator of the photon-beams method: " + volumeNames + " (docs/user/estimators.md)");
     cmd->add_option("--surface-estimator", surfaceEstimator, "Surface density estimator: " + surfaceNames);
     cmd->add_option("--time-kernel", timeKernel,
                     "Progressive time kernel of the estimators: none | box (width chosen from the scene) | box:WIDTH "

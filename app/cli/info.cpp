@@ -23,8 +23,8 @@ const char* materialName(MaterialType t) {
 
 nlohmann::json vec3(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
 
-// Everything `tpb info` says, as the object `tpb info --json` prints (README "Machine-readable
-// outputs" documents each key); the text form is printed from it.
+// Everything `tpb info` says, as the object `tpb info --json` prints (docs/user/outputs.md
+// documents each key); the text form is printed from it.
 nlohmann::json describe(const std::string& path, const PreparedRender& p) {
     using nlohmann::json;
     const Scene* s = p.scene.get();
@@ -179,7 +179,7 @@ void registerInfo(CLI::App& app) {
     cmd->add_option("scene", *path, "Scene file (JSON or Mitsuba 3 XML)")->required();
     ov->add(cmd);
     cmd->add_flag("--json", *asJson,
-                  "Print everything as one JSON object on stdout (README \"Machine-readable outputs\"; warnings stay on stderr)");
+                  "Print everything as one JSON object on stdout (docs/user/outputs.md; warnings stay on stderr)");
     cmd->callback([path, ov, asJson] { run(*path, *ov, *asJson); });
 }
 

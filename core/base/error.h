@@ -1,4 +1,4 @@
-// Three tiers of errors (see README "Errors"):
+// Three tiers of errors (see docs/user/errors.md):
 //  1. UserError: bad input (scene file, command line, output folder). Carries file:line and key and is
 //     printed as "file:line: key: what is wrong; what is allowed". The CLI exits with code 2.
 //  2. TPB_CHECK: invariants of the code. A failure is a bug: prints the condition and aborts.

@@ -20,7 +20,7 @@ inline double progressiveRadius(double r1, double alpha, uint64_t pass, int dim)
 // With a progressive time kernel (estimators/time_kernel.h) the estimate's kernel has dim + 1
 // dimensions, space and time: its measure r^dim tau shrinks by (i + alpha) / (i + 1) per pass with r
 // and tau at the same rate, so both follow progressiveRadius(., alpha, pass, dim + 1), ~ i^{-(1 -
-// alpha) / (dim + 1)} (README "Derivations", "Progressive time kernel").
+// alpha) / (dim + 1)} (docs/theory/derivations.md "Progressive time kernel").
 inline int scheduleDimension(int spatialDim, bool timeKernel) { return spatialDim + (timeKernel ? 1 : 0); }
 inline double progressiveTimeHalfWidth(double tau1, double alpha, uint64_t pass, int scheduleDim) {
     return progressiveRadius(tau1, alpha, pass, scheduleDim);

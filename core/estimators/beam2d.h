@@ -16,7 +16,7 @@
 // Eq. 8 of the paper (with Omega_R(r^2) = pi r^2, the kernel's cross-section perpendicular to the beam):
 //   L_b = sigma_s rho(-c) Phi_b / (pi r^2) * Int_{s-}^{s+} T(s_r) T_b(s_b(s_r)) ds_r,
 // where s_b(s_r) = s_b0 + c s_r is the projection of the ray point on the beam axis.
-// The closed form of the integral (derived in README "Derivations", checked against quadrature in
+// The closed form of the integral (derived in docs/theory/derivations.md, checked against quadrature in
 // tests/estimators/test_beam2d.cpp) is, with kappa = sigma_t + tau_b c and E(s) = sigma_t s + tau_b s_b(s):
 //   Int = exp(-E(s-)) * (s+ - s-) * g(kappa (s+ - s-)),   g(x) = (1 - e^{-x}) / x,
 // evaluated from the end with the larger transmittance so g's argument is >= 0 (no overflow, no 0/0;

@@ -1,4 +1,4 @@
-// Density estimators of the photon-beams camera pass, as units (docs/estimators.md: how to add one,
+// Density estimators of the photon-beams camera pass, as units (docs/developer/adding-an-estimator.md: how to add one,
 // with a worked example). The camera pass (integrators/camera_pass.cpp) follows a camera path
 // through specular surfaces and asks:
 //   a VolumeEstimator, on every segment of the path inside a scattering medium, for the in-scattered

@@ -3,7 +3,7 @@
 // exponential segment mapped linearly to time) is convolved with a box of half-width tau (m of OPL),
 //   k_tau(t) = 1 / (2 tau) on [-tau, tau],
 // before it is binned. Its width shrinks pass after pass with the spatial radius (the schedule and
-// why: README "Derivations", "Progressive time kernel"; integrators/photon_beams.cpp).
+// why: docs/theory/derivations.md "Progressive time kernel"; integrators/photon_beams.cpp).
 //
 // Glossary (units): t, a, b, tA, tB OPL time (m); s distance along the camera segment (m); kappa
 // the decay of the energy density along s (1/m, per channel); tau the kernel's half-width (m of OPL);

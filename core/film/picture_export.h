@@ -14,7 +14,7 @@
 
 namespace tpb {
 
-// The one exposure rule of every picture tpb writes (README, "Pictures and their exposure"): the
+// The one exposure rule of every picture tpb writes (docs/user/commands.md "Pictures and their exposure"): the
 // automatic exposure fitExposure (the 99th percentile of the lit pixels' luminance maps to 1) of
 // the picture's reference image, plus the user's extra EV (`base.exposureEv`). The reference image
 // of a single picture (steady.png, preview.png) is the picture itself; of a set of frames

@@ -6,8 +6,8 @@
 //   before.npy     float32 (H, W, 3): light that arrived before the film's first bin, on that axis
 //   after.npy      float32 (H, W, 3): light that arrived after its last bin, on that axis
 //   transient.json the time axis (start, bin width in m of optical path and ns, axis, emission),
-//                  the energy before/inside/after the film, the render that made it (README
-//                  "Machine-readable outputs" lists every field)
+//                  the energy before/inside/after the film, the render that made it
+//                  (docs/user/outputs.md lists every field)
 // transient.npy is streamed row by row (one row of W x bins x 3 floats in memory, never a second
 // copy of the film); each file is atomic (tmp + rename), the side file is written last.
 #pragma once

@@ -71,8 +71,8 @@ struct BundlePlan {
 
 // A shared query returns the pieces within r + slack of the block's axis, and each of the block's
 // segments tests all of them: it pays while the slack is small against the radius r. Measured with
-// `tpb bench scenes/cornell_medium.json --estimator beam2d --bins-list 1` over 24..512 pixels (README
-// Measurements): blocks of 4 win at slack/r 1.2-2.6 (1.25-2x faster passes), lose at 4.6 and beyond
+// `tpb bench scenes/cornell_medium.json --estimator beam2d --bins-list 1` over 24..512 pixels
+// (docs/measurements/history.md "segment bundles"): blocks of 4 win at slack/r 1.2-2.6 (1.25-2x faster passes), lose at 4.6 and beyond
 // (1.2x slower at 4.6, 2.6x at 12, 3.4x at 300).
 constexpr double kMaxBundleSlackRadii = 3.0;
 

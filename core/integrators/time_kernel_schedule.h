@@ -1,5 +1,5 @@
 // The schedule of the progressive time kernel of the photon-beams estimators (issue 14; Marco et
-// al. 2019; the derivation: README "Derivations", "Progressive time kernel"). Per estimator (the
+// al. 2019; the derivation: docs/theory/derivations.md "Progressive time kernel"). Per estimator (the
 // volume and the surface estimator have their own radius, dimension and so schedule):
 //   off:  r_i = progressiveRadius(r_1, alpha, i, d)                       (d = the estimator's dim())
 //   on:   r_i = progressiveRadius(r_1, alpha, i, D), tau_i = progressiveRadius(tau_1, alpha, i, D),
@@ -16,7 +16,7 @@ namespace tpb {
 
 // The default full width (m of OPL) of an estimator's time kernel at pass 1: 2 eta_max r_1, the
 // optical path light takes to cross the pass-1 spatial kernel (diameter 2 r_1 in a medium of index
-// eta_max), at most the film's time range. Rationale (README): photons that the spatial kernel
+// eta_max), at most the film's time range. Rationale (docs/theory/derivations.md): photons that the spatial kernel
 // gathers at x arrived from points within r of x, so their arrival times already scatter by up to
 // +-eta r around x's; a time kernel of that half-width balances the time blur with the spatial blur
 // (bias r^2 ~ tau^2 with tau = eta r) and does not tie the kernel to the film's bins (where the bins

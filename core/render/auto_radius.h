@@ -5,7 +5,7 @@
 // medium or light. A fixed fraction of the scene diagonal gathers 100x more in a small dense
 // medium than in a large thin one.
 //
-// Derivation (README "Derivations", checked in tests/render/test_auto_radius.cpp). The photons of
+// Derivation (docs/theory/derivations.md, checked in tests/render/test_auto_radius.cpp). The photons of
 // one pass, in the scattering medium that holds most of their beam length, clipped to the scene's
 // bounds (an open scene in an unbounded medium loses photons to infinity), fill a box B (the bounds
 // of the clipped beams) of volume V and surface area A:

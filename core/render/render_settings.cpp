@@ -251,7 +251,7 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
         if (std::find(known.begin(), known.end(), name) != known.end()) return;
         std::string list;
         for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-        c.fail(f, c.name(f) + ": unknown " + what + " \"" + name + "\"; allowed: " + list + " (README \"Estimators\")");
+        c.fail(f, c.name(f) + ": unknown " + what + " \"" + name + "\"; allowed: " + list + " (docs/user/estimators.md)");
     };
     const Field volEst = c.field("volume_estimator", "--estimator", ov.volumeEstimator.has_value());
     const Field surfEst = c.field("surface_estimator", "--surface-estimator", ov.surfaceEstimator.has_value());

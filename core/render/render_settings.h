@@ -18,7 +18,7 @@
 
 namespace tpb {
 
-// The integrator a render runs (README "Methods").
+// The integrator a render runs (docs/user/commands.md).
 enum class Method {
     Beams,       // progressive transient photon beams (the paper)
     PathTracer,  // unbiased transient volumetric path tracer (the reference)
@@ -69,7 +69,7 @@ struct SettingsSource {
 
 // The viewer's default warm-up: pass 1 at 1/8 of the photons. (W = 5 gives beam2d four refinements
 // within 3 s on the default scene instead of three, but its first picture, 1/32 of the photons,
-// leaves most pixels black on a 2000-photon scene: README "Measurements".)
+// leaves most pixels black on a 2000-photon scene: docs/measurements/history.md.)
 inline constexpr int kViewerWarmupPasses = 3;
 inline constexpr int kMaxWarmupPasses = 20;
 
@@ -94,7 +94,7 @@ struct RenderSettings {
     // weights (TileSums::weight). A pass with half the photons counts half, so after n passes the
     // film has the noise of n - W + 1 - 2^-W full passes: the warm-up costs the photons it did not
     // trace and nothing more (equal weights carried (2^(W+1) - W - 2) / n of extra relative
-    // variance; README "Warm-up").
+    // variance; docs/theory/how-it-works.md "Warm-up").
     // 0 = off (`tpb render`); `tpb view` uses kViewerWarmupPasses unless the scene or --warmup sets it.
     int warmupPasses = 0;
     // The photons traced in pass `pass` (1-based): photonsPerPass after the warm-up.
@@ -108,7 +108,7 @@ struct RenderSettings {
     TimeProfile profile = TimeProfile::Exact;
     BeamLength beamLength = BeamLength::Short;
     AccelBackend accel = AccelBackend::Bvh;
-    // The density estimators, by name (estimators/registry.cpp, docs/estimators.md).
+    // The density estimators, by name (estimators/registry.cpp, docs/developer/adding-an-estimator.md).
     std::string volumeEstimator = "beam2d";  // along camera segments in media
     std::string surfaceEstimator = "ppm";    // at diffuse camera-path vertices
     TimeKernelSettings timeKernel;           // off by default

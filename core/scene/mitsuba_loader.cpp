@@ -2,7 +2,7 @@
 // <include> and <default>/$param, then walk the scene: every plugin is read through a property
 // bag (Props) that remembers what was asked for; a parameter nobody asked for is a warning.
 //
-// Mappings (README "Mitsuba 3 XML" has the full table):
+// Mappings (docs/user/scenes.md "Mitsuba 3 XML" has the full table):
 //   sensor perspective -> camera (fov converted to tpb's vertical fov; lookat or matrix to_world);
 //   film hdrfilm -> resolution (automatic time range), transient_hdr_film -> resolution + bins,
 //   start_opl, bin_width_opl; the sensor's medium -> global_medium;

@@ -1,5 +1,5 @@
 // Mitsuba 3 XML import: the subset transient scenes use (mitransient's transient_hdr_film
-// included) -> the same SceneDesc the JSON loader makes (README "Scene format" > "Mitsuba 3 XML":
+// included) -> the same SceneDesc the JSON loader makes (docs/user/scenes.md "Mitsuba 3 XML":
 // the supported plugins, how each maps and the unit conversions). The only user of pugixml.
 // Everything the importer cannot represent is an error or a warning (SceneDesc::warnings) naming
 // "file:line: <element>: ..."; nothing is dropped silently. SceneDesc::locs gets the XML lines

@@ -41,7 +41,7 @@ struct ShapeInfo {
     Bounds3 bounds;          // of its surface (float-rounded triangles and spheres included)
 };
 
-// Which parts of the algorithm a scene needs (README "Stages").
+// Which parts of the algorithm a scene needs (docs/theory/how-it-works.md "A pass").
 struct Stages {
     bool beams = false;            // some region scatters and photons can reach it
     bool surfacePhotons = false;   // the scene has diffuse surfaces

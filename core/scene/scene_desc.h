@@ -113,7 +113,7 @@ enum class BeamLength { Short, Long };
 
 // The optional progressive time kernel of the photon-beams estimators (issue 14): every estimate's
 // time profile is smoothed along time by a kernel whose width shrinks pass after pass with the
-// spatial radius (README "Derivations": the rates). Box: the only kind so far.
+// spatial radius (docs/theory/derivations.md: the rates). Box: the only kind so far.
 enum class TimeKernelKind { None, Box };
 struct TimeKernelSettings {
     TimeKernelKind kind = TimeKernelKind::None;

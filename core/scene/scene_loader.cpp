@@ -79,7 +79,7 @@
 //     "unwarp": false,                   // remove the camera-to-scene travel time
 //     "time_profile": "exact",           // "exact" | "uniform"
 //     "beam_length": "short",            // "short" | "long"
-//     "volume_estimator": "beam2d",      // estimators/estimator_names.h (README "Estimators")
+//     "volume_estimator": "beam2d",      // estimators/estimator_names.h (docs/user/estimators.md)
 //     "surface_estimator": "ppm",        // the surface photon map
 //     "time_kernel": "none"              // "none" | "box" | {"type": "box", "width": m of OPL > 0}
 //   }

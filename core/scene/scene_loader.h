@@ -1,4 +1,4 @@
-// Scene file loader: JSON (see README "Scene format") -> SceneDesc. Parse and validate only; no
+// Scene file loader: JSON (see docs/user/scenes.md "Scene format") -> SceneDesc. Parse and validate only; no
 // Embree or render state. Every error is a UserError "file:line: key: problem; allowed: ...".
 #pragma once
 #include "render/memory_budget.h"

@@ -1,7 +1,7 @@
 // The machine-readable and picture outputs of the tpb binary (TPB_BINARY): `tpb render --npy
 // --mp4 --contact-sheet` writes its files, lists them in the folder's manifest and summary.json,
 // and refuses --mp4 before rendering when ffmpeg is missing; `tpb info --json` prints one JSON
-// object with the keys the README documents.
+// object with the keys docs/user/outputs.md documents.
 #include "support/temp_dir.h"
 #include "film/tone_map.h"
 #include "io/image_io.h"
@@ -196,8 +196,8 @@ TEST_F(CliOutputs, CtrlCDuringEncodingLeavesNoHalfWrittenMp4) {
     EXPECT_NE(slurp(dir_ / "stderr.txt").find("kept in"), std::string::npos);
 }
 
-// `tpb info --json`: one JSON object on stdout (nothing else there), with every key the README's
-// "Machine-readable outputs" table lists, and the values the text form prints.
+// `tpb info --json`: one JSON object on stdout (nothing else there), with every key the table of
+// docs/user/outputs.md lists, and the values the text form prints.
 TEST_F(CliOutputs, InfoJsonParsesAndHasTheDocumentedKeys) {
     const Proc p = runTpb("info " + q(scene_) + " --json", dir_);
     ASSERT_EQ(p.code, 0) << p.err;

@@ -1,8 +1,8 @@
 // libFuzzer target for the scene loader (built and run by tools/fuzz, not by CMake).
 //
 // Any byte string must either load or throw tpb::UserError: a crash, a sanitizer report, a hang or
-// any other exception is a bug. A scene that loads must also respect the documented ranges (README
-// "Scene format"), so a validation gap is reported as a crash too (__builtin_trap).
+// any other exception is a bug. A scene that loads must also respect the documented ranges
+// (docs/user/scenes.md "Scene format"), so a validation gap is reported as a crash too (__builtin_trap).
 #include "base/error.h"
 #include "scene/scene_loader.h"
 

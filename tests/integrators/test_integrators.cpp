@@ -552,7 +552,7 @@ TEST_P(MediumIntegrator, SingleScatteringMatchesQuadratureOracle) {
 //     arrivals fall in the middle of a bin (real axis: 3 m, the light is 3 m from the camera;
 //     unwarped: 0.278 m, the closest camera ray passes 3 sin(5.31 deg) from the light): the kernels move
 //     arrivals by up to eta r (or tau) there, an O(r) bias at the wavefront that a bin edge would turn
-//     into a spurious failure (it is measured in README "Progressive time kernel").
+//     into a spurious failure (it is measured in docs/theory/derivations.md "Progressive time kernel").
 // Must fail (the test's power at a few percent): the same checks on the estimate scaled by 0.96
 // (the steady total's z), and on its time axis moved one bin later (the bin totals).
 // Fails if: an estimator's normalisation (kernel measure, photon or point weight, 1/sin), its

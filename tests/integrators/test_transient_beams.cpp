@@ -687,7 +687,7 @@ TEST(TransientBeams, TimeKernelNarrowerThanTheBinsStillMatchesSingleScatteringOn
     }
 }
 
-// A measurement, not a check (README "Measurements", time kernel): per-bin relative RMSE of transient
+// A measurement, not a check (docs/measurements "Progressive time kernel"): per-bin relative RMSE of transient
 // photon mapping on bins far finer than the kernel (the floor of the test above, 1000 bins of 2 mm)
 // against an exact reference (direct light on the floor, 128 x 128 rays per pixel), with and
 // without the time kernel. Run: build/test_transient_beams --gtest_also_run_disabled_tests
