@@ -27,7 +27,7 @@ struct ViewCmd {
     std::string resume;  // --resume DIR
 };
 
-// --passes is the total pass count, as in `tpb render --resume` (README "Checkpoints and resume");
+// --passes is the total pass count, as in `tpb render --resume` (docs/user/commands.md "Checkpoints and resume");
 // --after-passes counts the passes this run renders before the screenshot (beyond a resumed
 // checkpoint's). A screenshot after more passes than the total would never come: refused, instead
 // of one flag silently winning.

@@ -553,7 +553,7 @@ bool Viewer::drawEstimatorSettings() {
     }
     if (ImGui::IsItemHovered())
         ImGui::SetTooltip("beam1d / beam2d: beams x camera ray with a 1D / 2D kernel; point2d / point3d: photon points\n"
-                          "with a 2D kernel across the ray / a 3D kernel (README \"Estimators\")");
+                          "with a 2D kernel across the ray / a 3D kernel (docs/user/estimators.md)");
     track("volume estimator");
     const char* kernels[] = {"none", "box"};
     int k = cur.timeKernel.kind == TimeKernelKind::Box ? 1 : 0;
@@ -563,7 +563,7 @@ bool Viewer::drawEstimatorSettings() {
     }
     if (ImGui::IsItemHovered())
         ImGui::SetTooltip("smooths every estimate along time with a box whose width shrinks with the radius\n"
-                          "(README \"Progressive time kernel\")");
+                          "(docs/theory/derivations.md)");
     track("time kernel");
     if (cur.timeKernel.kind == TimeKernelKind::Box) {
         ImGui::InputDouble("time kernel width (m)", &edit_.timeKernel.width, 0.0, 0.0, "%.6g");
