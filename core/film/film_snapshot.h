@@ -41,7 +41,7 @@ struct TileRect { int x0, y0, w, h; };
 // The type of the per-bin sums: double, so that films rendered separately (checkpoints, other
 // machines) merge to what one run of all their passes gives, to < 1e-12 relative per value (one
 // extra double rounding per value, ~1e-16, against ~1e-7 in float: tests/film/test_transient_film.cpp).
-// Memory: bins x 2 axes x RGB x 8 bytes per pixel (memory_budget.h).
+// Memory: bins x 2 axes x RGB x 8 bytes per pixel (film_bytes.h).
 using FilmSum = double;
 // The per-bin sums of a tile: large, so in huge pages (base/large_buffer.h).
 using FilmSums = std::vector<FilmSum, LargeBufferAllocator<FilmSum>>;

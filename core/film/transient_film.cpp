@@ -3,7 +3,8 @@
 #include "film/film_view.h"
 
 #include "base/error.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 
 #include <algorithm>
 #include <cfloat>
@@ -178,7 +179,7 @@ void TransientFilm::publish(int tile, std::shared_ptr<TileBlock> block) {
 }
 
 uint64_t TransientFilm::bytes() const {
-    // What the live film holds (the formula in memory_budget.cpp must agree: test_transient_film checks it).
+    // What the live film holds (the formula in film_bytes.cpp must agree: test_transient_film checks it).
     uint64_t n = 0;
     const std::shared_ptr<const FilmSnapshot> s = snapshot();
     for (int t = 0; t < s->tileCount(); ++t) {

@@ -205,7 +205,7 @@ public:
     int bins() const { return layout_->time.bins; }
     int tileCount() const { return static_cast<int>(layout_->tiles.size()); }
     TileRect tileRect(int tile) const { return layout_->tiles[tile]; }
-    uint64_t bytes() const;  // of the live film's blocks (the formula in memory_budget.cpp must agree)
+    uint64_t bytes() const;  // of the live film's blocks (the formula in film_bytes.cpp must agree)
 
     // Writer side (one writer per tile at a time): construct (waits for the tile's previous
     // writer), add pixels, destroy (adds the pass to the tile, counts it, publishes).

@@ -4,7 +4,8 @@
 #include "base/error.h"
 #include "base/progressive.h"
 #include "integrators/time_kernel_schedule.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 
 #include <chrono>
 

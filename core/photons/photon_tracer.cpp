@@ -1,7 +1,7 @@
 #include "photons/photon_tracer.h"
 
 #include "base/error.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
 #include "base/parallel.h"
 #include "base/rng.h"
 #include "base/sampling.h"

@@ -27,6 +27,7 @@
 // 1/(4/3 pi r^3) integrated along the ray) take away. Storing points draws no random number: the
 // photon paths, hence the beams and surface photons, are the same with or without them.
 #pragma once
+#include "base/memory.h"
 #include "base/math.h"
 #include "scene/scene.h"
 #include "transport/interaction.h"
@@ -134,6 +135,11 @@ PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s,
 
 // Bytes the map's beams, surface photons and points take (what maxMapBytes limits).
 uint64_t storedMapBytes(const PhotonMap& m);
+// Rough memory of one pass's photon map before it is traced (~4 beam segments per photon, as
+// `tpb info` prints): what validate() checks against the limit (base/memory.h).
+inline uint64_t photonMapBytes(int64_t photonsPerPass) {
+    return saturatingMul(static_cast<uint64_t>(std::max<int64_t>(photonsPerPass, 0)), 4 * (sizeof(double) * 12 + 16));
+}
 
 // Traces photon `index` of the pass (deterministic given seed, pass, index). Appends to `out`.
 // Throws UserError if this photon alone stores more than s.maxMapBytes. Returns false, the photon

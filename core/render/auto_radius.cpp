@@ -4,7 +4,8 @@
 #include "estimators/estimator.h"
 #include "integrators/photon_beams.h"
 #include "photons/photon_tracer.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 
 #include <algorithm>
 #include <cmath>

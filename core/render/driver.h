@@ -10,7 +10,8 @@
 #pragma once
 #include "integrators/integrator.h"
 #include "film/transient_film.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 #include "render/render_settings.h"
 #include "base/pause_gate.h"
 #include "scene/scene.h"

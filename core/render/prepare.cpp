@@ -1,7 +1,8 @@
 #include "render/prepare.h"
 
 #include "base/error.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 
 #include <algorithm>
 #include <climits>
@@ -33,7 +34,7 @@ void applyFilmShape(SceneDesc& d, const SettingsOverrides& o) {
     }
     if (d.camera.width < 1 || d.camera.height < 1 || d.film.bins < 1)
         throw UserError("--width, --height and --bins must be >= 1");
-    const uint64_t need = filmBytes(d.camera, d.film.bins);
+    const uint64_t need = filmBytes(d.camera.width, d.camera.height, d.film.bins);
     if (need > maxFilmBytes())
         throw UserError("the film would need " + humanBytes(need) + " but at most " + humanBytes(maxFilmBytes()) +
                         " is allowed; lower --width/--height/--bins");

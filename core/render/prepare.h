@@ -52,7 +52,7 @@ struct PrepareOptions {
 };
 
 // Applies the film-shape overrides (width, height, bins: the bins keep the film's time range) to
-// the description, refusing a film beyond the memory budget (memory_budget.h).
+// the description, refusing a film beyond the memory limit (base/memory.h).
 void applyFilmShape(SceneDesc& desc, const SettingsOverrides& overrides);
 
 // Loads nothing: takes the description (loadScene), applies the overrides, builds the scene,

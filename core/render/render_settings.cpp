@@ -2,7 +2,9 @@
 
 #include "base/error.h"
 #include "estimators/estimator_names.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
+#include "photons/photon_tracer.h"
 #include "scene/scene_loader.h"
 
 #include <algorithm>

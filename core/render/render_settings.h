@@ -112,7 +112,7 @@ struct RenderSettings {
     std::string volumeEstimator = "beam2d";  // along camera segments in media
     std::string surfaceEstimator = "ppm";    // at diffuse camera-path vertices
     TimeKernelSettings timeKernel;           // off by default
-    uint64_t maxPhotonMapBytes = 0;  // per pass; 0 = maxFilmBytes() (memory_budget.h)
+    uint64_t maxPhotonMapBytes = 0;  // per pass; 0 = maxFilmBytes() (base/memory.h)
 
     // ---- path tracer ----
     int samplesPerPixel = 1;

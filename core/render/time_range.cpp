@@ -1,6 +1,7 @@
 #include "render/time_range.h"
 
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 
 #include "accel/beam_accel.h"
 #include "integrators/camera_pass.h"

@@ -18,7 +18,8 @@
 
 #include "base/error.h"
 #include "base/text.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 #include "render/render_settings.h"
 #include "scene/light.h"
 #include "scene/scene_loader.h"
@@ -688,7 +689,7 @@ void Importer::readFilm(const Elem& e) {
             if (f != "box") warn(o, "tpb's film has no reconstruction filter (each pixel is a box); \"" + f + "\" ignored");
         }
     p.finish();
-    const uint64_t need = filmBytes(d_.camera, film.bins), limit = maxFilmBytes();
+    const uint64_t need = filmBytes(d_.camera.width, d_.camera.height, film.bins), limit = maxFilmBytes();
     if (need > limit)
         fail(e, "the film needs " + humanBytes(need) + " for " + std::to_string(d_.camera.width) + " x " +
                     std::to_string(d_.camera.height) + " pixels x " + std::to_string(film.bins) +

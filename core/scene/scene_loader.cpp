@@ -864,7 +864,7 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
     if (const JsonValue* f = objectAt(b, "film")) readFilm(ctx, *f, desc.film);
 
     // The film must fit in memory.
-    const uint64_t need = filmBytes(desc.camera, desc.film.bins), limit = maxFilmBytes();
+    const uint64_t need = filmBytes(desc.camera.width, desc.camera.height, desc.film.bins), limit = maxFilmBytes();
     if (need > limit) {
         const std::string key = desc.locs.count("film.bins") ? "film.bins"
                                 : desc.locs.count("camera.resolution") ? "camera.resolution" : "";

@@ -1,7 +1,8 @@
 // Scene file loader: JSON (see docs/user/scenes.md "Scene format") -> SceneDesc. Parse and validate only; no
 // Embree or render state. Every error is a UserError "file:line: key: problem; allowed: ...".
 #pragma once
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 #include "scene/scene_desc.h"
 #include <cstdint>
 #include <string>
@@ -14,7 +15,7 @@ namespace tpb {
 SceneDesc loadScene(const std::string& path);
 // Same, from text (for tests and tools); `virtualPath` names it in messages and sets the folder.
 SceneDesc loadSceneFromString(const std::string& text, const std::string& virtualPath);
-// The loader refuses films and photon counts above the memory budget (memory_budget.h).
+// The loader refuses films and photon counts above the memory limit (base/memory.h).
 
 // The whole text of a scene file (JSON, Mitsuba XML and its includes), read only if it is a
 // regular file of at most kMaxSceneFileBytes: a device (/dev/zero), a FIFO or a folder would be

@@ -7,7 +7,8 @@
 // --benchmark_filter that skips these benchmarks costs nothing).
 #pragma once
 #include "photons/photon_tracer.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 #include "render/prepare.h"
 #include "scene/scene_loader.h"
 

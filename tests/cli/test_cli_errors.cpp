@@ -248,7 +248,7 @@ TEST_F(CliErrors, FilmTooLargeIsRefusedBeforeAllocation) {
     write("scene.json", big.replace(big.find("\"bins\": 8"), 9, "\"bins\": 256"));
     tpb::CameraDesc cam;
     cam.width = cam.height = 256;
-    const uint64_t need = tpb::filmBytes(cam, 256);
+    const uint64_t need = tpb::filmBytes(cam.width, cam.height, 256);
     const Proc p = render(f, {}, {"TPB_MAX_FILM_BYTES=1000000"});
     expectUserError(p, f.string() + ":4", "film.bins", std::to_string(need) + " bytes");
     EXPECT_NE(p.err.find("1000000 bytes"), std::string::npos) << p.err;  // and the limit

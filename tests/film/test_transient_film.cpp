@@ -1,7 +1,8 @@
 // TransientFilm (core/film/transient_film.h): memory accounting, the energy it keeps outside its time
 // range, the overflow guard of its sums, and merging films.
 #include "film/transient_film.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 #include "film_test_passes.h"
 
 #include <gtest/gtest.h>

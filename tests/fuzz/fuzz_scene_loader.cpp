@@ -23,7 +23,7 @@ void checkInvariants(const tpb::SceneDesc& d) {
     require(d.camera.fovYDeg > 0.0 && d.camera.fovYDeg < 180.0);
     require(finite(d.camera.position) && finite(d.camera.lookAt) && finite(d.camera.up));
     require(d.film.bins >= 1);
-    require(tpb::filmBytes(d.camera, d.film.bins) <= tpb::maxFilmBytes());
+    require(tpb::filmBytes(d.camera.width, d.camera.height, d.film.bins) <= tpb::maxFilmBytes());
     require(std::isfinite(d.film.startOpl) && d.film.binWidthOpl > 0.0 && std::isfinite(d.film.binWidthOpl));
     require(d.globalMedium >= -1 && d.globalMedium < static_cast<int>(d.media.size()));
     for (const tpb::MediumDesc& m : d.media) {

@@ -3,7 +3,8 @@
 // scene's diagonal, and prepareRender (render/prepare.h) deciding the film's time axis once.
 #include "render/prepare.h"
 #include "render/render_settings.h"
-#include "render/memory_budget.h"
+#include "base/memory.h"
+#include "film/film_bytes.h"
 #include "scene/scene_loader.h"
 #include "base/error.h"
 #include "estimators/estimator_names.h"

@@ -305,9 +305,9 @@ TEST(SceneLoader, FilmBytesAndLimit) {
     CameraDesc cam;
     cam.width = 10;
     cam.height = 20;
-    EXPECT_EQ(filmBytes(cam, 5), 200u * (5 * 2 * 3 * 8 + (3 + 2 * 2 * 3) * 8));  // tests/film/test_transient_film.cpp: = what the film allocates
+    EXPECT_EQ(filmBytes(cam.width, cam.height, 5), 200u * (5 * 2 * 3 * 8 + (3 + 2 * 2 * 3) * 8));  // tests/film/test_transient_film.cpp: = what the film allocates
     cam.width = cam.height = INT_MAX;
-    EXPECT_EQ(filmBytes(cam, INT_MAX), UINT64_MAX);  // saturates instead of wrapping
+    EXPECT_EQ(filmBytes(cam.width, cam.height, INT_MAX), UINT64_MAX);  // saturates instead of wrapping
     EXPECT_GT(maxFilmBytes(), 0u);
 
     ::setenv("TPB_MAX_FILM_BYTES", "1000", 1);

@@ -1,9 +1,7 @@
-#include "render/memory_budget.h"
+#include "base/memory.h"
 
 #include "base/error.h"
-#include "film/film_snapshot.h"
 
-#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
@@ -11,26 +9,6 @@
 #include <unistd.h>
 
 namespace tpb {
-
-namespace {
-
-uint64_t satMul(uint64_t a, uint64_t b) { return (a != 0 && b > UINT64_MAX / a) ? UINT64_MAX : a * b; }
-uint64_t satAdd(uint64_t a, uint64_t b) { return b > UINT64_MAX - a ? UINT64_MAX : a + b; }
-
-}  // namespace
-
-uint64_t filmBytes(int width, int height, int bins) {
-    const uint64_t w = static_cast<uint64_t>(std::max(width, 0));
-    const uint64_t h = static_cast<uint64_t>(std::max(height, 0));
-    const uint64_t b = static_cast<uint64_t>(std::max(bins, 0));
-    // Transient: bins x 2 time axes x RGB x double (FilmSum). Steady RGB + 2 axes x (before, after) x RGB, double.
-    const uint64_t perPixel = satAdd(satMul(b, 2 * 3 * sizeof(FilmSum)), (3 + 2 * 2 * 3) * sizeof(double));
-    return satMul(satMul(w, h), perPixel);
-}
-
-uint64_t photonMapBytes(int64_t photonsPerPass) {
-    return satMul(static_cast<uint64_t>(std::max<int64_t>(photonsPerPass, 0)), 4 * (sizeof(double) * 12 + 16));
-}
 
 uint64_t maxFilmBytes() {
     if (const char* env = std::getenv("TPB_MAX_FILM_BYTES"); env && *env) {
@@ -44,7 +22,7 @@ uint64_t maxFilmBytes() {
     const long pages = sysconf(_SC_PHYS_PAGES);
     const long pageSize = sysconf(_SC_PAGE_SIZE);
     if (pages <= 0 || pageSize <= 0) return uint64_t(8) << 30;  // unknown: assume 8 GiB
-    return satMul(static_cast<uint64_t>(pages), static_cast<uint64_t>(pageSize)) / 4 * 3;
+    return saturatingMul(static_cast<uint64_t>(pages), static_cast<uint64_t>(pageSize)) / 4 * 3;
 }
 
 uint64_t peakRssBytes() {
