@@ -1,3 +1,4 @@
+#include "transport/stages.h"
 #include "render/prepare.h"
 
 #include "base/error.h"
@@ -136,7 +137,7 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
 
     PreparedRender p;
     p.sceneFingerprint = sceneFingerprint(desc);
-    p.scene = Scene::build(desc);
+    p.scene = Scene::build(desc, analyzeStages);
     const double diag = p.scene->bounds.diagonal() > 0.0 ? p.scene->bounds.diagonal() : 1.0;
     warnAboutScale(*p.scene, desc, warn);
 

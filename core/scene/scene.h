@@ -78,9 +78,14 @@ struct LightPlacement {
     bool uniform = true;   // no dielectric/null surface comes near the light's emitting points
 };
 
+class Scene;
+// Decides which stages a built scene needs: transport/stages.h's analyzeStages (it follows camera
+// rays through mirrors and glass, which the transport floor knows).
+using StageAnalysis = Stages (*)(const Scene&);
+
 class Scene {
 public:
-    static std::unique_ptr<const Scene> build(const SceneDesc& desc);
+    static std::unique_ptr<const Scene> build(const SceneDesc& desc, StageAnalysis analyzeStages);
 
     Geometry geometry;
     std::vector<Material> materials;
@@ -133,7 +138,6 @@ public:
     // True when a camera ray (pixel centres, through mirrors and both ways through glass) reaches a
     // diffuse surface: only then is a surface photon map needed. (The path continuation itself,
     // interface crossings included, lives in core/transport/interaction.h.)
-    bool cameraSeesDiffuse() const;
     RegionStack cameraRegions;                  // where the camera sits
     std::vector<LightPlacement> lightPlacement;  // where each light's photons start
 };

@@ -2,6 +2,7 @@
 // scene files, broken meshes, impossible film sizes and unwritable output folders. Every one must
 // end with exit code 2 and a message "file:line: key: what is wrong" (never a crash, a signal or
 // "internal error"). Ctrl-C during a render finishes the pass and writes the results atomically.
+#include "transport/stages.h"
 #include "io/image_io.h"
 #include "scene/scene.h"
 #include "scene/scene_loader.h"
@@ -963,7 +964,7 @@ TEST_F(CliErrors, CtrlCStopsThePilotPass) {
 // Item 6, at its root: the pilot polls the abort flag and reports its progress.
 TEST_F(CliErrors, PilotPollsTheAbortFlagAndReportsProgress) {
     const tpb::SceneDesc desc = tpb::loadSceneFromString(insideScene(), "scene.json");
-    const std::unique_ptr<const tpb::Scene> scene = tpb::Scene::build(desc);
+    const std::unique_ptr<const tpb::Scene> scene = tpb::Scene::build(desc, tpb::analyzeStages);
     tpb::RenderSettings settings = tpb::RenderSettings::fromDesc(desc.render, scene->bounds.diagonal());
     settings.threads = 2;
     std::atomic<bool> abort{true};

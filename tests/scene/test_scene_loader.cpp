@@ -1,5 +1,6 @@
 // Scene loader and JSON parser: round trips, defaults, and one test per kind of user mistake, each
 // checking that the message names the file, the line and the key.
+#include "transport/stages.h"
 #include "base/error.h"
 #include "io/json.h"
 #include "scene/mesh.h"
@@ -382,7 +383,7 @@ TEST(SceneLoader, OpenMeshHoldingAMediumIsRefused) {
     };
     const auto buildError = [&](const std::string& path) {
         try {
-            Scene::build(loadScene(path));
+            Scene::build(loadScene(path), analyzeStages);
         } catch (const UserError& e) {
             return std::string(e.what());
         }

@@ -6,13 +6,14 @@
 //     const int fog = b.medium(Color(0.3), Color(0.05), 0.3);
 //     b.globalMedium(fog).quad(Vec3(-1, 0, -1), Vec3(0, 0, 2), Vec3(2, 0, 0), b.diffuse(Color(0.75)));
 //     b.pointLight(Vec3(0, 1.7, 0), Color(20.0));
-//     std::unique_ptr<const Scene> scene = Scene::build(b.desc());
+//     std::unique_ptr<const Scene> scene = Scene::build(b.desc(), analyzeStages);
 //
 // Media and materials return their index, to be given to shapes; shapes and lights return the
 // builder (their index is shapeCount() / lightCount() - 1). Names are left empty (set them with
 // edit() where a test needs them). Defaults are those of SceneDesc, except that kernel radii are
 // absolute (render.radiusRelative = false), as tests usually want them.
 #pragma once
+#include "transport/stages.h"
 #include "scene/scene_desc.h"
 
 #include <utility>

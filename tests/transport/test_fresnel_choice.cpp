@@ -12,6 +12,7 @@
 // A choice with the probabilities swapped, F of the wrong side's indices, or Schlick's
 // approximation instead of the exact F would fail the z-tests (N = 40000 resolves F to ~0.002).
 // Everything goes through `cross` below: when the choice moves (core/transport), retarget it there.
+#include "transport/stages.h"
 #include "scene/scene.h"
 #include "support/chi2.h"
 #include "support/scene_builder.h"
@@ -49,7 +50,7 @@ struct GlassSphere {
     GlassSphere() {
         SceneBuilder b;
         b.sphere(Vec3(0.0), 1.0, b.dielectric(kGlassIor)).pointLight(Vec3(0.0, 3.0, 0.0), Color(1.0));
-        scene = Scene::build(b.desc());
+        scene = Scene::build(b.desc(), analyzeStages);
         for (size_t i = 0; i < scene->shapes.size(); ++i)
             if (scene->shapes[i].interiorRegion != 0) shape = static_cast<int>(i);
     }

@@ -8,6 +8,7 @@
 //  - the mirror bounce, Russian roulette's survival frequency and weight (also the deep rule that
 //    ends full-weight paths), the null-crossing budget.
 // The Fresnel reflectance and Snell's law are this file's own code, not scene/bsdf.h.
+#include "transport/stages.h"
 #include "transport/interaction.h"
 
 #include <gtest/gtest.h>
@@ -62,7 +63,7 @@ void addQuad(SceneDesc& d, const Vec3& corner, const Vec3& u, const Vec3& v, int
 std::unique_ptr<const Scene> sphereScene(MaterialType t, const Color& spec = Color(1.0)) {
     SceneDesc d = baseDesc();
     addSphere(d, Vec3(0.0), 1.0, addMaterial(d, t, spec));
-    return Scene::build(d);
+    return Scene::build(d, analyzeStages);
 }
 
 // Unpolarised Fresnel reflectance from the incident and transmitted cosines (Hecht).
@@ -101,7 +102,7 @@ TEST(Interaction, KindsAndFacingNormals) {
     l.edgeU = Vec3(2.0, 0.0, 0.0);
     l.edgeV = Vec3(0.0, 2.0, 0.0);
     d.lights.push_back(l);
-    const auto scene = Scene::build(d);
+    const auto scene = Scene::build(d, analyzeStages);
     const Vec3 geomNormal = glm::normalize(glm::cross(Vec3(2.0, 0.0, 0.0), Vec3(0.0, 2.0, 0.0)));  // +z
     const SurfaceKind expected[] = {SurfaceKind::Diffuse, SurfaceKind::Absorber, SurfaceKind::Emitter};
     for (int k = 0; k < 3; ++k) {
