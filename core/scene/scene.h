@@ -9,7 +9,6 @@
 #include "scene/light.h"
 #include "scene/medium.h"
 #include "scene/scene_desc.h"
-#include "estimators/time_splat.h"
 
 #include <memory>
 #include <optional>
