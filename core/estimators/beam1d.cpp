@@ -86,7 +86,8 @@ int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path,
         const Color L = path.beta * m.sigma_s * rho * b.power * T * (kernel / ca->sinTheta);
         // (1D-5): one instant on each axis.
         const double tBeam = b.opl0 + region.ior * ca->sb;
-        sink.instant(L, path.oplCam + tBeam + region.ior * ca->sr, tBeam);
+        sink.instant(L, path.oplCam + tBeam + region.ior * ca->sr, tBeam,
+                     causalFloor(path.oplCam, b.fromOpl, region.ior, b.from, ray.o, tBeam, r));  // via the vertex before
         ++estimates;
     }
     return estimates;

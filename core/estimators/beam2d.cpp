@@ -116,7 +116,11 @@ bool gatherBeam2DOverlap(const SegmentGather& g, const Beam& b, const RayBeamOve
     SegmentProfile profile(exact ? m.sigma_t + tauB * c : Color(0.0), o.sMinus, o.sPlus);
     if (exact) profile.shareTotals(Color(ix.massTotal, iy.massTotal, iz.massTotal));
     const double tBeam = b.opl0 + g.eta * o.sb0;
-    sink.spread(L, profile, g.path.oplCam + tBeam, g.eta * (1.0 + c), tBeam, g.eta * c);
+    // No part earlier than the real path leaving the photon's path at the vertex before the beam
+    // for x_r, nor (unwarped) eta r before the photon reaches the overlap's first beam point (causalFloor).
+    const double sbFirst = std::max(0.0, o.sb0 + c * (c >= 0.0 ? o.sMinus : o.sPlus));
+    sink.spread(L, profile, g.path.oplCam + tBeam, g.eta * (1.0 + c), tBeam, g.eta * c,
+                causalFloor(g.path.oplCam, b.fromOpl, g.eta, b.from, g.ray.o, b.opl0 + g.eta * sbFirst, g.radius));
     return true;
 }
 

@@ -59,22 +59,37 @@ struct PixelSink {
     FilmTally& tally;
     TimeKernel kernel{};
     // Energy L along s in [s0, s1] of the camera segment with density exp(-kappa s), arriving at
-    // aReal + bReal s (real axis) and aUnwarped + bUnwarped s (unwarped axis), OPL in m.
+    // aReal + bReal s (real axis) and aUnwarped + bUnwarped s (unwarped axis), OPL in m; no part
+    // earlier than `floor` (the earliest real path through the estimate's photon, causalFloor()).
     void spread(const Color& L, const Color& kappa, double s0, double s1, double aReal, double bReal,
-                double aUnwarped, double bUnwarped) {
-        splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnwarped, bUnwarped, kernel);
+                double aUnwarped, double bUnwarped, const ArrivalFloor& floor = {}) {
+        splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnwarped, bUnwarped, kernel, floor);
     }
     // The same with the profile of exp(-kappa s) on [s0, s1] built by the estimator (SegmentProfile,
     // time_splat.h), which can hand it totals it has computed anyway (bit for bit the same values).
     void spread(const Color& L, const SegmentProfile& profile, double aReal, double bReal, double aUnwarped,
-                double bUnwarped) {
-        splatSpread(time, acc, tally, L, profile, aReal, bReal, aUnwarped, bUnwarped, kernel);
+                double bUnwarped, const ArrivalFloor& floor = {}) {
+        splatSpread(time, acc, tally, L, profile, aReal, bReal, aUnwarped, bUnwarped, kernel, floor);
     }
-    // Energy L arriving at one instant on each axis.
-    void instant(const Color& L, double tReal, double tUnwarped) {
-        splatInstant(time, acc, tally, L, tReal, tUnwarped, kernel);
+    // Energy L arriving at one instant on each axis (no earlier than `floor`).
+    void instant(const Color& L, double tReal, double tUnwarped, const ArrivalFloor& floor = {}) {
+        splatInstant(time, acc, tally, L, tReal, tUnwarped, kernel, floor);
     }
 };
+
+// The causal floor of an estimate (docs/developer/adding-an-estimator.md, "Causality"). Its
+// photon's flight starts at x_start (OPL tStart; a beam's `from`, the event before a photon point);
+// the camera segment starts at x_r (the path's OPL there: oplCam) in a region of index eta.
+// Real: the earliest path leaves the flight at x_start straight for x_r (light -> x_start -> x_r ->
+// sensor; s + |x(s) - x_r| only grows along the flight). Unwarped: light on the flight reaches a
+// point within r of where the photon first is in the kernel (tEvent) no earlier than eta r before.
+//   real:      oplCam + tStart + eta |x_start - x_r|,     unwarped:  tEvent - eta r.
+inline ArrivalFloor causalFloor(double oplCam, double tStart, double eta, const Vec3& xStart, const Vec3& xr,
+                                double tEvent, double r) {
+    const double unwarped = tEvent - eta * r;
+    if (!(tStart > -kInf)) return {-kInf, unwarped};  // the flight's start unknown: the unwarped floor only
+    return {oplCam + tStart + eta * glm::length(xStart - xr), unwarped};
+}
 
 // Per-thread scratch space of the estimators (kept across pixels to avoid allocations).
 struct EstimatorScratch {

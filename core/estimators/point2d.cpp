@@ -59,7 +59,9 @@ int64_t Point2DEstimator::gather(const CameraSegment& seg, const PathState& path
         if (!kernelPointVisible(scene, scratch.shapes, ray.at(disc->s), p.position)) continue;
         const double rho = m.phase.eval(-glm::dot(p.dirIn, ray.d));  // scattering from w_p into -w_r
         const Color L = path.beta * m.sigma_s * rho * p.power * m.transmittance(disc->s) * invArea;
-        sink.instant(L, path.oplCam + p.opl + eta * disc->s, p.opl);
+        // No earlier than the real path leaving the point's flight at its start for x_r (causalFloor).
+        sink.instant(L, path.oplCam + p.opl + eta * disc->s, p.opl,
+                     causalFloor(path.oplCam, p.opl - eta * p.length, eta, p.position - p.length * p.dirIn, ray.o, p.opl, r));
         ++estimates;
     }
     return estimates;

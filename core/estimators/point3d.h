@@ -29,7 +29,9 @@
 //   real:      t(s) = t_cam + t_p + eta s     (slope eta)
 //   unwarped:  t(s) = t_p                     (slope 0: one instant)
 // written with PixelSink::spread (the uniform profile, the paper's even spread, is kappa = 0). As
-// r -> 0 the chord shrinks to s_p and both reduce to point2d's instants.
+// r -> 0 the chord shrinks to s_p and both reduce to point2d's instants. No part is binned before
+// the causal floor (estimator.h, causalFloor; derived in docs/developer/adding-an-estimator.md, "Causality"): the
+// chord's near part could otherwise arrive up to eta r before any real path through the point.
 //
 // Walls: as beam2d, a point is kept only when it sees the middle of its chord on the camera
 // segment (estimators/kernel_visibility.h).

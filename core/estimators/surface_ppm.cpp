@@ -34,7 +34,14 @@ int64_t SurfacePpmEstimator::gather(const SurfaceQuery& q, const PathState& path
         if (!scene.surfacePointsSeeEachOther(anchor, q.ng, photonAnchor(scene, ph), ph.normal)) return;
         const Color L = path.beta * fr * ph.power * invArea;
         ++estimates;
-        sink.instant(L, path.oplCam + ph.opl, ph.opl);
+        // The photon's time is taken as the gather point's (up to eta r early); no part earlier than
+        // light from the photon's vertex before could reach the gather point (causalFloor).
+        ArrivalFloor floor;
+        if (ph.length > 0.0) {
+            const double t = ph.opl + ph.ior * (glm::length(ph.position - ph.length * ph.dirIn - q.hit.p) - ph.length);
+            floor = {path.oplCam + t, t};
+        }
+        sink.instant(L, path.oplCam + ph.opl, ph.opl, floor);
     });
     return estimates;
 }

@@ -120,10 +120,14 @@ private:
 // the same arguments, the same instant rule (an interval shorter than 1e-9 bin is an instant at its
 // middle), energy before/after the film returned. An inactive kernel calls splatTime itself, so
 // the films are bit-identical to the kernel-free code.
+// With a floor (time_splat.h, ArrivalFloor) the smoothed profile's part earlier than `floor` is
+// mirrored about it: its CDF becomes H_f(t) = H(t) - H(2 floor - t) for t > floor, 0 before (the
+// box is applied first, then the floor: the box alone puts light up to tau before any real path).
 template <class Sink>
 inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, const Color& kappa, double s0,
-                                     double s1, double a, double b, const TimeKernel& kernel, Sink&& sink) {
-    if (!kernel.active()) return splatTime(tb, energy, kappa, s0, s1, a, b, sink);
+                                     double s1, double a, double b, const TimeKernel& kernel, Sink&& sink,
+                                     double floor = -kInf) {
+    if (!kernel.active()) return splatTimeFloored(tb, energy, SegmentProfile(kappa, s0, s1), a, b, floor, sink);
     const double tau = kernel.halfWidth;
     const double tA0 = a + b * s0, tB0 = a + b * s1;
     double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
@@ -133,10 +137,15 @@ inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, co
     const double mirrorSum = tA + tB;  // t -> tA + tB - t swaps tA and tB
 
     OutsideFilm out;
-    const int k0 = std::max(tb.binOf(tA - tau), 0);
-    const int k1 = std::min(tb.binOf(tB + tau), tb.bins - 1);
+    // A floor above the support's start: the support starts at the floor and ends at the later of
+    // its own end and its start's mirror image.
+    const bool floored = floor > tA - tau;
+    const double lowest = floored ? floor : tA - tau;
+    const double highest = floored ? std::max(tB + tau, 2.0 * floor - (tA - tau)) : tB + tau;
+    const int k0 = std::max(tb.binOf(lowest), 0);
+    const int k1 = std::min(tb.binOf(highest), tb.bins - 1);
     if (k1 < k0) {  // the smoothed support lies wholly before or after the film
-        if (tb.binOf(tB + tau) < 0) out.before = energy;
+        if (tb.binOf(highest) < 0) out.before = energy;
         else out.after = energy;
         return out;
     }
@@ -155,6 +164,7 @@ inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, co
         }
         double share(double dLo, double dHi) const { return std::max(0.0, mirror ? dLo - dHi : dHi - dLo); }
         double below(double d) const { return mirror ? 1.0 - d : d; }  // P(t < edge)
+        double belowAt(double t, double mirrorSum) const { return below(cdf(mirror ? mirrorSum - t : t)); }
         double above(double d) const { return mirror ? d : 1.0 - d; }  // P(t >= edge)
     };
     const auto channel = [&](double k) {
@@ -166,6 +176,29 @@ inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, co
     const Channel cy = grey ? cx : channel(kappa.y);
     const Channel cz = grey ? cx : channel(kappa.z);
 
+    if (floored) {
+        // P(t < e_j) after the reflection, per channel: 0 up to the floor, H(e) - H(2 floor - e) after.
+        const auto below = [&](const Channel& c, int j) {
+            const double e = tb.startOpl + j * tb.binWidth;
+            if ((j == k0 && k0 > 0) || !(e > floor)) return 0.0;
+            if (j == k1 + 1 && k1 < tb.bins - 1) return 1.0;
+            return std::clamp(c.belowAt(e, mirrorSum) - c.belowAt(2.0 * floor - e, mirrorSum), 0.0, 1.0);
+        };
+        const auto belowAll = [&](int j) {
+            const double x = below(cx, j);
+            return grey ? Color(x) : Color(x, below(cy, j), below(cz, j));
+        };
+        Color lo = belowAll(k0);
+        if (k0 == 0) out.before = energy * lo;
+        for (int k = k0; k <= k1; ++k) {
+            const Color hi = belowAll(k + 1);
+            const Color f(std::max(0.0, hi.x - lo.x), std::max(0.0, hi.y - lo.y), std::max(0.0, hi.z - lo.z));
+            if (!isBlack(f)) sink(k, energy * f);
+            lo = hi;
+        }
+        if (k1 == tb.bins - 1) out.after = energy * (Color(1.0) - lo);
+        return out;
+    }
     Color lo(cx.at(tb, k0, k0, k1, mirrorSum));
     if (!grey) lo = Color(lo.x, cy.at(tb, k0, k0, k1, mirrorSum), cz.at(tb, k0, k0, k1, mirrorSum));
     if (k0 == 0) out.before = energy * Color(cx.below(lo.x), cy.below(lo.y), cz.below(lo.z));

@@ -260,6 +260,48 @@ TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, co
     return out;
 }
 
+// The earliest time, per axis (OPL, m), at which a real path through an estimate's photon can
+// arrive (docs/developer/adding-an-estimator.md, "Causality"): no part of the estimate's time profile is binned
+// earlier; the part that would be is mirrored about the floor instead. -inf: no floor (the default).
+struct ArrivalFloor {
+    double real = -kInf;
+    double unwarped = -kInf;
+    bool active() const { return real > -kInf || unwarped > -kInf; }
+};
+
+// splatTime with the profile's part earlier than `floor` mirrored about it (t -> 2 floor - t, the
+// reflection of kernel density estimation at a boundary): energy kept, nothing before the floor,
+// no spike. When nothing is earlier than the floor it is splatTime itself (bit for bit).
+template <class Sink>
+TPB_HOT_INLINE OutsideFilm splatTimeFloored(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a,
+                                            double b, double floor, Sink&& sink) {
+    const double tA0 = a + b * p.s0, tB0 = a + b * p.s1;
+    const double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
+    // (A floor within rounding of the profile's start, as the unwarped floor of a beam at its
+    // overlap's first point, changes nothing.)
+    if (!(floor > tA + 1e-12 * (1.0 + std::abs(tA)))) return splatTime(tb, energy, p, a, b, sink);
+    const double mirrored = 2.0 * floor - a;  // t = mirrored - b s after the reflection
+    const bool collapsed = !(p.s1 - p.s0 > 0.0) || (tB - tA) <= 1e-9 * tb.binWidth;  // splatTime's instant rule
+    if (collapsed) return 0.5 * (tA + tB) >= floor ? splatTime(tb, energy, p, a, b, sink)
+                                                   : splatTime(tb, energy, p, mirrored, -b, sink);
+    if (!(floor < tB)) return splatTime(tb, energy, p, mirrored, -b, sink);
+    // t(s) = floor at s_c inside the segment (b != 0 here): the early part is [s0, s_c] when time
+    // grows along s, [s_c, s1] when it falls. Its share per channel, from the profile's mass.
+    const double sc = std::clamp((floor - a) / b, p.s0, p.s1);
+    const auto earlyShare = [&](const ExpProfile& e) {
+        const double below = e.reflect ? 1.0 - splat_detail::massTo(e, p.s1 - sc) * e.invTotal()
+                                       : splat_detail::massTo(e, sc - p.s0) * e.invTotal();
+        return std::clamp(b > 0.0 ? below : 1.0 - below, 0.0, 1.0);
+    };
+    const double fx = earlyShare(p.x);
+    const Color early = p.grey ? Color(fx) : Color(fx, earlyShare(p.y), earlyShare(p.z));
+    const SegmentProfile late(p.kappa, b > 0.0 ? sc : p.s0, b > 0.0 ? p.s1 : sc);
+    const SegmentProfile before(p.kappa, b > 0.0 ? p.s0 : sc, b > 0.0 ? sc : p.s1);
+    const OutsideFilm outLate = splatTime(tb, energy * (Color(1.0) - early), late, a, b, sink);
+    const OutsideFilm outEarly = splatTime(tb, energy * early, before, mirrored, -b, sink);
+    return {outEarly.before + outLate.before, outEarly.after + outLate.after};
+}
+
 template <class Sink>
 inline OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const Color& kappa, double s0, double s1,
                              double a, double b, Sink&& sink) {

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 namespace tpb {
@@ -55,13 +56,16 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
     const auto onAxis = [&](TimeAxis axis, double a, double b) TPB_HOT_LAMBDA {
         int kMin = INT_MAX, kMax = -1;
         Color& sum = binned[static_cast<int>(axis)];
-        const OutsideFilm out = splat(a, b, [&](int k, const Color& c) TPB_HOT_LAMBDA {
+        const auto binSink = [&](int k, const Color& c) TPB_HOT_LAMBDA {
             acc.addUnmarked(axis, k, c);
             kMin = std::min(kMin, k);
             kMax = std::max(kMax, k);
             sum += c;
             ++written;
-        });
+        };
+        OutsideFilm out;
+        if constexpr (std::is_invocable_v<Splat&, double, double, decltype(binSink)&, TimeAxis>) out = splat(a, b, binSink, axis);
+        else out = splat(a, b, binSink);
         if (kMax >= 0) acc.mark(axis, kMin, kMax);
         return out;
     };
@@ -95,9 +99,15 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
 
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L,
                  const SegmentProfile& profile, double aReal, double bReal, double aUnw, double bUnw,
-                 const TimeKernel& kernel) {
+                 const TimeKernel& kernel, const ArrivalFloor& floor) {
     if (kernel.active()) {
-        splatSpread(time, acc, tally, L, profile.kappa, profile.s0, profile.s1, aReal, bReal, aUnw, bUnw, kernel);
+        splatSpread(time, acc, tally, L, profile.kappa, profile.s0, profile.s1, aReal, bReal, aUnw, bUnw, kernel, floor);
+        return;
+    }
+    if (floor.active()) {
+        splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink, TimeAxis axis) {
+            return splatTimeFloored(time, L, profile, a, b, axis == TimeAxis::Real ? floor.real : floor.unwarped, sink);
+        });
         return;
     }
     splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) TPB_HOT_LAMBDA {
@@ -106,13 +116,19 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
 }
 
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
-                 double s0, double s1, double aReal, double bReal, double aUnw, double bUnw, const TimeKernel& kernel) {
-    if (!kernel.active()) {  // the kernel-free code itself: bit-identical films
+                 double s0, double s1, double aReal, double bReal, double aUnw, double bUnw, const TimeKernel& kernel,
+                 const ArrivalFloor& floor) {
+    if (!kernel.active() && !floor.active()) {  // the kernel-free code itself: bit-identical films
         splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnw, bUnw);
         return;
     }
-    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) {
-        return splatTimeSmoothed(time, L, kappa, s0, s1, a, b, kernel, sink);
+    if (!kernel.active()) {
+        splatSpread(time, acc, tally, L, SegmentProfile(kappa, s0, s1), aReal, bReal, aUnw, bUnw, kernel, floor);
+        return;
+    }
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink, TimeAxis axis) {
+        return splatTimeSmoothed(time, L, kappa, s0, s1, a, b, kernel, sink,
+                                 axis == TimeAxis::Real ? floor.real : floor.unwarped);
     });
 }
 

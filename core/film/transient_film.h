@@ -150,9 +150,10 @@ struct FilmTally {
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
                  double s0, double s1, double aReal, double bReal, double aUnwarped, double bUnwarped);
 // The same with the estimate's profile built by the caller (which may share its totals: beam2d).
+// With a floor (time_splat.h): no part of the profile is binned earlier than it, per axis.
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L,
                  const SegmentProfile& profile, double aReal, double bReal, double aUnwarped, double bUnwarped,
-                 const TimeKernel& kernel);
+                 const TimeKernel& kernel, const ArrivalFloor& floor = {});
 // An estimate that arrives at one instant on each axis (surface photons, path-traced paths).
 inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, double tReal,
                          double tUnwarped) {
@@ -163,10 +164,10 @@ inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally&
 // above, bit for bit.
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
                  double s0, double s1, double aReal, double bReal, double aUnwarped, double bUnwarped,
-                 const TimeKernel& kernel);
+                 const TimeKernel& kernel, const ArrivalFloor& floor = {});
 inline void splatInstant(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, double tReal,
-                         double tUnwarped, const TimeKernel& kernel) {
-    splatSpread(time, acc, tally, L, Color(0.0), 0.0, 0.0, tReal, 0.0, tUnwarped, 0.0, kernel);
+                         double tUnwarped, const TimeKernel& kernel, const ArrivalFloor& floor = {}) {
+    splatSpread(time, acc, tally, L, Color(0.0), 0.0, 0.0, tReal, 0.0, tUnwarped, 0.0, kernel, floor);
 }
 
 // One render thread's staging for the tile it writes: the touched runs of bins of every pixel it

@@ -68,7 +68,16 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
     NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
     const size_t beams0 = out.beams.size(), photons0 = out.photons.size(), points0 = out.points.size();
 
+    // The start of the previous segment (the emission point at first) and its region's index: a
+    // beam's `from` (photon_tracer.h).
+    Vec3 prevStart = ray.o;
+    double prevStartOpl = opl, prevIor = kInf;
     for (int depth = 0; depth < s.maxDepth; ++depth) {
+        Vec3 from = prevStart;
+        double fromOpl = prevStartOpl;
+        const double fromIor = prevIor;
+        prevStart = ray.o;
+        prevStartOpl = opl;
         if ((depth & 4095) == 4095) {  // a long photon: the memory guard and the abort flag
             const uint64_t mine =
                 mapBytes(out.beams.size() - beams0, out.photons.size() - photons0, out.points.size() - points0);
@@ -78,6 +87,13 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
         const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
         const double dSurf = hit ? hit->t : kInf;
         const Region& region = scene.regions[regions.top()];
+        prevIor = region.ior;
+        // Refracted into a denser medium: the straight path from the vertex before could be faster
+        // than its length times this region's index, so the beam's own origin is its `from`.
+        if (fromIor < region.ior) {
+            from = ray.o;
+            fromOpl = opl;
+        }
 
         if (region.hasMedium && !region.medium.scattering) {
             // Absorbing only: no scattering event to sample, just attenuate up to the surface.
@@ -94,7 +110,8 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                     out.cutFlux += power * m.transmittance(len);  // what flows on past the beam's end
                 }
                 if (len > 0.0 && std::isfinite(len))
-                    out.beams.push_back({ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth)});
+                    out.beams.push_back(
+                        {ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth), from, fromOpl});
             }
             if (s.storePoints && ff.scattered) {
                 // The point at the end of this segment (header): Phi T(d) / (sigma_bar Tbar(d)) per
@@ -103,7 +120,7 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                 const Color w(std::exp((sigmaBar - m.sigma_t.x) * d), std::exp((sigmaBar - m.sigma_t.y) * d),
                               std::exp((sigmaBar - m.sigma_t.z) * d));
                 out.points.push_back({ray.at(d), ray.d, power * w / sigmaBar, opl + ff.opl, regions.top(),
-                                      static_cast<uint32_t>(depth)});
+                                      static_cast<uint32_t>(depth), d});
             }
             if (!std::isfinite(ff.distance)) break;
             // Weight: T(d) sigma_s / (sigma_bar T_bar(d)) at a scattering event, T / T_bar at a surface.
@@ -127,7 +144,7 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
             case SurfaceKind::Emitter:
             case SurfaceKind::Absorber: return true;  // emitters and unassigned shapes absorb
             case SurfaceKind::Diffuse: {
-                if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, si.ng, power, opl});
+                if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, si.ng, power, opl, hit->t, region.ior});
                 const Vec3 newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), si.ns));
                 if (glm::dot(newDir, si.ng) <= 0.0) return true;
                 power *= si.material->albedo;

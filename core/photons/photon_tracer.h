@@ -46,6 +46,11 @@ struct Beam {
     double opl0;     // OPL at the origin (m), emission time included
     int region;      // region whose medium the beam lives in
     uint32_t depth;  // number of scattering/reflection events before this segment
+    // The photon's vertex before the origin and its OPL: the causal floor's start (estimators/
+    // estimator.h, causalFloor). The origin itself for a beam leaving a light or refracted into a
+    // medium of higher index. fromOpl -inf: unknown (a beam built by hand), no floor on the real axis.
+    Vec3 from{0.0};
+    double fromOpl = -kInf;
 };
 
 // A photon at a scattering event inside a scattering medium (see the header: weight and depth).
@@ -56,6 +61,7 @@ struct VolumePhoton {
     double opl;      // OPL at the scattering point (m), emission time included
     int region;      // region whose medium it scatters in
     uint32_t depth;  // that of the segment (beam) it ends: scattering/reflection events before it
+    double length = 0.0;  // m, from the segment's start (the event before, OPL opl - ior length) to here
 };
 
 struct SurfacePhoton {
@@ -64,6 +70,10 @@ struct SurfacePhoton {
     Vec3 normal;  // geometric normal, facing the side the photon came from
     Color power;  // W, divided by the photon count
     double opl;   // OPL at landing (m)
+    // m, from the segment's start (the event before: the causal floor's start) to here, and the
+    // index of the region it crossed. length 0: unknown (a photon built by hand), no floor.
+    double length = 0.0;
+    double ior = 1.0;
 };
 
 struct PhotonMap {

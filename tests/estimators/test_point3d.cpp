@@ -145,6 +145,9 @@ TEST(Point3D, OnePointMatchesTheFormulaAndItsTimeProfilePerBin) {
     const Vec3 xp(0.1, -0.05, 1.5), dirIn(0.3, -1.0, 0.2);
     PhotonMap map;
     map.points.push_back(point(xp, dirIn, Color(1.0, 2.0, 3.0), opl));
+    // Its flight started 1 m back: the causal floor (light leaving there for the camera) lies
+    // 0.6 eta before the chord's start, so it changes nothing here (CausalFloorBinsTheChordsEarlyPart).
+    map.points.back().length = 1.0;
     const CameraSegment seg{Ray{Vec3(0.0), Vec3(0.0, 0.0, 1.0)}, 4.0, 0};
     test::GatherSetup g;
     g.radius = r;
@@ -193,6 +196,46 @@ TEST(Point3D, OnePointMatchesTheFormulaAndItsTimeProfilePerBin) {
             EXPECT_NEAR(u.bins[0][kMid][c], expected[c] * tb.binWidth / (tHi - tLo), 1e-10 * expected[c]);
         }
     }
+}
+
+// A point whose flight starts at itself (length 0): no light earlier than the real path x_p -> x_r,
+// t_cam + t_p + eta |x_p - x_r|. The chord's part with eta s below eta |x_p - x_r| is mirrored about
+// that floor (s -> 2 s_f - s), the rest lands as before, the total unchanged (docs/developer/adding-an-estimator.md,
+// "Causality"): every bin against quadrature of the mirrored profile.
+TEST(Point3D, CausalFloorMirrorsTheChordsEarlyPart) {
+    const test::TestScene sc = test::testSceneFrom(mediumScene());
+    const Medium& m = sc->regions[0].medium;
+    const double eta = sc->regions[0].ior, r = 0.3, opl = 2.013;
+    const Vec3 xp(0.1, -0.05, 1.5), dirIn(0.3, -1.0, 0.2);
+    PhotonMap map;
+    map.points.push_back(point(xp, dirIn, Color(1.0), opl));
+    const CameraSegment seg{Ray{Vec3(0.0), Vec3(0.0, 0.0, 1.0)}, 4.0, 0};
+    test::GatherSetup g;
+    g.radius = r;
+    g.path.oplCam = 0.5;
+    const auto chord = rayPointChord(seg.ray.o, seg.ray.d, seg.sMax, xp, r);
+    ASSERT_TRUE(chord);
+    const double a = g.path.oplCam + opl, floorReal = a + eta * glm::length(xp);
+    const double sFloor = glm::length(xp);  // eta s = eta |x_p - x_r|: the chord's share below it moves
+    ASSERT_GT(sFloor, chord->sMinus + 0.2);
+    Point3DEstimator est;
+    const test::GatherResult res = test::gatherOnce(est, *sc, map, seg, sc.time, g);
+    ASSERT_EQ(res.estimates, 1);
+    const TimeBins& tb = sc.time;
+    const int kFloor = tb.binOf(floorReal);
+    const auto T = [&](double lo, double hi) {
+        return hi > lo ? quad([&](double s) { return std::exp(-m.sigma_t.x * s); }, lo, hi) : 0.0;
+    };
+    const double total = T(chord->sMinus, chord->sPlus);
+    for (int k = 0; k < kFloor; ++k) EXPECT_EQ(res.bins[0][k].x, 0.0) << k;  // nothing before the floor
+    for (int k = kFloor; k < tb.bins; ++k) {
+        const double lo = (tb.startOpl + k * tb.binWidth - a) / eta, hi = lo + tb.binWidth / eta;  // bin k in s
+        const double direct = T(std::max(sFloor, lo), std::min(chord->sPlus, hi));
+        const double mirrored = T(std::max(chord->sMinus, 2.0 * sFloor - hi), std::min(sFloor, 2.0 * sFloor - lo));
+        EXPECT_NEAR(res.bins[0][k].x, res.steady.x * (direct + mirrored) / total, 1e-10 * res.steady.x) << k;
+    }
+    EXPECT_NEAR(res.binsTotal(TimeAxis::Real).x, res.steady.x, 1e-12 * res.steady.x);  // energy kept
+    EXPECT_GT(T(chord->sMinus, sFloor) / total, 0.3);
 }
 
 // Filling space with points of power Phi dV turns the estimate into the kernel's integral:

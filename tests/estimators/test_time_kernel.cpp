@@ -155,6 +155,43 @@ TEST(TimeKernelMath, SharesMatchQuadratureOfTheConvolution) {
     std::printf("convolved shares vs quadrature: worst |difference| %.3g (E = 1)\n", worst);
 }
 
+// With a causal floor F (time_splat.h, ArrivalFloor) the smoothed profile's part before F is
+// mirrored about it: bin [lo, hi] gets the unfloored share of [max(lo, F), hi] plus that of its
+// mirror image [2F - hi, 2F - max(lo, F)]; nothing before F (docs/developer/adding-an-estimator.md, "Causality").
+TEST(TimeKernelMath, AFloorMirrorsTheSmoothedProfilesEarlyPart) {
+    double worst = 0.0;
+    for (const Case& c : kCases)
+        for (double tau : {0.07, 0.5})
+            for (double lag : {0.05, 0.3, 1.0}) {  // the floor this far after the smoothed support's start
+                const double tA = std::min(c.a + c.b * c.s0, c.a + c.b * c.s1);
+                const double F = tA - tau + lag;
+                Splat r;
+                r.bins.assign(static_cast<size_t>(kFilm.bins), Color(0.0));
+                r.out = splatTimeSmoothed(kFilm, Color(1.0), Color(c.kappa), c.s0, c.s1, c.a, c.b, box(tau),
+                                          [&](int bin, const Color& e) { r.bins[static_cast<size_t>(bin)] += e; }, F);
+                const auto share = [&](double lo, double hi) {
+                    if (!(hi > F)) return 0.0;
+                    const double l = std::max(lo, F);
+                    return oracleShare(c.kappa, c.s0, c.s1, c.a, c.b, tau, l, hi) +
+                           oracleShare(c.kappa, c.s0, c.s1, c.a, c.b, tau, 2.0 * F - hi, 2.0 * F - l);
+                };
+                double total = r.out.before.x + r.out.after.x;
+                for (int bin = 0; bin < kFilm.bins; ++bin) {
+                    const double lo = kFilm.startOpl + bin * kFilm.binWidth, got = r.bins[static_cast<size_t>(bin)].x;
+                    worst = std::max(worst, std::abs(got - share(lo, lo + kFilm.binWidth)));
+                    EXPECT_NEAR(got, share(lo, lo + kFilm.binWidth), 1e-12) << c.what << ", tau " << tau << ", lag " << lag
+                                                                          << ", bin " << bin;
+                    if (lo + kFilm.binWidth <= F) {
+                        EXPECT_EQ(got, 0.0) << c.what << ", bin " << bin;
+                    }
+                    total += got;
+                }
+                EXPECT_NEAR(r.out.before.x, share(-kInf, kFilm.startOpl), 1e-12) << c.what;
+                EXPECT_NEAR(total, 1.0, 1e-12) << c.what;  // energy kept
+            }
+    std::printf("floored (mirrored) shares vs quadrature: worst |difference| %.3g (E = 1)\n", worst);
+}
+
 TEST(TimeKernelMath, ChromaticChannelsEachMatchQuadrature) {
     for (const Case& c : kCases) {
         if (!(c.s1 > c.s0)) continue;
