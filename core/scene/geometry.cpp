@@ -212,6 +212,7 @@ struct Geometry::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
     std::vector<GeomInfo> geoms;   // indexed by Embree geomID
+    std::vector<int> geomOfShape;  // shape id -> geomID; -1: none, -2: more than one
     std::deque<MeshData> meshes;   // deque: stable addresses
     std::deque<SphereData> spheres;  // user data pointers of the sphere geometries
     Bounds3 bounds;
@@ -225,6 +226,11 @@ struct Geometry::Impl {
         rtcReleaseGeometry(geom);  // the scene holds it now
         checkEmbree(what);
         geoms.push_back(info);
+        if (info.shapeId >= 0) {
+            if (geomOfShape.size() <= static_cast<size_t>(info.shapeId)) geomOfShape.resize(info.shapeId + 1, -1);
+            int& g = geomOfShape[info.shapeId];
+            g = g == -1 ? static_cast<int>(id) : -2;
+        }
         return id;
     }
 };
@@ -420,6 +426,73 @@ bool Geometry::occluded(const Ray& ray) const {
     if (!setupRay(ray, qc, r)) return false;
     rtcOccluded1(impl_->scene, &qc.ctx, &r);
     return r.tfar == -std::numeric_limits<float>::infinity();
+}
+
+namespace {
+
+struct PointQueryUser {
+    const std::vector<GeomInfo>* geoms;
+    const std::deque<MeshData>* meshes;
+    const std::deque<SphereData>* spheres;
+    Geometry::PrimitiveVisitor visit;
+    void* user;
+};
+
+bool pointQueryPrimitive(RTCPointQueryFunctionArguments* args) {
+    const auto* u = static_cast<const PointQueryUser*>(args->userPtr);
+    if (args->geomID >= u->geoms->size()) return false;
+    const GeomInfo& info = (*u->geoms)[args->geomID];
+    Geometry::Primitive prim;
+    prim.shape = info.shapeId;
+    prim.prim = static_cast<int>(args->primID);
+    if (info.kind == Kind::Sphere) {
+        const SphereData& s = (*u->spheres)[info.index];
+        prim.sphere = true;
+        prim.v[0] = s.center;
+        prim.radius = s.radius;
+    } else {
+        const MeshData& m = (*u->meshes)[info.index];
+        if (args->primID >= m.triangles.size()) return false;
+        const glm::uvec3 tri = m.triangles[args->primID];
+        prim.v[0] = m.positions[tri.x];
+        prim.v[1] = m.positions[tri.y];
+        prim.v[2] = m.positions[tri.z];
+    }
+    u->visit(u->user, prim);
+    return false;  // the query's radius is unchanged
+}
+
+}  // namespace
+
+void Geometry::primitivesNear(const Vec3& p, double r, PrimitiveVisitor visit, void* user) const {
+    TPB_CHECK(impl_->committed);
+    if (!(maxAbs(p) < kMaxCoordinate) || !(r >= 0.0) || !std::isfinite(r)) return;
+    RTCPointQuery q;
+    q.x = static_cast<float>(p.x);
+    q.y = static_cast<float>(p.y);
+    q.z = static_cast<float>(p.z);
+    q.time = 0.0f;
+    // Float rounding of the centre and the radius: pad so that the float ball holds the double one.
+    q.radius = roundUp(r + 1e-6 * (r + maxAbs(p)));
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    PointQueryUser u{&impl_->geoms, &impl_->meshes, &impl_->spheres, visit, user};
+    rtcPointQuery(impl_->scene, &q, &ctx, pointQueryPrimitive, &u);
+}
+
+bool Geometry::triangle(int shape, int prim, Vec3 v[3]) const {
+    if (shape < 0 || static_cast<size_t>(shape) >= impl_->geomOfShape.size()) return false;
+    const int g = impl_->geomOfShape[shape];
+    if (g < 0) return false;
+    const GeomInfo& info = impl_->geoms[g];
+    if (info.kind != Kind::Mesh) return false;
+    const MeshData& m = impl_->meshes[info.index];
+    if (prim < 0 || static_cast<size_t>(prim) >= m.triangles.size()) return false;
+    const glm::uvec3 tri = m.triangles[prim];
+    v[0] = m.positions[tri.x];
+    v[1] = m.positions[tri.y];
+    v[2] = m.positions[tri.z];
+    return true;
 }
 
 Bounds3 Geometry::bounds() const { return impl_->bounds; }

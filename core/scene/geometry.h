@@ -8,6 +8,7 @@
 #include "scene/mesh.h"
 #include <memory>
 #include <optional>
+#include <type_traits>
 
 namespace tpb {
 
@@ -37,6 +38,30 @@ public:
     std::optional<SurfaceHit> intersect(const Ray& ray) const;
     // Any hit with ray.tmin < t < ray.tmax. Thread-safe after commit().
     bool occluded(const Ray& ray) const;
+
+    // A primitive reported by forEachPrimitiveNear: a triangle (its float-rounded vertices, as
+    // intersected) or a sphere (centre v[0], radius).
+    struct Primitive {
+        int shape = -1;
+        int prim = -1;  // triangle index within the shape (0 for spheres)
+        bool sphere = false;
+        Vec3 v[3];
+        double radius = 0.0;
+    };
+    using PrimitiveVisitor = void (*)(void* user, const Primitive& prim);
+    // Calls visit(user, prim) for every primitive whose bounding box meets the ball of radius r
+    // around p (a superset of the primitives within r: the caller tests the exact distance).
+    // Thread-safe after commit().
+    void primitivesNear(const Vec3& p, double r, PrimitiveVisitor visit, void* user) const;
+    template <class Fn>
+    void forEachPrimitiveNear(const Vec3& p, double r, Fn&& fn) const {
+        primitivesNear(p, r, [](void* u, const Primitive& prim) { (*static_cast<std::remove_reference_t<Fn>*>(u))(prim); },
+                       &fn);
+    }
+
+    // The float-rounded vertices of triangle `prim` of shape `shape` (a SurfaceHit's shape and prim),
+    // false for a sphere or a shape made of more than one geometry.
+    bool triangle(int shape, int prim, Vec3 v[3]) const;
 
     Bounds3 bounds() const;
     size_t triangleCount() const;
