@@ -281,13 +281,20 @@ const std::vector<Mode> kModes = {{"real_delta", "", "real_delta"},
 
 // Runs a command under xvfb-run, again if the X server failed to start (two `xvfb-run -a` started
 // at once, e.g. under `ctest -j`, can pick the same display number).
+// The command's own exit code is written to a file: xvfb-run exits 5 when it cannot remove its
+// temporary folder after the command ended (seen once under load in CI), which says nothing about
+// the command.
 Proc runXvfb(const std::string& cmd, const fs::path& logBase) {
+    const fs::path script = logBase.string() + ".xvfb.sh", code = logBase.string() + ".code";
+    std::ofstream(script) << cmd << "\necho $? > " << q(code) << "\n";
     Proc r;
     for (int attempt = 0; attempt < 4; ++attempt) {
-        r = runShell(kXvfb + cmd, logBase);
+        fs::remove(code);
+        r = runShell(kXvfb + "sh " + q(script), logBase);
         if (r.err.find("Xvfb failed to start") == std::string::npos) break;
         ::usleep(300000u * (attempt + 1) + 1000u * static_cast<unsigned>(::getpid() % 300));
     }
+    if (const std::string c = slurp(code); !c.empty()) r.code = std::stoi(c);
     return r;
 }
 
