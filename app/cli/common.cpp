@@ -1,3 +1,4 @@
+#include "base/parallel.h"
 #include "cli/common.h"
 
 #include "cli/flags.h"

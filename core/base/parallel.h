@@ -12,6 +12,15 @@
 
 namespace tpb {
 
+// Worker threads beyond this are pointless (the workers never wait on I/O: more threads than cores
+// only add memory and contention; 1000 threads on 2 cores ran a thread per tile): 4 x the cores
+// std::thread reports. render.threads and --threads above it are capped, with a warning.
+inline constexpr int kThreadsPerCoreCap = 4;
+inline int maxUsefulThreads() {
+    const unsigned cores = std::thread::hardware_concurrency();
+    return kThreadsPerCoreCap * static_cast<int>(std::max(1u, cores));
+}
+
 inline int resolveThreads(int requested) {
     if (requested > 0) return requested;
     const unsigned hw = std::thread::hardware_concurrency();

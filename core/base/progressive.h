@@ -17,7 +17,7 @@ inline double progressiveRadius(double r1, double alpha, uint64_t pass, int dim)
     return r1 * std::exp(logScale / dim);
 }
 
-// With a progressive time kernel (estimators/time_kernel.h) the estimate's kernel has dim + 1
+// With a progressive time kernel (film/time_kernel.h) the estimate's kernel has dim + 1
 // dimensions, space and time: its measure r^dim tau shrinks by (i + alpha) / (i + 1) per pass with r
 // and tau at the same rate, so both follow progressiveRadius(., alpha, pass, dim + 1), ~ i^{-(1 -
 // alpha) / (dim + 1)} (docs/theory/derivations.md "Progressive time kernel").

@@ -1,5 +1,5 @@
 // The names of the density estimators (estimators/registry.cpp makes them), in one list the settings
-// check (render/render_settings.cpp) reads without linking the estimators. A new estimator adds its
+// check (integrators/render_settings.cpp) reads without linking the estimators. A new estimator adds its
 // name here and its line in registry.cpp; tests/estimators/test_registry.cpp checks the two agree.
 #pragma once
 #include <string>

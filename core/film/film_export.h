@@ -7,7 +7,7 @@
 #include "film/film_snapshot.h"
 #include "film/tone_map.h"
 #include "film/time_response.h"
-#include "scene/scene_desc.h"
+#include "film/time_axis.h"
 #include "io/image_io.h"
 
 #include <atomic>

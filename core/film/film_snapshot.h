@@ -24,7 +24,7 @@
 // unchanged (an in-place add drops them; a block that the next pass replaces takes them with it).
 #pragma once
 #include "base/large_buffer.h"
-#include "estimators/time_splat.h"
+#include "film/time_splat.h"
 
 #include <atomic>
 #include <cstdint>

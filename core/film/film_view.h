@@ -11,7 +11,7 @@
 #pragma once
 #include "film/film_snapshot.h"
 #include "film/time_response.h"
-#include "scene/scene_desc.h"
+#include "film/time_axis.h"
 
 #include <vector>
 

@@ -21,9 +21,9 @@
 // the images read from them are float (film_view.h).
 #pragma once
 #include "base/math.h"
-#include "scene/scene_desc.h"
-#include "estimators/time_kernel.h"
-#include "estimators/time_splat.h"
+#include "film/time_axis.h"
+#include "film/time_kernel.h"
+#include "film/time_splat.h"
 #include "film/film_snapshot.h"
 
 #include <atomic>

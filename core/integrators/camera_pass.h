@@ -21,7 +21,7 @@ struct CameraPassParams {
 };
 
 // The estimators a camera path asks (either may be null: that stage is off for the scene).
-// With each its time kernel of this pass (estimators/time_kernel.h; None: off), which the camera
+// With each its time kernel of this pass (film/time_kernel.h; None: off), which the camera
 // pass puts in the PixelSink it hands that estimator.
 struct CameraPassEstimators {
     const VolumeEstimator* volume = nullptr;

@@ -21,7 +21,7 @@
 #include "film/transient_film.h"
 #include "integrators/camera_pass.h"
 #include "integrators/path_tracer.h"
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 #include "scene/scene.h"
 
 #include <atomic>
@@ -45,7 +45,7 @@ struct PassStats {
     // at scattering events, for the point estimators); beamPieces: what the volume estimator indexed
     // (beam pieces, or points).
     double beamRadius = 0.0, surfaceRadius = 0.0;
-    // and half-widths of their time kernels (m of OPL; 0 = off: estimators/time_kernel.h).
+    // and half-widths of their time kernels (m of OPL; 0 = off: film/time_kernel.h).
     double volumeTimeHalfWidth = 0.0, surfaceTimeHalfWidth = 0.0;
     int64_t photons = 0, beams = 0, beamPieces = 0, surfacePhotons = 0, points = 0;
     // Flux the photons started with, and the part still carried at the end of long beams cut in an

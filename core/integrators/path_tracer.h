@@ -53,7 +53,7 @@
 // last allowed vertex, so maxDepth = 1 gives exactly single scattering / direct lighting.
 #pragma once
 #include "film/transient_film.h"
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 #include "scene/scene.h"
 
 #include <atomic>

@@ -12,7 +12,7 @@
 // estimator (estimators/estimator.h, chosen by name in the settings) gives the dimension of its
 // kernel to the schedule (the 2D beam kernel and the surface kernel are both 2D: their area shrinks
 // by (i + alpha) / (i + 1) per pass).
-// With the optional progressive time kernel (RenderSettings::timeKernel, estimators/time_kernel.h)
+// With the optional progressive time kernel (RenderSettings::timeKernel, film/time_kernel.h)
 // each estimator's estimates are also smoothed along time by a box whose half-width shrinks with its
 // radius, and both follow the schedule of dimension dim() + 1 (integrators/time_kernel_schedule.h).
 // Only the stages the scene needs run (Scene::stages: no beams without a scattering medium that

@@ -8,8 +8,8 @@
 // default (defaultTimeKernelWidth): the OPL light takes to cross the pass-1 kernel, 2 eta_max r_1.
 #pragma once
 #include "base/progressive.h"
-#include "estimators/time_kernel.h"
-#include "render/render_settings.h"
+#include "film/time_kernel.h"
+#include "integrators/render_settings.h"
 #include "scene/scene.h"
 
 namespace tpb {

@@ -24,7 +24,7 @@
 // No scattering medium, or photons that never enter one: no measurement, the default fraction of
 // the diagonal stays (RadiusPilot::measured false, with the reason).
 #pragma once
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 #include "scene/scene.h"
 
 #include <atomic>

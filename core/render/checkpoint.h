@@ -27,7 +27,7 @@
 #include "integrators/integrator.h"
 #include "render/fingerprint.h"
 #include "render/prepare.h"
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 
 #include <memory>
 #include <string>

@@ -12,7 +12,7 @@
 #include "film/transient_film.h"
 #include "base/memory.h"
 #include "film/film_bytes.h"
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 #include "base/pause_gate.h"
 #include "scene/scene.h"
 

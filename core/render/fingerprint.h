@@ -12,8 +12,8 @@
 // files are in it by the FNV-1a 64 of their bytes, so an edited OBJ is seen; the scene file's own
 // bytes are not (comments, key order and the render block's pass count may change).
 #pragma once
-#include "estimators/time_splat.h"
-#include "render/render_settings.h"
+#include "film/time_splat.h"
+#include "integrators/render_settings.h"
 #include "scene/scene_desc.h"
 
 #include <string>

@@ -144,8 +144,7 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     // The settings: the file's, then the flags; checked once, now that the diagonal is known.
     p.settings = RenderSettings::fromDesc(desc.render, diag);
     p.settings.apply(overrides);
-    for (const std::string& w : p.settings.validate({&desc, &overrides, diag}))
-        if (std::find(desc.warnings.begin(), desc.warnings.end(), w) == desc.warnings.end()) warn(w);  // (the loader's)
+    for (const std::string& w : p.settings.validate({&desc, &overrides, diag})) warn(w);
 
     // "radius": "auto" (unless --radius overrides it) or --auto-radius: from a pilot pass's photon
     // density (auto_radius.h), capped like any radius; the surface radius, unless given, keeps the

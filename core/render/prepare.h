@@ -6,7 +6,7 @@
 #pragma once
 #include "render/auto_radius.h"
 #include "render/fingerprint.h"
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 #include "render/time_range.h"
 #include "scene/scene.h"
 #include "scene/scene_desc.h"

@@ -12,8 +12,8 @@
 // order of the diagonal made it rays x beams, minutes without output). It polls an abort flag
 // (Ctrl-C, SIGTERM) and reports its progress.
 #pragma once
-#include "estimators/time_splat.h"
-#include "render/render_settings.h"
+#include "film/time_splat.h"
+#include "integrators/render_settings.h"
 #include "scene/scene.h"
 
 #include <atomic>

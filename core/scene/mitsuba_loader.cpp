@@ -20,7 +20,6 @@
 #include "base/text.h"
 #include "base/memory.h"
 #include "film/film_bytes.h"
-#include "render/render_settings.h"
 #include "scene/light.h"
 #include "scene/scene_loader.h"
 
@@ -1209,10 +1208,6 @@ void Importer::run(const std::string& text, const std::string& path) {
                         (d_.globalMedium >= 0 ? " (\"" + d_.media[d_.globalMedium].name + "\")" : " (none)") +
                         ": tpb takes the medium outside shapes (and around lights) from the regions they are in "
                         "(the sensor's medium fills the outside), so this medium is not used here");
-
-    RenderSettings settings = RenderSettings::fromDesc(d_.render, 0.0);
-    for (std::string& w : settings.validate({&d_, nullptr, 0.0})) d_.warnings.push_back(std::move(w));
-    d_.render.threads = settings.threads;
 }
 
 }  // namespace

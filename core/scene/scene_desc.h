@@ -4,6 +4,7 @@
 // (e.g. "lights[0].power"), so the build step can report "scene.json:12: lights[0].power: ...".
 #pragma once
 #include "base/math.h"
+#include "film/time_axis.h"
 #include <map>
 #include <string>
 #include <vector>
@@ -107,19 +108,7 @@ struct LightDesc {
     double laserRadius = 0.0;  // laser: beam radius, m (0 = infinitely thin)
 };
 
-enum class EmissionMode { Delta, Continuous };
-enum class TimeProfile { Exact, Uniform };
 enum class BeamLength { Short, Long };
-
-// The optional progressive time kernel of the photon-beams estimators (issue 14): every estimate's
-// time profile is smoothed along time by a kernel whose width shrinks pass after pass with the
-// spatial radius (docs/theory/derivations.md: the rates). Box: the only kind so far.
-enum class TimeKernelKind { None, Box };
-struct TimeKernelSettings {
-    TimeKernelKind kind = TimeKernelKind::None;
-    double width = 0.0;  // m of OPL, full width of pass 1's kernel; 0 = chosen from the scene
-    bool operator==(const TimeKernelSettings&) const = default;
-};
 
 struct RenderDesc {
     int64_t photonsPerPass = 20000;

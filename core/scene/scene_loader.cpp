@@ -98,7 +98,6 @@
 #include "scene/scene_loader.h"
 #include "scene/mitsuba_loader.h"
 
-#include "render/render_settings.h"
 
 #include "base/error.h"
 #include "base/text.h"
@@ -715,8 +714,8 @@ void readLight(Context& ctx, const JsonValue& obj, const std::string& path, Ligh
     b.finish();
 }
 
-// Types only here; the ranges are RenderSettings::validate()'s (render_settings.h), the one check
-// of the render settings, called at the end with this file's locations.
+// Types only here; the ranges are RenderSettings::validate()'s (integrators/render_settings.h),
+// the one check of the render settings, which prepareRender calls with this file's locations.
 void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     Bag b(ctx, obj, "render", "render settings");
     r.photonsPerPass = b.integer("photons_per_pass", INT64_MIN, INT64_MAX).value_or(r.photonsPerPass);
@@ -778,7 +777,7 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     r.beamLength = b.choice<BeamLength>("beam_length", {{"short", BeamLength::Short}, {"long", BeamLength::Long}},
                                         "beam_length")
                        .value_or(r.beamLength);
-    // The estimators: names checked by validate() below (the allowed values in its message).
+    // The estimators: names checked by validate() (the allowed values in its message).
     r.volumeEstimator = b.string("volume_estimator").value_or(r.volumeEstimator);
     r.surfaceEstimator = b.string("surface_estimator").value_or(r.surfaceEstimator);
     // "time_kernel": "none" | "box" | {"type": "box", "width": m of OPL}.
@@ -807,12 +806,6 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
         }
     }
     b.finish();
-
-    // The ranges (the scene's diagonal is not known yet: absolute radii are checked against it
-    // once the scene is built, prepare.h). A thread count above the cores is capped.
-    RenderSettings settings = RenderSettings::fromDesc(r, 0.0);
-    for (std::string& w : settings.validate({&ctx.desc, nullptr, 0.0})) ctx.desc.warnings.push_back(std::move(w));
-    r.threads = settings.threads;
 }
 
 // Each element of the array under `key` must be an object; calls read(element, "key[i]").
@@ -922,11 +915,6 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
     if (desc.render.passes == 0 && desc.render.timeBudgetSec == 0.0)
         warn(desc, "render.passes", "render.passes is 0 and render.time_budget_s is 0: the render only stops when interrupted");
     return desc;
-}
-
-int maxUsefulThreads() {
-    const unsigned cores = std::thread::hardware_concurrency();
-    return kThreadsPerCoreCap * static_cast<int>(std::max(1u, cores));
 }
 
 std::string readSceneFile(const std::string& path, const std::string& what) {

@@ -24,10 +24,4 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
 inline constexpr uint64_t kMaxSceneFileBytes = uint64_t(256) << 20;
 std::string readSceneFile(const std::string& path, const std::string& what = "scene file");
 
-// Worker threads beyond this are pointless (the workers never wait on I/O: more threads than cores
-// only add memory and contention; 1000 threads on 2 cores ran a thread per tile): 4 x the cores
-// std::thread reports. render.threads and --threads above it are capped, with a warning.
-inline constexpr int kThreadsPerCoreCap = 4;
-int maxUsefulThreads();
-
 }  // namespace tpb

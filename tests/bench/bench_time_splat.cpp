@@ -1,4 +1,4 @@
-// The time splat (splatTime, estimators/time_splat.h): one estimate's energy spread over the film's
+// The time splat (splatTime, film/time_splat.h): one estimate's energy spread over the film's
 // time bins it covers, exponential profile in closed form. Two entry points:
 //   BM_SplatTimeProfile: the SegmentProfile signature with the profile built beforehand, as the
 //     gather builds one per estimate and splats it on both time axes (the cost per axis);
@@ -10,7 +10,7 @@
 // coloured 0 is a grey kappa (one channel evaluated, the default scene's fog), 1 three kappas.
 // items/s = estimates splatted per second; bins_per_estimate counts the sink's calls.
 #include "base/rng.h"
-#include "estimators/time_splat.h"
+#include "film/time_splat.h"
 
 #include <benchmark/benchmark.h>
 

@@ -5,7 +5,7 @@
 #include "scene/medium.h"
 #include "base/progressive.h"
 #include "base/rng.h"
-#include "estimators/time_splat.h"
+#include "film/time_splat.h"
 
 #include "support/quadrature.h"
 

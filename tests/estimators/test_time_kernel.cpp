@@ -1,9 +1,9 @@
-// Exact tests of the progressive time kernel's splat (estimators/time_kernel.h, K1-K4): the share of
+// Exact tests of the progressive time kernel's splat (film/time_kernel.h, K1-K4): the share of
 // each bin of (profile * box) against an independent quadrature of the convolution, for an instant
 // and for the exponential segment (kappa > 0, < 0, ~0; b > 0, < 0, ~0; chromatic), energy
 // conservation with what falls before and after the film, the tau -> 0 limit, the bit-identical
 // kernel-free path, the first moment, and the phi-functions against long double.
-#include "estimators/time_kernel.h"
+#include "film/time_kernel.h"
 #include "film/transient_film.h"
 #include "base/rng.h"
 

@@ -56,7 +56,7 @@ struct RenderSetup {
 
 // One way to render a test scene: the method and, for photon beams, the volume estimator
 // (estimators/estimator_names.h) and whether the progressive time kernel is on (a box of the default
-// width, estimators/time_kernel.h).
+// width, film/time_kernel.h).
 struct Variant {
     Method method = Method::Beams;
     std::string volume = "beam2d";
@@ -344,7 +344,7 @@ TEST_P(PhysicalIntegrator, DiffusePlaneUnderPointLightMatchesClosedForm) {
     // (beams: a photon lands up to rs from x, so its OPL is off by up to rs) and 1e-3 m. Every bin
     // outside that window must be empty, and the window's bins must hold all of the steady energy
     // (nothing before or after the film).
-    // The time kernel (when on) widens every arrival by its half-width (estimators/time_kernel.h).
+    // The time kernel (when on) widens every arrival by its half-width (film/time_kernel.h).
     const double blur = (beams ? ps.surfaceRadius + r.stats.front().surfaceTimeHalfWidth : 0.0) + 1e-3;
     if (v.timeKernel) {
         EXPECT_GT(r.stats.front().surfaceTimeHalfWidth, 0.0);

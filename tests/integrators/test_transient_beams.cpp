@@ -592,7 +592,7 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
     EXPECT_LT(exact, uniform);
 }
 
-// ---- The progressive time kernel (estimators/time_kernel.h, integrators/time_kernel_schedule.h) ----
+// ---- The progressive time kernel (film/time_kernel.h, integrators/time_kernel_schedule.h) ----
 
 namespace {
 

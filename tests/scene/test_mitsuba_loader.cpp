@@ -2,6 +2,7 @@
 // their JSON scenes, transforms against hand-computed matrices, fov_axis conversions, unit
 // conversions, <default>/$param/<include>/<ref>, the PLY reader, and every error path naming
 // file:line.
+#include "render/prepare.h"
 #include "base/error.h"
 #include "render/driver.h"
 #include "scene/light.h"
@@ -387,10 +388,13 @@ TEST(MitsubaLoader, DefaultsParametersIncludesAndRefs) {
     MitsubaOptions o;
     o.params["r"] = "3";
     EXPECT_EQ(loadMitsubaScene((tmp.path() / "main.xml").string(), o).shapes[1].radius, 3.0);
-    // A bad render setting is reported at its XML line by the render settings' own check.
+    // A bad render setting is reported at its XML line by the render settings' own check
+    // (RenderSettings::validate, when prepareRender checks the loaded file).
     tmp.write("bad.xml", "<scene version=\"3.0.0\">\n<integrator type=\"path\">\n<float name=\"tpb_alpha\" value=\"7\"/></integrator></scene>");
     try {
-        loadScene((tmp.path() / "bad.xml").string());
+        PrepareOptions opt;
+        opt.pilot.run = false;
+        prepareRender(loadScene((tmp.path() / "bad.xml").string()), {}, opt);
         ADD_FAILURE() << "no error";
     } catch (const UserError& e) {
         EXPECT_THAT(e.what(), HasSubstr("bad.xml:3: render.alpha"));

@@ -1,5 +1,7 @@
 // Scene loader and JSON parser: round trips, defaults, and one test per kind of user mistake, each
 // checking that the message names the file, the line and the key.
+#include "base/parallel.h"
+#include "render/prepare.h"
 #include "transport/stages.h"
 #include "base/error.h"
 #include "io/json.h"
@@ -29,12 +31,24 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Loads `text` as "scene.json" and expects a UserError at `line` about `key` containing `fragment`.
+// Loads `text` as `file` and prepares its render as `tpb render` does (pilots off): the loader
+// reads types, prepareRender checks the render block's ranges with the file's locations
+// (RenderSettings::validate). The warnings of both, in order, go to `warnings`.
+PreparedRender prepareText(const std::string& text, const std::string& file,
+                           std::vector<std::string>* warnings = nullptr) {
+    PrepareOptions opt;
+    opt.pilot.run = false;
+    if (warnings) opt.warn = [warnings](const std::string& w) { warnings->push_back(w); };
+    return prepareRender(loadSceneFromString(text, file), {}, opt);
+}
+
+// Loads and prepares `text` as "scene.json" and expects a UserError at `line` about `key`
+// containing `fragment`.
 void expectError(const std::string& text, int line, const std::string& key, const std::string& fragment,
                  const std::string& file = "scene.json") {
     SCOPED_TRACE(text);
     try {
-        loadSceneFromString(text, file);
+        prepareText(text, file);
         ADD_FAILURE() << "no error; expected: " << fragment;
     } catch (const UserError& e) {
         const std::string what = e.what();
@@ -701,20 +715,24 @@ TEST(SceneErrors, KernelRadiusThatMakesPassesQuadratic) {
                 "wide makes every camera ray gather every beam or photon, so a pass costs rays x beams");
     expectError("{\"version\": 1,\n\"render\": {\"surface_radius_relative\": 0.5}}", 2,
                 "render.surface_radius_relative", "allowed (0, 0.25]");
-    const SceneDesc d = loadSceneFromString("{\"version\": 1,\n\"render\": {\"radius_relative\": 0.1}}", "scene.json");
-    ASSERT_EQ(d.warnings.size(), 2u);  // and "the scene has no lights"
-    EXPECT_THAT(d.warnings[0], HasSubstr("scene.json:2: render.radius_relative: radius_relative 0.1 is large (above "
-                                         "0.05 of the scene's diagonal): passes get much slower"));
-    EXPECT_EQ(loadSceneFromString("{\"version\": 1, \"render\": {\"radius_relative\": 0.05}}", "s.json").warnings.size(), 1u);
+    std::vector<std::string> w;
+    prepareText("{\"version\": 1,\n\"render\": {\"radius_relative\": 0.1}}", "scene.json", &w);
+    ASSERT_EQ(w.size(), 2u);  // "the scene has no lights", then the radius
+    EXPECT_THAT(w[1], HasSubstr("scene.json:2: render.radius_relative: radius_relative 0.1 is large (above "
+                                "0.05 of the scene's diagonal): passes get much slower"));
+    w.clear();
+    prepareText("{\"version\": 1, \"render\": {\"radius_relative\": 0.05}}", "s.json", &w);
+    EXPECT_EQ(w.size(), 1u);
 }
 
 // render.threads far above the cores ran a thread per tile: capped with a warning naming the key.
 TEST(SceneErrors, ThreadsAboveTheCoresAreCapped) {
-    const SceneDesc d = loadSceneFromString("{\"version\": 1,\n\"render\": {\"threads\": 100000}}", "scene.json");
-    EXPECT_EQ(d.render.threads, maxUsefulThreads());
-    ASSERT_EQ(d.warnings.size(), 2u);  // and "the scene has no lights"
-    EXPECT_THAT(d.warnings[0], HasSubstr("scene.json:2: render.threads: threads 100000 is more than 4 x the "));
-    EXPECT_THAT(d.warnings[0], HasSubstr("using " + std::to_string(maxUsefulThreads()) + " (0 = all cores)"));
+    std::vector<std::string> w;
+    const PreparedRender p = prepareText("{\"version\": 1,\n\"render\": {\"threads\": 100000}}", "scene.json", &w);
+    EXPECT_EQ(p.settings.threads, maxUsefulThreads());
+    ASSERT_EQ(w.size(), 2u);  // "the scene has no lights", then the threads
+    EXPECT_THAT(w[1], HasSubstr("scene.json:2: render.threads: threads 100000 is more than 4 x the "));
+    EXPECT_THAT(w[1], HasSubstr("using " + std::to_string(maxUsefulThreads()) + " (0 = all cores)"));
 }
 
 // ---- JSON parser -----------------------------------------------------------------------------------

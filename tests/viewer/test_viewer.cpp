@@ -5,7 +5,7 @@
 // toggles. Skipped only when xvfb-run is missing or cannot start an X server.
 #include "film/tone_map.h"
 #include "io/image_io.h"
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 
 #include "support/checkpoint_payload.h"
 

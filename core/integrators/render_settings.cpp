@@ -1,11 +1,11 @@
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 
 #include "base/error.h"
 #include "estimators/estimator_names.h"
 #include "base/memory.h"
 #include "film/film_bytes.h"
 #include "photons/photon_tracer.h"
-#include "scene/scene_loader.h"
+#include "base/parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -28,25 +28,6 @@ std::optional<Method> parseMethod(std::string_view s) {
     if (s == "pt") return Method::PathTracer;
     if (s == "preview") return Method::Preview;
     return std::nullopt;
-}
-
-std::optional<TimeKernelSettings> parseTimeKernel(std::string_view s) {
-    if (s == "none") return TimeKernelSettings{};
-    if (s == "box") return TimeKernelSettings{TimeKernelKind::Box, 0.0};
-    if (s.rfind("box:", 0) == 0) {
-        const std::string w(s.substr(4));
-        char* end = nullptr;
-        const double width = std::strtod(w.c_str(), &end);
-        if (w.empty() || end != w.c_str() + w.size() || !(width > 0.0) || !std::isfinite(width)) return std::nullopt;
-        return TimeKernelSettings{TimeKernelKind::Box, width};
-    }
-    return std::nullopt;
-}
-
-std::string timeKernelName(const TimeKernelSettings& k) {
-    if (k.kind == TimeKernelKind::None) return "none";
-    if (!(k.width > 0.0)) return "box";
-    return "box:" + shortNumber(k.width);
 }
 
 int64_t RenderSettings::photonsForPass(uint64_t pass) const {

@@ -11,39 +11,11 @@
 // The optional progressive time kernel (time_kernel.h) convolves these profiles with a box first.
 #pragma once
 #include "base/math.h"
+#include "film/time_axis.h"
 
 #include <algorithm>
 
 namespace tpb {
-
-struct TimeBins {
-    double startOpl = 0.0;  // m
-    double binWidth = 0.01; // m
-    int bins = 1;
-    double endOpl() const { return startOpl + binWidth * bins; }
-    // Bin of time t, or -1 before the film / bins after it (clamped, no integer overflow).
-    TPB_HOT_INLINE int binOf(double t) const {
-        const double k = std::floor((t - startOpl) / binWidth);
-        if (!(k >= 0.0)) return -1;
-        if (k >= static_cast<double>(bins)) return bins;
-        return static_cast<int>(k);
-    }
-    // binOf(t) with a multiplication by invWidth = 1 / binWidth instead of the division (the splat
-    // calls it four times per estimate), always the same answer: q = (t - start) invWidth is within
-    // 3.4e-16 |q| of the division's quotient (three roundings), so when q lies farther than
-    // 1e-15 (1 + |q|) from every integer both have the same floor; otherwise (q within rounding of
-    // a bin boundary, huge, NaN or infinite) it divides (TimeSplat.BinByReciprocalIsTheBinByDivision in
-    // tests/estimators/test_beam2d.cpp).
-    TPB_HOT_INLINE int binOf(double t, double invWidth) const {
-        const double q = (t - startOpl) * invWidth;
-        const double k = std::floor(q);
-        const double f = q - k, tol = 1e-15 * (1.0 + std::abs(q));
-        if (!(f > tol && f < 1.0 - tol)) return binOf(t);
-        if (k < 0.0) return -1;
-        if (k >= static_cast<double>(bins)) return bins;
-        return static_cast<int>(k);
-    }
-};
 
 // The exponential profile exp(-kappa s) on [s0, s1] of one channel, seen from its decaying end:
 // x = s - s0 (kappa >= 0) or s1 - s (kappa < 0, `reflect`), density exp(-|kappa| x), unnormalised

@@ -1,8 +1,9 @@
 // RenderSettings: the one validate() (a bad value named by file:line:key when it came from the
 // scene file, by its flag when an override set it), the overrides, relative radii against the
 // scene's diagonal, and prepareRender (render/prepare.h) deciding the film's time axis once.
+#include "base/parallel.h"
 #include "render/prepare.h"
-#include "render/render_settings.h"
+#include "integrators/render_settings.h"
 #include "base/memory.h"
 #include "film/film_bytes.h"
 #include "scene/scene_loader.h"
@@ -344,7 +345,8 @@ TEST(SceneLoaderRender, EstimatorAndTimeKernelKeys) {
                 StartsWith("t.json:7: render.time_kernel.width: width must be > 0"));
     EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": {"type": "box", "widht": 1}})"); }), HasSubstr("widht"));
     EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": 3})"); }), HasSubstr("expected \"none\", \"box\" or an object"));
-    EXPECT_THAT(errorOf([&] { load(R"({"volume_estimator": "beams"})"); }),
+    // The name is checked by validate(), in prepareRender, at the file's line.
+    EXPECT_THAT(errorOf([&] { prepareRender(load(R"({"volume_estimator": "beams"})"), {}, opt); }),
                 AllOf(StartsWith("t.json:7: render.volume_estimator: "), HasSubstr("allowed: ")));
     EXPECT_THAT(errorOf([&] { load(R"({"volume_estimator": 2})"); }), HasSubstr("expected a string"));
 }

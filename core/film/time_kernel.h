@@ -36,8 +36,8 @@
 //   and (K2) is (K4) with T = 0. Per channel (kappa is RGB), one evaluation for a grey kappa.
 // Tested against quadrature of the convolution in tests/estimators/test_time_kernel.cpp.
 #pragma once
-#include "estimators/time_splat.h"
-#include "scene/scene_desc.h"
+#include "film/time_splat.h"
+#include "film/time_axis.h"
 
 #include <algorithm>
 #include <array>

@@ -27,11 +27,6 @@ enum class Method {
 const char* methodName(Method m);                       // "beams" | "pt" | "preview"
 std::optional<Method> parseMethod(std::string_view s);  // accepts the names above
 
-// The time kernel as the CLI and the viewer write it: "none" | "box" (width from the scene) |
-// "box:WIDTH" (WIDTH m of OPL, > 0). nullopt for anything else.
-std::optional<TimeKernelSettings> parseTimeKernel(std::string_view s);
-std::string timeKernelName(const TimeKernelSettings& k);  // the inverse: "none", "box", "box:0.05"
-
 // Command-line (or viewer) overrides of the scene file's render block: what is set replaces the
 // file's value. width/height/bins change the film's shape: they are applied to the description
 // before the scene is built (applyFilmShape, prepare.h); the rest to RenderSettings (apply()).
