@@ -22,11 +22,14 @@
 #include "integrators/camera_pass.h"
 #include "integrators/path_tracer.h"
 #include "integrators/render_settings.h"
+#include "estimators/estimator.h"
+#include "photons/photon_tracer.h"
 #include "scene/scene.h"
 
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 namespace tpb {
 
@@ -61,6 +64,22 @@ struct PassStats {
     uint64_t peakRssBytes = 0;
 };
 
+// A probe pass measures the scene before the render: the pilots of render/time_range.h (the film's
+// time range, from the arrival times) and render/auto_radius.h (the kernel radius, from the photon
+// density). It is not one of the render's passes (pass 0, keyed by its own seed), writes no film and
+// scales no power. The Driver's runProbe (render/driver.h) runs it like a pass.
+struct ProbeRequest {
+    uint64_t seed = 1;
+    int64_t photons = 0;
+    // What the photon map stores: the volume estimator's needs unless set; surface photons when the
+    // scene has a diffuse surface, unless `surfacePhotons` is false.
+    std::optional<VolumeEstimator::Needs> store;
+    bool surfacePhotons = true;
+    uint64_t maxMapBytes = 0;  // bytes of photon map; 0 = the settings' limit
+    bool photonsOnly = false;  // the photon pass alone (probeMap()), no camera probe
+    double beamRadius = 0.0, surfaceRadius = 0.0;  // m, the kernels the camera probe gathers with
+};
+
 class Integrator {
 public:
     virtual ~Integrator() = default;
@@ -72,6 +91,17 @@ public:
     virtual void renderTile(const PassContext& ctx, int tile, const TileRect& rect, TransientFilm::TileWriter& writer,
                             int thread) = 0;
     virtual void endPass(const PassContext& ctx, PassStats& stats) = 0;
+    // A probe pass (ProbeRequest) with ctx.pass 0: false when the method has none, or ctx.abort
+    // stopped it. Then probePixel for the pixels the caller chooses, from any threads (each thread
+    // `thread` its own pixels at a time).
+    virtual bool beginProbe(const PassContext& /*ctx*/, const ProbeRequest& /*request*/) { return false; }
+    // The probe's estimate of pixel (x, y) on ctx.time's bins, in thread `thread`'s accumulator
+    // (valid until that thread's next call).
+    virtual const PixelAccumulator* probePixel(const PassContext& /*ctx*/, int /*x*/, int /*y*/, int /*thread*/) {
+        return nullptr;
+    }
+    // The photon map of the probe (photon beams), else null.
+    virtual const PhotonMap* probeMap() const { return nullptr; }
     // Passes that improve the estimate: 0 = unlimited (progressive), 1 = the first pass is the answer
     // (the preview).
     virtual int64_t usefulPasses() const { return 0; }

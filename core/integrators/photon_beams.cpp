@@ -152,4 +152,46 @@ void PhotonBeamsIntegrator::endPass(const PassContext&, PassStats& ps) {
     ps.film = static_cast<const FilmTally&>(ps.camera);
 }
 
+// The pilots' probe: the photon pass of the request, then (unless photonsOnly) the estimators
+// prepared for its kernels with the pass's defaults otherwise (no time kernel, no shared queries).
+bool PhotonBeamsIntegrator::beginProbe(const PassContext& ctx, const ProbeRequest& req) {
+    PhotonPassParams pt = photonPassFor(scene_, settings_, req.store.value_or(volume_->needs()), 0, ctx.threads);
+    pt.seed = req.seed;
+    pt.photons = req.photons;
+    pt.powerPhotons = 0;
+    pt.storeSurfacePhotons = pt.storeSurfacePhotons && req.surfacePhotons;
+    if (req.maxMapBytes > 0) pt.maxMapBytes = std::min(pt.maxMapBytes, req.maxMapBytes);
+    map_ = tracer_.trace(scene_, pt, ctx.abort);
+    if (map_.aborted || (ctx.abort && ctx.abort->load())) return false;
+    estimators_ = {};
+    if (req.photonsOnly) return true;
+    EstimatorPass ep;
+    ep.threads = ctx.threads;
+    if (scene_.stages.beams && (!map_.beams.empty() || !map_.points.empty())) {
+        ep.radius = req.beamRadius;
+        volume_->prepare(scene_, map_, ep);
+        if (!volume_->empty()) estimators_.volume = volume_.get();
+    }
+    if (scene_.stages.surfacePhotons && !map_.photons.empty()) {
+        ep.radius = req.surfaceRadius;
+        surface_->prepare(scene_, map_, ep);
+        if (!surface_->empty()) estimators_.surface = surface_.get();
+    }
+    camera_ = {};
+    camera_.seed = req.seed;
+    camera_.pass = 0;
+    camera_.maxDepth = settings_.maxDepth;
+    scratch_.resize(static_cast<size_t>(ctx.threads));
+    for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
+    return !(ctx.abort && ctx.abort->load());
+}
+
+const PixelAccumulator* PhotonBeamsIntegrator::probePixel(const PassContext& ctx, int x, int y, int thread) {
+    CameraPassScratch& scratch = scratch_[static_cast<size_t>(thread)];
+    scratch.acc.clearTouched();
+    CameraPassStats stats;
+    renderPixel(scene_, estimators_, camera_, *ctx.time, x, y, scratch, stats);
+    return &scratch.acc;
+}
+
 }  // namespace tpb

@@ -43,6 +43,9 @@ public:
     void renderTile(const PassContext& ctx, int tile, const TileRect& rect, TransientFilm::TileWriter& writer,
                     int thread) override;
     void endPass(const PassContext& ctx, PassStats& stats) override;
+    bool beginProbe(const PassContext& ctx, const ProbeRequest& request) override;
+    const PixelAccumulator* probePixel(const PassContext& ctx, int x, int y, int thread) override;
+    const PhotonMap* probeMap() const override { return &map_; }
 
     // Kernel radii of pass `pass` (m), from the estimators' kernel dimensions.
     double beamRadius(uint64_t pass) const;

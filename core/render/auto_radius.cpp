@@ -2,10 +2,10 @@
 
 #include "base/error.h"
 #include "estimators/estimator.h"
+#include "base/parallel.h"
 #include "integrators/photon_beams.h"
+#include "render/driver.h"
 #include "photons/photon_tracer.h"
-#include "base/memory.h"
-#include "film/film_bytes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -62,28 +62,31 @@ RadiusPilot pilotRadius(const Scene& scene, const RenderSettings& settings, cons
         out.why = "no scattering medium: the volume radius is not used";
         return out;
     }
-    // A probe pass (pass 0, not one of the render's 1, 2, ...) that stores beams and points, no
-    // surface photons.
-    PhotonPassParams pt = photonPassFor(scene, settings, VolumeEstimator::Needs{true, true}, 0,
-                                        settings.threads > 0 ? settings.threads : 1);
-    pt.photons = std::min<int64_t>(settings.photonsPerPass, kAutoPilotPhotons);
-    pt.powerPhotons = 0;
-    pt.storeSurfacePhotons = false;
-    out.scale = static_cast<double>(settings.photonsPerPass) / static_cast<double>(std::max<int64_t>(pt.photons, 1));
+    // A probe pass of the photon-beams integrator (pass 0, not one of the render's 1, 2, ...; the
+    // render's seed): its photon pass alone, storing beams and points, no surface photons.
+    ProbeRequest probe;
+    probe.seed = settings.seed;
+    probe.photons = std::min<int64_t>(settings.photonsPerPass, kAutoPilotPhotons);
+    probe.store = VolumeEstimator::Needs{true, true};
+    probe.surfacePhotons = false;
+    probe.photonsOnly = true;
     // At most 64 MiB (~30x a typical 4000-photon map): a medium where photons never die (albedo 1,
     // a huge max_depth) is reported as unmeasured within a second instead of filling the budget.
-    pt.maxMapBytes = std::min<uint64_t>(pt.maxMapBytes, kAutoPilotMaxMapBytes);
-    PhotonMap map;
+    probe.maxMapBytes = kAutoPilotMaxMapBytes;
+    out.scale = static_cast<double>(settings.photonsPerPass) / static_cast<double>(std::max<int64_t>(probe.photons, 1));
+    PhotonBeamsIntegrator beams(scene, settings);
+    ProbeResult ran;
     try {
-        map = tracePhotons(scene, pt, abort);
+        ran = runProbe(beams, scene, probe, TimeBins{}, 1, 1, resolveThreads(settings.threads), abort);
     } catch (const UserError&) {  // the photon map over the memory budget: the render will say so
         out.why = "the pilot's photon map outgrew the memory budget";
         return out;
     }
-    if (map.aborted) {  // Ctrl-C during the pilot: the caller stops (nothing measured)
+    if (!ran.ran) {  // Ctrl-C during the pilot: the caller stops (nothing measured)
         out.why = "the pilot was interrupted";
         return out;
     }
+    const PhotonMap& map = *beams.probeMap();
     out.photons = map.emitted;
 
     // The scattering region holding most of the beam length.

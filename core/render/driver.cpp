@@ -154,4 +154,63 @@ PassStats Driver::lastPass() const {
     return history_.empty() ? PassStats{} : history_.back();
 }
 
+ProbeResult runProbe(Integrator& integrator, const Scene& scene, const ProbeRequest& request, const TimeBins& time,
+                     int stepX, int stepY, int threads, const std::atomic<bool>* abort,
+                     const std::function<void(double)>& progress) {
+    constexpr double kPhotonShare = 0.2;  // rough share of the photon pass in the probe's time
+    const auto report = [&](double f) {
+        if (progress) progress(f);
+    };
+    const auto aborted = [&] { return abort && abort->load(); };
+    ProbeResult out;
+    PassContext ctx;
+    ctx.pass = 0;
+    ctx.time = &time;
+    ctx.threads = std::max(1, threads);
+    ctx.abort = abort;
+    report(0.0);
+    if (!integrator.beginProbe(ctx, request)) {
+        out.aborted = aborted();
+        return out;
+    }
+    if (request.photonsOnly) {
+        out.ran = true;
+        return out;
+    }
+    report(kPhotonShare);
+    const int W = scene.camera.width, H = scene.camera.height;
+    stepX = std::max(1, stepX);
+    stepY = std::max(1, stepY);
+    const int rows = (H + stepY - 1) / stepY;
+    const size_t bins = static_cast<size_t>(time.bins);
+    std::vector<double> perRow(static_cast<size_t>(rows) * bins, 0.0);
+    std::atomic<int> rowsDone{0};
+    parallelFor(rows, ctx.threads, [&](int64_t r, int thread) {
+        double* row = &perRow[static_cast<size_t>(r) * bins];
+        const int y = static_cast<int>(r) * stepY;
+        for (int x = 0; x < W; x += stepX) {
+            if (aborted()) return;  // (a row of a huge film is long too)
+            const PixelAccumulator* acc = integrator.probePixel(ctx, x, y, thread);
+            if (!acc) return;
+            for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
+                for (int k = acc->lo(a); k <= acc->hi(a); ++k) {
+                    const double* v = acc->bin(a, k);
+                    row[k] += std::max(0.0, luminance(Color(v[0], v[1], v[2])));
+                }
+        }
+        const int done = rowsDone.fetch_add(1) + 1;
+        if (thread == 0) report(kPhotonShare + (1.0 - kPhotonShare) * done / rows);
+    }, abort);
+    if (aborted()) {
+        out.aborted = true;
+        return out;
+    }
+    out.luminance.assign(bins, 0.0);
+    for (int r = 0; r < rows; ++r)
+        for (size_t k = 0; k < bins; ++k) out.luminance[k] += perRow[static_cast<size_t>(r) * bins + k];
+    report(1.0);
+    out.ran = true;
+    return out;
+}
+
 }  // namespace tpb

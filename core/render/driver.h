@@ -98,4 +98,19 @@ private:
 
 double nowSec();
 
+// A probe pass (integrators/integrator.h, ProbeRequest) run like a pass: beginProbe on `threads`
+// threads, then (unless the request is photonsOnly) the pixels (x, y) with x % stepX == 0 and
+// y % stepY == 0 gathered on the time axis `time`, rows spread over the threads. `luminance`: per
+// bin, the luminance of every such pixel's estimate (negative parts dropped), both time axes
+// summed; each row is summed on its own and the rows added in row order, so the result is the same
+// for any thread count. `progress` (0..1, on the calling thread) after the photon pass and the rows.
+struct ProbeResult {
+    bool ran = false;      // false: the integrator has no probe, or `abort` stopped it
+    bool aborted = false;  // `abort` stopped it
+    std::vector<double> luminance;  // time.bins values (empty for a photonsOnly probe)
+};
+ProbeResult runProbe(Integrator& integrator, const Scene& scene, const ProbeRequest& request, const TimeBins& time,
+                     int stepX, int stepY, int threads, const std::atomic<bool>* abort = nullptr,
+                     const std::function<void(double)>& progress = {});
+
 }  // namespace tpb

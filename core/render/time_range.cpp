@@ -1,16 +1,10 @@
 #include "render/time_range.h"
 
-#include "base/memory.h"
-#include "film/film_bytes.h"
-
-#include "accel/beam_accel.h"
-#include "integrators/camera_pass.h"
-#include "integrators/photon_beams.h"
 #include "base/parallel.h"
-#include "accel/photon_grid.h"
-#include "photons/photon_tracer.h"
+#include "integrators/photon_beams.h"
+#include "render/driver.h"
 
-#include <mutex>
+#include <algorithm>
 
 namespace tpb {
 
@@ -40,92 +34,28 @@ TimeRangeFit measureArrivalRange(const Scene& scene, const RenderSettings& setti
     fit.heuristicEnd = t1;
     fit.startOpl = t0;
     fit.endOpl = t1;
-    const auto aborted = [&] { return control.abort && control.abort->load(); };
-    const auto progress = [&](double f) {
-        if (control.progress) control.progress(f);
-    };
-    // Rough shares of the pilot's time, for the progress report: photons, then camera rows.
-    constexpr double kPhotonShare = 0.2;
-
     // Histogram over a window 4x wider than the heuristic one.
-    TimeBins wide{t0, 4.0 * (t1 - t0) / 4096.0, 4096};
-    const int threads = resolveThreads(settings.threads);
-    // A probe pass of the beam2d estimator (beams, no points), its own seed, pass 0, no power
-    // scaling and no film yet.
-    PhotonPassParams pt = photonPassFor(scene, settings, makeVolumeEstimator("beam2d")->needs(), 0, threads);
-    pt.seed = settings.seed ^ 0x9E3779B97F4A7C15ull;
-    pt.photons = pilotPhotons;
-    pt.powerPhotons = 0;
-    progress(0.0);
-    const PhotonMap map = tracePhotons(scene, pt, control.abort);
-    if (aborted()) {
-        fit.interrupted = true;
-        return fit;
-    }
-    progress(kPhotonShare);
-    const double diag = std::max(scene.bounds.diagonal(), 1e-6);
-    CameraPassParams cs;
-    cs.seed = pt.seed;
-    cs.pass = 0;
+    const TimeBins wide{t0, 4.0 * (t1 - t0) / 4096.0, 4096};
+    // A probe pass of the photon-beams integrator with these settings (the render's estimators
+    // when the caller keeps them: prepareRender gives the defaults, so every estimator of a
+    // comparison gets one time axis), on its own seed, over about 32 x 32 pixels spread over the image.
     // Generous kernels (a low-noise pilot), never wider than kPilotMaxRadiusFraction of the diagonal:
     // the render's own radius may be huge, and the pilot only needs the arrival times.
-    const double beamRadius = std::min(std::max(settings.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
-    const double surfaceRadius = std::min(std::max(settings.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
-    cs.maxDepth = settings.maxDepth;
-    EstimatorPass ep;
-    ep.threads = threads;
-    std::unique_ptr<VolumeEstimator> volume = makeVolumeEstimator("beam2d");
-    std::unique_ptr<SurfaceEstimator> surface = makeSurfaceEstimator("ppm");
-    CameraPassEstimators est;
-    if (scene.stages.beams && !map.beams.empty()) {
-        ep.radius = beamRadius;
-        volume->prepare(scene, map, ep);
-        est.volume = volume.get();
-    }
-    if (scene.stages.surfacePhotons && !map.photons.empty()) {
-        ep.radius = surfaceRadius;
-        surface->prepare(scene, map, ep);
-        est.surface = surface.get();
-    }
-    if (aborted()) {
-        fit.interrupted = true;
-        return fit;
-    }
-    // Every 8th pixel in each direction (at least an 8x8 grid).
+    const double diag = std::max(scene.bounds.diagonal(), 1e-6);
+    ProbeRequest probe;
+    probe.seed = settings.seed ^ 0x9E3779B97F4A7C15ull;
+    probe.photons = pilotPhotons;
+    probe.beamRadius = std::min(std::max(settings.beamRadius0, 0.01 * diag), kPilotMaxRadiusFraction * diag);
+    probe.surfaceRadius = std::min(std::max(settings.surfaceRadius0, 0.02 * diag), kPilotMaxRadiusFraction * diag);
+    PhotonBeamsIntegrator beams(scene, settings);
     const int W = scene.camera.width, H = scene.camera.height;
-    const int sx = std::max(1, W / 32), sy = std::max(1, H / 32);
-    const int rows = (H + sy - 1) / sy;
-    std::vector<double> hist(wide.bins, 0.0);
-    std::mutex m;
-    std::atomic<int> rowsDone{0};
-    parallelFor(rows, threads, [&](int64_t r, int worker) {
-        CameraPassScratch scratch;
-        scratch.acc.reset(wide.bins);
-        CameraPassStats stats;
-        std::vector<double> local(wide.bins, 0.0);
-        const int y = static_cast<int>(r) * sy;
-        for (int x = 0; x < W; x += sx) {
-            if (aborted()) return;  // (a row of a huge film is long too)
-            renderPixel(scene, est, cs, wide, x, y, scratch, stats);
-            for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
-                for (int k = scratch.acc.lo(a); k <= scratch.acc.hi(a); ++k) {
-                    const double* v = scratch.acc.bin(a, k);
-                    local[k] += std::max(0.0, luminance(Color(v[0], v[1], v[2])));
-                }
-            scratch.acc.clearTouched();
-        }
-        {
-            std::lock_guard<std::mutex> g(m);
-            for (int k = 0; k < wide.bins; ++k) hist[k] += local[k];
-        }
-        const int done = rowsDone.fetch_add(1) + 1;
-        if (worker == 0) progress(kPhotonShare + (1.0 - kPhotonShare) * done / rows);
-    }, control.abort);
-    if (aborted()) {
-        fit.interrupted = true;
+    const ProbeResult r = runProbe(beams, scene, probe, wide, std::max(1, W / 32), std::max(1, H / 32),
+                                   resolveThreads(settings.threads), control.abort, control.progress);
+    if (!r.ran) {
+        fit.interrupted = r.aborted;
         return fit;
     }
-    progress(1.0);
+    const std::vector<double>& hist = r.luminance;
     double total = 0.0;
     for (double v : hist) total += v;
     if (!(total > 0.0)) return fit;
