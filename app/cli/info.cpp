@@ -4,6 +4,8 @@
 #include "cli/interrupt.h"
 #include "cli/commands.h"
 #include "cli/summary.h"
+#include "base/error.h"
+#include "io/record_json.h"
 #include "render/auto_radius.h"
 
 #include <nlohmann/json.hpp>
@@ -67,10 +69,7 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
                    {"pixel_accumulator_bytes_per_thread", static_cast<uint64_t>(t.bins) * 2 * 3 * sizeof(double)},
                    {"photon_map_bytes_per_pass_rough",
                     static_cast<uint64_t>(ds.photonsPerPass) * 4 * (sizeof(double) * 12 + 16)}};
-    j["render"] = {{"method", methodName(ds.method)},   {"photons_per_pass", ds.photonsPerPass},
-                   {"beam_radius0_m", ds.beamRadius0}, {"surface_radius0_m", ds.surfaceRadius0},
-                   {"alpha", ds.alpha},                {"passes", ds.passes},
-                   {"time_budget_s", ds.timeBudgetSec}};
+    j["render"] = recordJson(settingsRecord(ds));  // the one serialisation of the settings
     j["density"] = nullptr;
     // The photon density of a pilot pass, and the radius "auto" picks from it (render/auto_radius.h).
     if (s->stages.beams && ds.method == Method::Beams) {
@@ -85,8 +84,6 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
             j["density"]["radius_chosen_automatically"] = p.radiusPilot.measured;
         }
     }
-    j["estimators"] = {{"volume", ds.volumeEstimator}, {"surface", ds.surfaceEstimator},
-                       {"time_kernel", timeKernelName(ds.timeKernel)}};
     j["stages"] = s->stages.reasons;
     return j;
 }
@@ -136,23 +133,28 @@ void printText(const nlohmann::json& j) {
                 humanBytes(m["photon_map_bytes_per_pass_rough"].get<uint64_t>()).c_str());
     const auto& r = j["render"];
     const double budget = r["time_budget_s"].get<double>();
-    std::printf("render     %lld photons/pass, beam radius %.4g m, surface radius %.4g m, alpha %.3g, %lld passes%s\n",
-                r["photons_per_pass"].get<long long>(), r["beam_radius0_m"].get<double>(), r["surface_radius0_m"].get<double>(),
-                r["alpha"].get<double>(), r["passes"].get<long long>(),
-                budget > 0 ? (", budget " + std::to_string(budget) + " s").c_str() : "");
+    const std::string passes = std::to_string(r["passes"].get<long long>()) + " passes" +
+                               (budget > 0 ? ", budget " + shortNumber(budget) + " s" : "");
+    if (r.contains("photons_per_pass"))
+        std::printf("render     %s: %lld photons/pass, beam radius %.4g m, surface radius %.4g m, alpha %.3g, %s\n",
+                    r["method"].get<std::string>().c_str(), r["photons_per_pass"].get<long long>(),
+                    r["radius"].get<double>(), r["surface_radius"].get<double>(), r["alpha"].get<double>(),
+                    passes.c_str());
+    else
+        std::printf("render     %s: %s\n", r["method"].get<std::string>().c_str(), passes.c_str());
     const auto& d = j["density"];
     if (!d.is_null()) {
         if (d["measured"].get<bool>())
             std::printf("density    pilot pass of %lld photons (x%.3g for the pass): %s; the radius %.4g m gathers ~%.3g per ray%s\n",
                         d["pilot_photons"].get<long long>(), d["scale_to_pass"].get<double>(), d["why"].get<std::string>().c_str(),
-                        r["beam_radius0_m"].get<double>(), d["gathered_per_ray"].get<double>(),
+                        r["radius"].get<double>(), d["gathered_per_ray"].get<double>(),
                         d["radius_chosen_automatically"].get<bool>() ? " (chosen: \"radius\": \"auto\")" : "");
         else
             std::printf("density    %s\n", d["why"].get<std::string>().c_str());
     }
-    const auto& e = j["estimators"];
-    std::printf("estimators volume %s, surface %s, time kernel %s\n", e["volume"].get<std::string>().c_str(),
-                e["surface"].get<std::string>().c_str(), e["time_kernel"].get<std::string>().c_str());
+    if (r.contains("volume_estimator"))
+        std::printf("estimators volume %s, surface %s, time kernel %s\n", r["volume_estimator"].get<std::string>().c_str(),
+                    r["surface_estimator"].get<std::string>().c_str(), r["time_kernel"].get<std::string>().c_str());
     std::printf("stages\n");
     for (const auto& st : j["stages"]) std::printf("  - %s\n", st.get<std::string>().c_str());
 }

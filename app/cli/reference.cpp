@@ -59,13 +59,11 @@ void runReference(ReferenceCmd& c) {
         if (method == "pt") {
             job.pt = prepared.settings;
             job.pt.samplesPerPixel = c.spp;
-            want.seed = job.pt.seed;
-            want.samplesPerPixel = job.pt.samplesPerPixel;
+            job.pt.method = Method::PathTracer;
+            setSettings(want, job.pt);
         } else {
             job.beams = prepared.settings;
-            want.seed = job.beams.seed;
-            want.photonsPerPass = job.beams.photonsPerPass;
-            want.beamRadius0 = job.beams.beamRadius0;
+            setSettings(want, job.beams);
         }
     }
     const std::string out = c.out.empty() ? defaultReferencePath(prepared, method) : c.out;

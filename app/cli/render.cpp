@@ -7,6 +7,7 @@
 #include "cli/resume.h"
 #include "base/error.h"
 #include "film/film_export.h"
+#include "io/record_json.h"
 #include "film/picture_export.h"
 #include "io/image_io.h"
 #include "estimators/estimator.h"
@@ -62,14 +63,7 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
     for (const auto& r : scene.stages.reasons) stages.push_back(r);
     j["stages"] = stages;
     const RenderSettings& s = drv.settings();
-    j["settings"] = {{"photons_per_pass", s.photonsPerPass}, {"beam_radius0_m", s.beamRadius0},
-                     {"surface_radius0_m", s.surfaceRadius0}, {"alpha", s.alpha}, {"seed", s.seed},
-                     {"threads", s.threads}, {"time_profile", s.profile == TimeProfile::Exact ? "exact" : "uniform"},
-                     {"beam_length", s.beamLength == BeamLength::Short ? "short" : "long"},
-                     {"accel", accelBackendName(s.accel)},
-                     {"volume_estimator", s.volumeEstimator}, {"surface_estimator", s.surfaceEstimator},
-                     {"time_kernel", timeKernelName(s.timeKernel)}, {"max_depth", s.maxDepth},
-                     {"warmup_passes", s.warmupPasses}, {"pass_limit", s.passes}, {"time_budget_s", s.timeBudgetSec}};
+    j["settings"] = recordJson(settingsRecord(s));  // the one serialisation of the settings
     json per = json::array();
     int64_t beams = 0, estimates = 0, photonEst = 0;
     double passSec = 0.0;
@@ -114,8 +108,7 @@ nlohmann::json summaryJsonPt(const PreparedRender& p, const Driver& drv, const E
     const auto hist = drv.history();
     const RenderSettings& s = drv.settings();
     json j = summaryHeader(p, "pt", hist.size(), wallSec, drv.film(), opt);
-    j["settings"] = {{"samples_per_pixel", s.samplesPerPixel}, {"max_depth", s.maxDepth}, {"seed", s.seed},
-                     {"threads", s.threads}, {"equiangular", s.equiangular}};
+    j["settings"] = recordJson(settingsRecord(s));
     json per = json::array();
     double renderSec = 0.0;
     PathTracerStats st;

@@ -6,6 +6,8 @@
 #include "base/parallel.h"
 #include "film/film_view.h"
 
+#include "io/record_json.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -28,7 +30,9 @@ using nlohmann::json;
 
 constexpr char kMagic[9] = "TPBREF1\n";
 constexpr const char* kFormat = "tpb-reference";
-constexpr int kVersion = 1;
+// 2: the settings in one object, "settings" (settingsRecord); 1 wrote seed, max_depth,
+// samples_per_pixel, photons_per_pass and beam_radius0_m at the top (still read).
+constexpr int kVersion = 2;
 
 json infoToJson(const ReferenceInfo& i) {
     json j;
@@ -38,11 +42,7 @@ json infoToJson(const ReferenceInfo& i) {
     j["scene_hash"] = i.sceneHash;
     j["method"] = i.method;
     j["passes"] = i.passes;
-    j["samples_per_pixel"] = i.samplesPerPixel;
-    j["seed"] = i.seed;
-    j["max_depth"] = i.maxDepth;
-    j["photons_per_pass"] = i.photonsPerPass;
-    j["beam_radius0_m"] = i.beamRadius0;
+    j["settings"] = recordJson(i.settings);
     j["resolution"] = {i.width, i.height};
     j["bins"] = i.bins;
     j["start_opl_m"] = i.startOpl;
@@ -63,17 +63,20 @@ json infoToJson(const ReferenceInfo& i) {
 ReferenceInfo infoFromJson(const json& j) {
     ReferenceInfo i;
     if (j.value("format", std::string()) != kFormat) throw std::runtime_error("not a tpb reference header");
-    if (j.value("version", 0) != kVersion)
-        throw std::runtime_error("unsupported version " + std::to_string(j.value("version", 0)) + " (this tpb reads 1)");
+    const int version = j.value("version", 0);
+    if (version != 1 && version != kVersion)
+        throw std::runtime_error("unsupported version " + std::to_string(version) + " (this tpb reads 1 and 2)");
     i.scene = j.at("scene").get<std::string>();
     i.sceneHash = j.value("scene_hash", std::string());
     i.method = j.at("method").get<std::string>();
     i.passes = j.at("passes").get<int64_t>();
-    i.samplesPerPixel = j.value("samples_per_pixel", 1);
-    i.seed = j.at("seed").get<uint64_t>();
-    i.maxDepth = j.at("max_depth").get<int>();
-    i.photonsPerPass = j.value("photons_per_pass", int64_t(0));
-    i.beamRadius0 = j.value("beam_radius0_m", 0.0);
+    const json& s = version == 1 ? j : j.at("settings");
+    i.settings = recordFromJson(s);
+    i.samplesPerPixel = s.value("samples_per_pixel", 1);
+    i.seed = s.at("seed").get<uint64_t>();
+    i.maxDepth = s.at("max_depth").get<int>();
+    i.photonsPerPass = s.value("photons_per_pass", int64_t(0));
+    i.beamRadius0 = s.value(version == 1 ? "beam_radius0_m" : "radius", 0.0);
     i.width = j.at("resolution").at(0).get<int>();
     i.height = j.at("resolution").at(1).get<int>();
     i.bins = j.at("bins").get<int>();
@@ -380,6 +383,15 @@ void requireCompatible(const std::string& path, const ReferenceInfo& ref, const 
     throw UserError(path, 0, "", msg);
 }
 
+void setSettings(ReferenceInfo& i, const RenderSettings& s) {
+    i.settings = settingsRecord(s);
+    i.seed = s.seed;
+    i.maxDepth = s.maxDepth;
+    i.samplesPerPixel = s.method == Method::PathTracer ? std::max(1, s.samplesPerPixel) : 1;
+    i.photonsPerPass = s.method == Method::Beams ? s.photonsPerPass : 0;
+    i.beamRadius0 = s.method == Method::Beams ? s.beamRadius0 : 0.0;
+}
+
 ReferenceInfo describeScene(const Scene& scene, const TimeBins& time, const std::string& scenePath,
                             const RenderSettings& settings) {
     ReferenceInfo i;
@@ -390,8 +402,7 @@ ReferenceInfo describeScene(const Scene& scene, const TimeBins& time, const std:
     i.bins = time.bins;
     i.startOpl = time.startOpl;
     i.binWidth = time.binWidth;
-    i.maxDepth = settings.maxDepth;
-    i.seed = settings.seed;
+    setSettings(i, settings);
     return i;
 }
 
@@ -425,10 +436,7 @@ ReferenceVolume renderReference(const Scene& scene, const TimeBins& time, const 
         RenderSettings ds = job.beams;
         ds.passes = 0;
         ds.timeBudgetSec = 0.0;
-        info.seed = ds.seed;
-        info.maxDepth = ds.maxDepth;
-        info.photonsPerPass = ds.photonsPerPass;
-        info.beamRadius0 = ds.beamRadius0;
+        setSettings(info, ds);
         Driver drv(scene, ds, time);
         int64_t done = 0;
         while (budgetLeft(done)) {
@@ -451,12 +459,10 @@ ReferenceVolume renderReference(const Scene& scene, const TimeBins& time, const 
         info.selfErrorEstimate = "unknown (photon beams: the error is mostly kernel bias)";
     } else {
         RenderSettings ps = job.pt;
-        info.seed = ps.seed;
-        info.maxDepth = ps.maxDepth;
-        info.samplesPerPixel = std::max(1, ps.samplesPerPixel);
+        ps.method = Method::PathTracer;
+        setSettings(info, ps);
         // Two films of the same passes split by parity (odd / even), each run by a Driver: pass i
         // depends only on (seed, i), so together they are the film of passes 1..done.
-        ps.method = Method::PathTracer;
         Driver da(scene, ps, time), db(scene, ps, time);
         int64_t done = 0;
         while (budgetLeft(done)) {
@@ -541,9 +547,10 @@ ReferenceVolume singleScatteringReference(const Scene& scene, const TimeBins& ti
 
     ReferenceVolume r;
     ReferenceInfo& info = r.info;
-    info = describeScene(scene, time, scenePath, settings);
+    RenderSettings single = settings;
+    single.maxDepth = 1;
+    info = describeScene(scene, time, scenePath, single);
     info.method = "analytic-single-scattering";
-    info.maxDepth = 1;
     info.passes = 0;
     info.selfErrorReal = info.selfErrorUnwarped = info.selfErrorSteady = 0.0;
     info.selfErrorEstimate = "quadrature (4-point Gauss-Legendre per piece, pieces cut at every bin edge)";

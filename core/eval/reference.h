@@ -43,6 +43,10 @@ struct ReferenceInfo {
     std::string scene, sceneHash;
     std::string method = "pt";  // "pt" | "beams" | "analytic-single-scattering"
     int64_t passes = 0;
+    // The settings that rendered it (settingsRecord: the one serialisation of the settings), the
+    // header's "settings"; the fields below are read from it (setSettings, and when the file is
+    // read back) and compared by the compatibility checks.
+    Record settings;
     int samplesPerPixel = 1;
     uint64_t seed = 0;
     int maxDepth = 0;
@@ -62,6 +66,10 @@ struct ReferenceInfo {
     size_t volumeSize() const { return pixels() * static_cast<size_t>(bins) * 3u; }
     double selfError(TimeAxis a) const { return a == TimeAxis::Real ? selfErrorReal : selfErrorUnwarped; }
 };
+
+// Sets info.settings and the fields read from them (seed, max depth, samples per pixel, photons
+// per pass and pass 1's radius for the photon beams).
+void setSettings(ReferenceInfo& info, const RenderSettings& settings);
 
 struct ReferenceVolume {
     ReferenceInfo info;

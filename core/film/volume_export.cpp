@@ -4,6 +4,8 @@
 #include "film/film_view.h"
 #include "io/npy.h"
 
+#include "io/record_json.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -68,18 +70,9 @@ std::string volumeSideJson(const FilmSnapshot& film, const ExportOptions& opt, c
                    {"note", "sums over the pixels of before.npy / after.npy / steady.npy; fractions of the steady "
                             "image's luminance"}};
     j["render"] = {{"scene", render.scene},
-                   {"method", render.method},
                    {"passes", film.minPasses()},
                    {"passes_max", film.maxPasses()},
-                   {"seed", render.seed},
-                   {"photons_per_pass", render.photonsPerPass},
-                   {"samples_per_pixel", render.samplesPerPixel},
-                   {"volume_estimator", render.volumeEstimator},
-                   {"surface_estimator", render.surfaceEstimator},
-                   {"time_kernel", render.timeKernel},
-                   {"alpha", render.alpha},
-                   {"beam_radius0_m", render.beamRadius0},
-                   {"surface_radius0_m", render.surfaceRadius0},
+                   {"settings", recordJson(render.settings)},
                    {"beam_radius_m", render.beamRadius},
                    {"surface_radius_m", render.surfaceRadius}};
     return j.dump(2) + "\n";

@@ -11,6 +11,7 @@
 // transient.npy is streamed row by row (one row of W x bins x 3 floats in memory, never a second
 // copy of the film); each file is atomic (tmp + rename), the side file is written last.
 #pragma once
+#include "io/record.h"
 #include "film/film_export.h"
 
 #include <atomic>
@@ -21,15 +22,12 @@
 
 namespace tpb {
 
-// The render a volume came from, as written in transient.json (plain values: the caller fills
-// them from its settings; core/render/provenance.h does it from a Driver).
+// The render a volume came from, as written in transient.json (the caller fills it from its
+// settings; core/render/provenance.h does it from a Driver).
 struct VolumeProvenance {
-    std::string scene, method;                          // scene file, "beams" | "pt" | "preview"
-    std::string volumeEstimator, surfaceEstimator, timeKernel;
-    uint64_t seed = 0;
-    int64_t photonsPerPass = 0, samplesPerPixel = 0;
-    double alpha = 0.0, beamRadius0 = 0.0, surfaceRadius0 = 0.0;  // m, pass 1
-    double beamRadius = 0.0, surfaceRadius = 0.0;                 // m, the last pass's (0: none yet)
+    std::string scene;                             // scene file
+    Record settings;                               // settingsRecord (integrators/render_settings.h)
+    double beamRadius = 0.0, surfaceRadius = 0.0;  // m, the last pass's (0: none yet)
 };
 
 // The file names a volume export writes, in the order it writes them (transient.json last).

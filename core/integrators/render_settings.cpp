@@ -278,4 +278,34 @@ void RenderSettings::validateAgainstFilm(double filmRangeOpl, const SettingsSour
                        "e.g. " + shortNumber(4.0 * filmRangeOpl / 100.0) + " m), or \"box\" to let the renderer choose");
 }
 
+Record settingsRecord(const RenderSettings& s) {
+    Record r;
+    const auto put = [&](const char* key, RecordValue v) { r.push_back({key, std::move(v)}); };
+    put("method", std::string(methodName(s.method)));
+    put("passes", static_cast<int64_t>(s.passes));
+    put("time_budget_s", s.timeBudgetSec);
+    put("max_depth", static_cast<int64_t>(s.maxDepth));
+    put("seed", s.seed);
+    put("threads", static_cast<int64_t>(s.threads));
+    if (s.method == Method::Beams) {
+        put("photons_per_pass", static_cast<int64_t>(s.photonsPerPass));
+        put("warmup", static_cast<int64_t>(s.warmupPasses));
+        put("radius", s.beamRadius0);
+        put("surface_radius", s.surfaceRadius0);
+        put("alpha", s.alpha);
+        put("time_profile", std::string(s.profile == TimeProfile::Exact ? "exact" : "uniform"));
+        put("beam_length", std::string(s.beamLength == BeamLength::Short ? "short" : "long"));
+        put("accel", std::string(accelBackendName(s.accel)));
+        put("volume_estimator", s.volumeEstimator);
+        put("surface_estimator", s.surfaceEstimator);
+        put("time_kernel", timeKernelName(s.timeKernel));
+    } else if (s.method == Method::PathTracer) {
+        put("samples_per_pixel", static_cast<int64_t>(s.samplesPerPixel));
+        put("equiangular", s.equiangular);
+    }
+    put("emission", std::string(s.emission == EmissionMode::Delta ? "delta" : "continuous"));
+    put("unwarp", s.unwarp);
+    return r;
+}
+
 }  // namespace tpb

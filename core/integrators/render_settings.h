@@ -7,6 +7,7 @@
 // built scene's bounding diagonal), times in seconds of wall clock, depths in scattering vertices.
 #pragma once
 #include "accel/accel_backend.h"
+#include "io/record.h"
 #include "scene/scene_desc.h"
 
 #include <cstdint>
@@ -136,5 +137,14 @@ struct RenderSettings {
     // time kernel no wider than the film's range (filmRangeOpl, m). Throws UserError like validate().
     void validateAgainstFilm(double filmRangeOpl, const SettingsSource& source) const;
 };
+
+// The one serialisation of the settings (summary.json "settings", `tpb info` "render",
+// transient.json "render", the reference header, the checkpoint's fingerprint). Keys are the scene
+// file's render keys where the file has one (photons_per_pass, warmup, radius and surface_radius in
+// m, alpha, passes, time_budget_s, max_depth, seed, threads, time_profile, beam_length,
+// volume_estimator, surface_estimator, emission, unwarp), else the flag's name (method, accel,
+// samples_per_pixel, equiangular); time_kernel as the flag writes it ("none", "box", "box:0.05").
+// Only the keys the method reads: the photon-beam keys for beams, the path tracer's for pt.
+Record settingsRecord(const RenderSettings& s);
 
 }  // namespace tpb

@@ -16,9 +16,7 @@ std::string num(double v) {
     std::snprintf(b, sizeof b, "%.17g", v);
     return b;
 }
-std::string num(int64_t v) { return std::to_string(v); }
 std::string num(int v) { return std::to_string(v); }
-std::string num(uint64_t v) { return std::to_string(v); }
 std::string num(bool v) { return v ? "true" : "false"; }
 std::string num(const Vec3& v) {
     char b[96];
@@ -158,26 +156,17 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
 }
 
 Fingerprint settingsFingerprint(const RenderSettings& s) {
-    Writer w;
-    w.text("render.method", methodName(s.method));
-    w("render.seed", s.seed);
-    w("render.max_depth", s.maxDepth);
-    if (s.method == Method::Beams) {
-        w("render.photons", s.photonsPerPass);
-        w("render.warmup", s.warmupPasses);
-        w("render.radius_m", s.beamRadius0);
-        w("render.surface_radius_m", s.surfaceRadius0);
-        w("render.alpha", s.alpha);
-        w.text("render.time_profile", s.profile == TimeProfile::Exact ? "exact" : "uniform");
-        w.text("render.beam_length", s.beamLength == BeamLength::Short ? "short" : "long");
-        w.text("render.estimator", s.volumeEstimator);
-        w.text("render.surface_estimator", s.surfaceEstimator);
-        w.text("render.time_kernel", timeKernelName(s.timeKernel));
-    } else if (s.method == Method::PathTracer) {
-        w("render.spp", s.samplesPerPixel);
-        w("render.equiangular", s.equiangular);
-    }
-    return w.fp;
+    // The keys of settingsRecord that enter a pass (fingerprint.h: not the pass count, budget,
+    // threads, accelerator or how the film is shown).
+    static const char* const kPassKeys[] = {"method", "seed", "max_depth", "photons_per_pass", "warmup", "radius",
+                                            "surface_radius", "alpha", "time_profile", "beam_length",
+                                            "volume_estimator", "surface_estimator", "time_kernel",
+                                            "samples_per_pixel", "equiangular"};
+    const Record record = settingsRecord(s);
+    Fingerprint fp;
+    for (const char* key : kPassKeys)
+        if (const RecordValue* v = recordFind(record, key)) fp.emplace_back(std::string("render.") + key, recordText(*v));
+    return fp;
 }
 
 Fingerprint timeFingerprint(const TimeBins& t) {
@@ -188,7 +177,19 @@ Fingerprint timeFingerprint(const TimeBins& t) {
     return w.fp;
 }
 
-std::vector<std::string> fingerprintChanges(const Fingerprint& checkpoint, const Fingerprint& now) {
+std::string currentFingerprintKey(const std::string& key) {
+    static const std::map<std::string, std::string> kRenamed = {{"render.photons", "render.photons_per_pass"},
+                                                                {"render.radius_m", "render.radius"},
+                                                                {"render.surface_radius_m", "render.surface_radius"},
+                                                                {"render.estimator", "render.volume_estimator"},
+                                                                {"render.spp", "render.samples_per_pixel"}};
+    const auto it = kRenamed.find(key);
+    return it == kRenamed.end() ? key : it->second;
+}
+
+std::vector<std::string> fingerprintChanges(const Fingerprint& stored, const Fingerprint& now) {
+    Fingerprint checkpoint;
+    for (const auto& [k, v] : stored) checkpoint.emplace_back(currentFingerprintKey(k), v);
     std::map<std::string, std::string> a(checkpoint.begin(), checkpoint.end()), b(now.begin(), now.end());
     std::vector<std::string> out;
     for (const auto& [k, v] : checkpoint) {

@@ -28,10 +28,16 @@ using Fingerprint = std::vector<std::pair<std::string, std::string>>;
 // is left to settingsFingerprint (its values after the overrides are what count).
 Fingerprint sceneFingerprint(const SceneDesc& desc);
 // The settings that enter a pass (method, seed, photons, warm-up, radii, alpha, estimators, time
-// kernel, max depth, time profile, beam length, path tracer's spp and sampling).
+// kernel, max depth, time profile, beam length, path tracer's spp and sampling): those keys of
+// settingsRecord (integrators/render_settings.h), each as "render.<key>".
 Fingerprint settingsFingerprint(const RenderSettings& s);
 // The film's time axis (bins, start, width: bit-exact, as %.17g).
 Fingerprint timeFingerprint(const TimeBins& t);
+
+// The current name of a fingerprint key: checkpoints written before the settings had one
+// serialisation name some keys differently (render.photons, render.radius_m,
+// render.surface_radius_m, render.estimator, render.spp); they still resume.
+std::string currentFingerprintKey(const std::string& key);
 
 // "key: the checkpoint has A, this run has B" for every key whose value differs, "key: only in the
 // checkpoint (A)" / "key: only in this run (B)" for keys on one side. Empty = the same sequence.

@@ -11,16 +11,7 @@ inline VolumeProvenance provenanceOf(const Driver& drv, const std::string& scene
     const RenderSettings& s = drv.settings();
     VolumeProvenance v;
     v.scene = scenePath;
-    v.method = methodName(s.method);
-    v.volumeEstimator = s.volumeEstimator;
-    v.surfaceEstimator = s.surfaceEstimator;
-    v.timeKernel = timeKernelName(s.timeKernel);
-    v.seed = s.seed;
-    v.photonsPerPass = s.photonsPerPass;
-    v.samplesPerPixel = s.samplesPerPixel;
-    v.alpha = s.alpha;
-    v.beamRadius0 = s.beamRadius0;
-    v.surfaceRadius0 = s.surfaceRadius0;
+    v.settings = settingsRecord(s);
     if (drv.completedPasses() > 0) {
         const PassStats last = drv.lastPass();
         v.beamRadius = last.beamRadius;

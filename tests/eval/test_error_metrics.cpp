@@ -20,12 +20,15 @@
 #include "support/test_scene.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <unistd.h>
 
@@ -200,9 +203,12 @@ ReferenceVolume syntheticReference(int W, int H, int B) {
     i.sceneHash = "fnv1a64:0123456789abcdef";
     i.method = "pt";
     i.passes = 7;
-    i.samplesPerPixel = 3;
-    i.seed = 42;
-    i.maxDepth = 5;
+    RenderSettings pt;
+    pt.method = Method::PathTracer;
+    pt.samplesPerPixel = 3;
+    pt.seed = 42;
+    pt.maxDepth = 5;
+    setSettings(i, pt);
     i.width = W;
     i.height = H;
     i.bins = B;
@@ -239,6 +245,41 @@ void expectUserErrorMentioning(const std::function<void()>& f, const std::vector
 
 }  // namespace
 
+// A version-1 file (before the settings had one object: seed, max_depth, samples_per_pixel at the
+// top of the header) still reads, with the same fields.
+TEST(Reference, VersionOneHeadersStillRead) {
+    const std::string dir = tempDir("version1");
+    const std::string path = dir + "/v1.tpbref";
+    const ReferenceVolume r = syntheticReference(4, 2, 3);
+    writeReference(path, r);
+    std::ifstream in(path, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    uint64_t n = 0;
+    std::memcpy(&n, bytes.data() + 8, 8);
+    nlohmann::json h = nlohmann::json::parse(bytes.substr(16, n));
+    ASSERT_EQ(h["version"], 2);
+    h["version"] = 1;
+    h["seed"] = h["settings"]["seed"];
+    h["max_depth"] = h["settings"]["max_depth"];
+    h["samples_per_pixel"] = h["settings"]["samples_per_pixel"];
+    h.erase("settings");
+    const std::string text = h.dump(2) + "\n";
+    const uint64_t m = text.size();
+    {
+        std::ofstream out(path, std::ios::binary | std::ios::trunc);
+        out.write(bytes.data(), 8);
+        out.write(reinterpret_cast<const char*>(&m), 8);
+        out << text;
+        out.write(bytes.data() + 16 + n, static_cast<std::streamsize>(bytes.size() - 16 - n));
+    }
+    const ReferenceVolume q = readReference(path);
+    EXPECT_EQ(q.info.seed, 42u);
+    EXPECT_EQ(q.info.maxDepth, 5);
+    EXPECT_EQ(q.info.samplesPerPixel, 3);
+    EXPECT_EQ(q.real, r.real);
+    EXPECT_TRUE(cacheMismatches(q.info, r.info).empty());
+}
+
 TEST(Reference, FileRoundTripIsBitIdentical) {
     const std::string dir = tempDir("roundtrip");
     const std::string path = dir + "/a.tpbref";
@@ -270,6 +311,14 @@ TEST(Reference, FileRoundTripIsBitIdentical) {
     EXPECT_TRUE(referenceMismatches(b, a).empty());
     EXPECT_TRUE(cacheMismatches(b, a).empty());
     EXPECT_EQ(readReferenceInfo(path).bins, 4);
+    // The settings (the header's one "settings" object) read back value for value.
+    ASSERT_FALSE(a.settings.empty());
+    EXPECT_EQ(b.settings.size(), a.settings.size());
+    for (const RecordEntry& e : a.settings) {
+        const RecordValue* v = recordFind(b.settings, e.key);
+        ASSERT_NE(v, nullptr) << e.key;
+        EXPECT_EQ(recordText(*v), recordText(e.value)) << e.key;
+    }
     // No temporary file left behind, and the layout is the documented one.
     int files = 0;
     for (const auto& e : fs::directory_iterator(dir)) files += e.is_regular_file();

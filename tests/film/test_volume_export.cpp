@@ -66,14 +66,12 @@ std::shared_ptr<const FilmSnapshot> snapshot() {
 VolumeProvenance provenance() {
     VolumeProvenance v;
     v.scene = "scenes/x.json";
-    v.method = "beams";
-    v.volumeEstimator = "beam2d";
-    v.surfaceEstimator = "ppm";
-    v.timeKernel = "none";
-    v.seed = 42;
-    v.photonsPerPass = 12345;
-    v.alpha = 0.75;
-    v.beamRadius0 = 0.05;
+    v.settings = {{"method", std::string("beams")},
+                  {"seed", uint64_t(42)},
+                  {"photons_per_pass", int64_t(12345)},
+                  {"volume_estimator", std::string("beam2d")},
+                  {"alpha", 0.75},
+                  {"radius", 0.05}};
     v.beamRadius = 0.04;
     return v;
 }
@@ -173,10 +171,10 @@ TEST(NpyVolumeExport, NumpyLoadsTheFilmValueForValueWithItsTimeAxis) {
             EXPECT_NEAR(j["time"]["start_ns"].get<double>(), 2.0 / 0.299792458, 1e-12);
             EXPECT_NEAR(j["time"]["bin_width_ns"].get<double>(), 0.25 / 0.299792458, 1e-12);
             EXPECT_EQ(j["render"]["passes"], 3);
-            EXPECT_EQ(j["render"]["seed"], 42);
-            EXPECT_EQ(j["render"]["photons_per_pass"], 12345);
+            EXPECT_EQ(j["render"]["settings"]["seed"], 42);
+            EXPECT_EQ(j["render"]["settings"]["photons_per_pass"], 12345);
             EXPECT_EQ(j["render"]["scene"], "scenes/x.json");
-            EXPECT_EQ(j["render"]["volume_estimator"], "beam2d");
+            EXPECT_EQ(j["render"]["settings"]["volume_estimator"], "beam2d");
             EXPECT_DOUBLE_EQ(j["render"]["beam_radius_m"].get<double>(), 0.04);
             double before = 0.0, after = 0.0;
             for (float v : beforeImage(*s, axis)) before += v;

@@ -262,6 +262,39 @@ TEST(Fingerprint, NamesEachChangedKeyAndIgnoresWhatAResumeMayChange) {
     EXPECT_EQ(fingerprintChanges(timeFingerprint(u), timeFingerprint(v)).size(), 1u);
 }
 
+// Checkpoints written before the settings had one serialisation named five keys differently; the
+// values were written the same way (%.17g), so such a checkpoint still resumes, and a changed value
+// is named by its current key.
+TEST(Fingerprint, OlderKeyNamesStillResume) {
+    RenderSettings s;
+    s.photonsPerPass = 1234;
+    s.beamRadius0 = 0.0125;
+    s.surfaceRadius0 = 0.03;
+    s.volumeEstimator = "point3d";
+    Fingerprint older;
+    for (const auto& [k, v] : settingsFingerprint(s)) {
+        std::string key = k;
+        if (k == "render.photons_per_pass") key = "render.photons";
+        if (k == "render.radius") key = "render.radius_m";
+        if (k == "render.surface_radius") key = "render.surface_radius_m";
+        if (k == "render.volume_estimator") key = "render.estimator";
+        older.emplace_back(key, v);
+    }
+    ASSERT_NE(older, settingsFingerprint(s));
+    EXPECT_TRUE(fingerprintChanges(older, settingsFingerprint(s)).empty());
+    RenderSettings t = s;
+    t.beamRadius0 = 0.02;
+    const std::vector<std::string> ch = fingerprintChanges(older, settingsFingerprint(t));
+    ASSERT_EQ(ch.size(), 1u);
+    EXPECT_EQ(ch[0], "render.radius: the checkpoint has 0.0125, this run has 0.02");
+    RenderSettings pt;
+    pt.method = Method::PathTracer;
+    pt.samplesPerPixel = 4;
+    Fingerprint olderPt;
+    for (const auto& [k, v] : settingsFingerprint(pt)) olderPt.emplace_back(k == "render.samples_per_pixel" ? "render.spp" : k, v);
+    EXPECT_TRUE(fingerprintChanges(olderPt, settingsFingerprint(pt)).empty());
+}
+
 TEST(ResumeOverrides, AdoptTheCheckpointsFlagsAndRefuseOtherValues) {
     RenderSettings s;
     s.seed = 4;
