@@ -1,5 +1,6 @@
 #include "base/parallel.h"
 #include "cli/common.h"
+#include "film/output_names.h"
 
 #include "cli/flags.h"
 #include "cli/summary.h"
@@ -439,8 +440,8 @@ PreviousOutputs previousOutputs(const fs::path& dir) {
         }
         return prev;
     }
-    if (!fs::exists(dir / "summary.json", ec)) return prev;
-    const nlohmann::json s = readJsonFile(dir / "summary.json");
+    if (!fs::exists(dir / kSummaryName, ec)) return prev;
+    const nlohmann::json s = readJsonFile(dir / kSummaryName);
     const bool render = s.is_object() && s.contains("outputs") && s["outputs"].is_object() && s.contains("film") &&
                         s["film"].is_object() && s["film"].value("bins", 0) > 0 && s.contains("method");
     if (!render) return prev;
@@ -452,9 +453,9 @@ PreviousOutputs previousOutputs(const fs::path& dir) {
         if (name.rfind("frames/", 0) == 0) frames = true;
         else if (safeRelative(name) && name.find('/') == std::string::npos) prev.files.insert(name);
     }
-    prev.files.insert("preview.exr");
-    prev.files.insert("preview.png");
-    prev.files.insert("summary.json");
+    prev.files.insert(kPreviewExrName);
+    prev.files.insert(kPreviewPngName);
+    prev.files.insert(kSummaryName);
     if (frames) {
         prev.framesDir = "frames";
         prev.first = 0;
@@ -559,12 +560,12 @@ OutputFolder::~OutputFolder() = default;  // releases the lock (lock_)
 
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     OutputFiles f;
-    f.files = {"preview.exr", "preview.png", "steady.exr", "steady.png", "summary.json"};
-    if (r.strip > 0) f.files.push_back("strip.png");
+    f.files = {kPreviewExrName, kPreviewPngName, kSteadyExrName, kSteadyPngName, kSummaryName};
+    if (r.strip > 0) f.files.push_back(kStripName);
     if (r.npy)
         for (const std::string& n : volumeFileNames()) f.files.push_back(n);
-    if (r.contactSheet > 0) f.files.push_back("contact_sheet.png");
-    if (r.mp4) f.files.push_back("transient.mp4");
+    if (r.contactSheet > 0) f.files.push_back(contactSheetName());
+    if (r.mp4) f.files.push_back(mp4Name());
     const int frames = exportFrameCount(bins, r.opt);
     if (!r.noFrames && frames > 0) {
         f.framesDir = "frames";
@@ -654,7 +655,7 @@ private:
 // signal stops the one being written (it leaves no file) and the ones after it.
 void writePictureOutputs(const FilmSnapshot& snap, const RenderOutputs& r, OutputReport& rep,
                          const std::atomic<bool>* cancel, bool tty) {
-    const auto stopped = [&](const char* what) {
+    const auto stopped = [&](const std::string& what) {
         if (!(cancel && cancel->load())) return false;
         rep.interrupted = true;
         if (rep.error.empty()) rep.error = "interrupted by " + interruptName() + " while writing " + what;
@@ -672,19 +673,19 @@ void writePictureOutputs(const FilmSnapshot& snap, const RenderOutputs& r, Outpu
     const bool needTone = (r.contactSheet > 0 || r.mp4) && !rep.interrupted;
     const ToneMap tone = needTone ? autoExposedToneMap(snap, r.opt, r.tone) : r.tone;
     if (r.contactSheet > 0 && !rep.interrupted) {
-        exportContactSheet(snap, r.out + "/contact_sheet.png", r.contactSheet, r.opt, tone);
-        rep.kept.push_back("contact_sheet.png");
-        rep.exposureEv.emplace_back("contact_sheet.png", tone.exposureEv);
+        exportContactSheet(snap, r.out + "/" + contactSheetName(), r.contactSheet, r.opt, tone);
+        rep.kept.push_back(contactSheetName());
+        rep.exposureEv.emplace_back(contactSheetName(), tone.exposureEv);
     }
     if (r.mp4 && !rep.interrupted) {
         int n = 0;
         {
             ExportProgress bar("encoding transient.mp4", tty, r.quiet);
-            n = exportMp4(snap, r.out + "/transient.mp4", r.opt, tone, r.fps, std::ref(bar), cancel);
+            n = exportMp4(snap, r.out + "/" + mp4Name(), r.opt, tone, r.fps, std::ref(bar), cancel);
         }
-        if (!stopped("transient.mp4") && n > 0) {
-            rep.kept.push_back("transient.mp4");
-            rep.exposureEv.emplace_back("transient.mp4", tone.exposureEv);
+        if (!stopped(mp4Name()) && n > 0) {
+            rep.kept.push_back(mp4Name());
+            rep.exposureEv.emplace_back(mp4Name(), tone.exposureEv);
         }
     }
 }
@@ -715,13 +716,13 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
 
     {
         const std::vector<float> steady = steadyImage(*snap);  // one image for both files
-        writeExr(r.out + "/steady.exr", film.width(), film.height(), steady, r.opt.pixel);
-        rep.kept.push_back("steady.exr");
-        const float ev = writeAutoExposedPng(r.out + "/steady.png", film.width(), film.height(), steady, ToneMap{});
-        rep.kept.push_back("steady.png");
-        rep.exposureEv.emplace_back("steady.png", ev);
+        writeExr(r.out + "/" + kSteadyExrName, film.width(), film.height(), steady, r.opt.pixel);
+        rep.kept.push_back(kSteadyExrName);
+        const float ev = writeAutoExposedPng(r.out + "/" + kSteadyPngName, film.width(), film.height(), steady, ToneMap{});
+        rep.kept.push_back(kSteadyPngName);
+        rep.exposureEv.emplace_back(kSteadyPngName, ev);
     }
-    rep.kept.push_back("summary.json");
+    rep.kept.push_back(kSummaryName);
     writeSummary(false);
 
     // A first signal during the export stops it after the frame in progress. If the render was
@@ -753,8 +754,8 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
             stripTone.exposureEv = static_cast<float>(r.stripEv);
             stripTone = autoExposedToneMap(*snap, r.opt, stripTone);
             exportStripPng(*snap, r.out + "/strip.png", r.strip, r.opt, stripTone);
-            rep.kept.push_back("strip.png");
-            rep.exposureEv.emplace_back("strip.png", stripTone.exposureEv);
+            rep.kept.push_back(kStripName);
+            rep.exposureEv.emplace_back(kStripName, stripTone.exposureEv);
         }
         writePictureOutputs(*snap, r, rep, cancel, tty);
     } catch (const std::exception& e) {

@@ -13,48 +13,6 @@
 
 namespace tpb::app {
 
-std::string axisModeTag(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    std::string tag = std::string(axis == TimeAxis::Real ? "real" : "unwarped") + "_" +
-                      (mode == EmissionMode::Delta ? "delta" : "continuous");
-    const auto plain = [](std::string n) {  // "gaussian:0.5" -> "gaussian0.5"
-        n.erase(std::remove(n.begin(), n.end(), ':'), n.end());
-        return n;
-    };
-    if (r.pulse != PulseShape::Delta) tag += "_pulse-" + plain(pulseName(r));
-    if (r.sensor != SensorShape::Ideal) tag += "_sensor-" + plain(sensorName(r));
-    return tag;
-}
-
-std::string exportFrameName(int bin, TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "frame_%05d_", bin);
-    return buf + axisModeTag(axis, mode, r) + ".exr";
-}
-
-std::string exportFramesDir(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    return "frames_" + axisModeTag(axis, mode, r);
-}
-
-std::string exportStreakName(int row, TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "streak_row%04d_", row);
-    return buf + axisModeTag(axis, mode, r) + ".exr";
-}
-
-std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    return "profile_x" + std::to_string(x) + "_y" + std::to_string(y) + "_" + axisModeTag(axis, mode, r) + ".csv";
-}
-
-std::string exportVolumeDir(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    return "volume_" + axisModeTag(axis, mode, r);
-}
-std::string exportMp4Name(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    return "transient_" + axisModeTag(axis, mode, r) + ".mp4";
-}
-std::string exportContactSheetName(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
-    return "contact_sheet_" + axisModeTag(axis, mode, r) + ".png";
-}
-
 void markFramesComplete(const std::string& dir, int written, int total) {
     const std::string marker = dir + "/" + kIncompleteName;
     if (written >= total) {
@@ -112,35 +70,35 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
             FolderLock::acquire(req.dir, "tpb view", "choose another folder in the Export section");
         if (req.frame && !cancel_) {
             step("current frame");
-            const std::string path = req.dir + "/" + exportFrameName(req.bin, req.axis, req.mode, req.response);
+            const std::string path = req.dir + "/" + frameName(req.bin, outputTag(req.axis, req.mode, req.response));
             exportFrame(film, req.bin, path, opt);
             wrote(path);
             ++done_;
         }
         if (req.steady && !cancel_) {
             step("steady state");
-            const std::string path = req.dir + "/steady.exr";
+            const std::string path = req.dir + "/" + kSteadyExrName;
             exportSteady(film, path);
             wrote(path);
             ++done_;
         }
         if (req.streak && !cancel_) {
             step("streak image");
-            const std::string path = req.dir + "/" + exportStreakName(req.row, req.axis, req.mode, req.response);
+            const std::string path = req.dir + "/" + streakName(req.row, outputTag(req.axis, req.mode, req.response));
             exportStreak(film, req.row, path, opt);
             wrote(path);
             ++done_;
         }
         if (req.profile && !cancel_) {
             step("pixel profile");
-            const std::string path = req.dir + "/" + exportProfileName(req.x, req.y, req.axis, req.mode, req.response);
+            const std::string path = req.dir + "/" + profileName(req.x, req.y, outputTag(req.axis, req.mode, req.response));
             exportProfileCsv(film, req.x, req.y, path, opt);
             wrote(path);
             ++done_;
         }
         if (frames > 0 && !cancel_) {
             step("all frames");
-            const std::string dir = req.dir + "/" + exportFramesDir(req.axis, req.mode, req.response);
+            const std::string dir = req.dir + "/" + framesDirName(outputTag(req.axis, req.mode, req.response));
             const int base = done_.load();
             int n = 0;
             try {
@@ -163,7 +121,7 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
         }
         if (req.volume && !cancel_) {
             step("volume (.npy rows)");
-            const std::string dir = req.dir + "/" + exportVolumeDir(req.axis, req.mode, req.response);
+            const std::string dir = req.dir + "/" + volumeDirName(outputTag(req.axis, req.mode, req.response));
             const int base = done_.load();
             const std::vector<std::string> names = exportVolumeNpy(
                 film, dir, opt, provenanceOf(*driver, req.scenePath), [&](int d, int) { done_ = base + d; }, &cancel_);
@@ -171,14 +129,14 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
         }
         if (req.contactSheet && !cancel_) {
             step("contact sheet");
-            const std::string path = req.dir + "/" + exportContactSheetName(req.axis, req.mode, req.response);
+            const std::string path = req.dir + "/" + contactSheetName(outputTag(req.axis, req.mode, req.response));
             exportContactSheet(film, path, req.sheetFrames, opt, req.tone);
             wrote(path);
             ++done_;
         }
         if (req.mp4 && !cancel_) {
             step("MP4");
-            const std::string path = req.dir + "/" + exportMp4Name(req.axis, req.mode, req.response);
+            const std::string path = req.dir + "/" + mp4Name(outputTag(req.axis, req.mode, req.response));
             const int base = done_.load();
             if (exportMp4(film, path, opt, req.tone, req.fps, [&](int d, int) { done_ = base + d; }, &cancel_) > 0)
                 wrote(path);
@@ -192,9 +150,9 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
                     notWritten.push_back(name);
             };
             std::lock_guard<std::mutex> g(mutex_);
-            skipped(req.volume, exportVolumeDir(req.axis, req.mode, req.response) + "/");
-            skipped(req.contactSheet, exportContactSheetName(req.axis, req.mode, req.response));
-            skipped(req.mp4, exportMp4Name(req.axis, req.mode, req.response));
+            skipped(req.volume, volumeDirName(outputTag(req.axis, req.mode, req.response)) + "/");
+            skipped(req.contactSheet, contactSheetName(outputTag(req.axis, req.mode, req.response)));
+            skipped(req.mp4, mp4Name(outputTag(req.axis, req.mode, req.response)));
             error_ = "export cancelled";
             for (size_t i = 0; i < notWritten.size(); ++i) error_ += (i ? ", " : "; not written: ") + notWritten[i];
         }

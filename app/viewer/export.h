@@ -7,6 +7,7 @@
 #pragma once
 #include "render/driver.h"
 #include "film/film_export.h"
+#include "film/output_names.h"
 #include "film/tone_map.h"
 
 #include <atomic>
@@ -34,17 +35,7 @@ struct ExportRequest {
     TimeResponse response;     // pulse shape and sensor response shown (film/time_response.h)
 };
 
-// File names (relative to the request's folder). A pulse shape or sensor response other than
-// delta/ideal adds e.g. "_pulse-gaussian0.5_sensor-exp0.1" (ns) to the tag.
-std::string axisModeTag(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});               // e.g. "real_delta"
-std::string exportFrameName(int bin, TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});  // frame_00012_real_delta.exr
-std::string exportFramesDir(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});           // frames_real_delta
-std::string exportStreakName(int row, TimeAxis axis, EmissionMode mode, const TimeResponse& r = {}); // streak_row0031_real_delta.exr
-std::string exportProfileName(int x, int y, TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});  // profile_x12_y40_real_delta.csv
-std::string exportVolumeDir(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});           // volume_real_delta
-std::string exportMp4Name(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});             // transient_real_delta.mp4
-std::string exportContactSheetName(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});    // contact_sheet_real_delta.png
-
+// File names: film/output_names.h, each tagged with outputTag(axis, mode, response).
 // "All frames" cut short (Cancel, or a second Ctrl-C while the viewer closes) leaves this note in
 // the frames' folder, saying how many of them this export wrote; a complete export removes it.
 inline constexpr const char* kIncompleteName = "INCOMPLETE.txt";

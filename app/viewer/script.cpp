@@ -158,8 +158,8 @@ void Viewer::endFrameChecks() {
     // picture is taken by the caller.
     if (!session_.exportError().empty() || session_.checkpointFailed()) exitCode_ = kViewerExitUserError;
     if (!opt_.exportDir.empty()) {
-        const std::string frame = st_.outDir + "/" + exportFrameName(st_.bin, st_.axis, st_.mode, st_.response);
-        for (const std::string& want : {frame, st_.outDir + "/steady.exr"})
+        const std::string frame = st_.outDir + "/" + frameName(st_.bin, outputTag(st_.axis, st_.mode, st_.response));
+        for (const std::string& want : {frame, st_.outDir + "/" + kSteadyExrName})
             if (std::find(session_.exported().begin(), session_.exported().end(), want) == session_.exported().end()) {
                 std::fprintf(stderr, "error: --export: the Export buttons did not write %s\n", want.c_str());
                 exitCode_ = 1;

@@ -1,4 +1,5 @@
 #include "film/film_export.h"
+#include "film/output_names.h"
 
 #include "base/math.h"
 #include "film/film_view.h"
@@ -9,12 +10,6 @@
 #include <sstream>
 
 namespace tpb {
-
-std::string frameFileName(int bin) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "frame_%05d.exr", bin);
-    return buf;
-}
 
 void exportFrame(const FilmSnapshot& film, int bin, const std::string& path, const ExportOptions& opt) {
     writeExr(path, film.width(), film.height(), frameImage(film, bin, opt.axis, opt.mode, opt.response), opt.pixel);
@@ -38,7 +33,7 @@ int exportFrames(const FilmSnapshot& film, const std::string& dir, const ExportO
     int done = 0;
     for (int k = opt.firstBin; k <= last; k += step) {
         if (cancel && cancel->load()) break;
-        exportFrame(film, k, dir + "/" + frameFileName(k), opt);
+        exportFrame(film, k, dir + "/" + frameName(k), opt);
         ++done;
         if (progress) progress(done, total);
     }

@@ -35,7 +35,6 @@ void exportStreak(const FilmSnapshot& film, int row, const std::string& path, co
 // "bin,t_opl_m,t_ns,r,g,b" rows.
 void exportProfileCsv(const FilmSnapshot& film, int x, int y, const std::string& path, const ExportOptions& opt);
 
-std::string frameFileName(int bin);
 // How many frames exportFrames writes for a film of `bins` bins with these options.
 int exportFrameCount(int bins, const ExportOptions& opt);
 

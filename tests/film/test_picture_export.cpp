@@ -3,6 +3,7 @@
 // ffprobe counts its frames; a missing ffmpeg is a clear UserError; ffmpeg's failure names its
 // stderr; a cancelled encoding leaves no file. The ffmpeg tests skip when ffmpeg/ffprobe are absent.
 #include "film/film_view.h"
+#include "film/output_names.h"
 #include "film/picture_export.h"
 #include "film_test_passes.h"
 #include "io/video_encoder.h"
@@ -208,4 +209,23 @@ TEST(VideoEncoder, CancelKillsFfmpegAndLeavesNoHalfWrittenMp4) {
     EXPECT_EQ(n, 0);
     EXPECT_FALSE(fs::exists(tmp / "t.mp4"));
     expectNoTemporaries(tmp.path());
+}
+
+// One set of export names for `tpb render` (untagged) and the viewer (tagged with the axis, the
+// emission and, when not delta/ideal, the pulse and sensor).
+TEST(OutputNames, UntaggedForTheCliTaggedForTheViewer) {
+    EXPECT_EQ(frameName(12), "frame_00012.exr");
+    EXPECT_EQ(mp4Name(), "transient.mp4");
+    EXPECT_EQ(contactSheetName(), "contact_sheet.png");
+    const std::string tag = outputTag(TimeAxis::Unwarped, EmissionMode::Continuous);
+    EXPECT_EQ(tag, "unwarped_continuous");
+    EXPECT_EQ(frameName(12, tag), "frame_00012_unwarped_continuous.exr");
+    EXPECT_EQ(framesDirName(tag), "frames_unwarped_continuous");
+    EXPECT_EQ(streakName(31, tag), "streak_row0031_unwarped_continuous.exr");
+    EXPECT_EQ(profileName(12, 40, tag), "profile_x12_y40_unwarped_continuous.csv");
+    EXPECT_EQ(volumeDirName(tag), "volume_unwarped_continuous");
+    EXPECT_EQ(mp4Name(tag), "transient_unwarped_continuous.mp4");
+    EXPECT_EQ(contactSheetName(tag), "contact_sheet_unwarped_continuous.png");
+    const TimeResponse r = *parseSensor("exp:0.1", *parsePulse("gaussian:0.5"));
+    EXPECT_EQ(outputTag(TimeAxis::Real, EmissionMode::Delta, r), "real_delta_pulse-gaussian0.5_sensor-exp0.1");
 }
