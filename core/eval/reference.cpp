@@ -1,7 +1,7 @@
 // Reference volumes (see reference.h for the file format and what each field means).
 #include "eval/reference.h"
 
-#include "io/atomic_file.h"
+#include "io/film_container.h"
 #include "base/error.h"
 #include "base/parallel.h"
 #include "film/film_view.h"
@@ -133,21 +133,19 @@ std::vector<float>* arrayByName(ReferenceVolume& r, const std::string& name) {
     throw UserError(path, 0, "", "not a valid tpb reference file (" + why + "); re-create it with `tpb reference`");
 }
 
-// Reads magic + header; leaves the stream at the first array. Returns the header JSON.
-json readHeader(std::ifstream& f, const std::string& path) {
-    if (!f) throw UserError(path, 0, "", "cannot open the reference file (missing or unreadable); create it with `tpb reference`");
-    char magic[8];
-    if (!f.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0) corrupt(path, "bad magic, expected \"TPBREF1\"");
-    uint64_t n = 0;
-    if (!f.read(reinterpret_cast<char*>(&n), 8)) corrupt(path, "truncated header");
-    if (n == 0 || n > (64u << 20)) corrupt(path, "header length " + std::to_string(n));
-    std::string text(n, '\0');
-    if (!f.read(text.data(), static_cast<std::streamsize>(n))) corrupt(path, "truncated header");
+// Opens the container (film_container.h) and parses its header.
+json readHeader(FilmContainerReader& f, const std::string& path) {
+    if (!f.opened())
+        throw UserError(path, 0, "", "cannot open the reference file (missing or unreadable); create it with `tpb reference`");
     try {
-        return json::parse(text);
+        return json::parse(f.header());
     } catch (const std::exception& e) {
         corrupt(path, std::string("header is not JSON: ") + e.what());
     }
+}
+
+FilmContainerReader openReference(const std::string& path) {
+    return FilmContainerReader(path, std::string_view(kMagic, 8), [path](const std::string& why) { corrupt(path, why); });
 }
 
 std::string fmtDouble(double v) {
@@ -259,6 +257,7 @@ void writeReference(const std::string& path, const ReferenceVolume& ref) {
         arrays.push_back({{"name", s.name}, {"shape", s.shape}, {"dtype", "float32"}});
     }
     header["arrays"] = arrays;
+    header["sealed"] = true;  // a hash of the arrays follows them (version 2)
     const std::string text = header.dump(2) + "\n";
     const fs::path target(path);
     if (target.has_parent_path()) {
@@ -266,20 +265,16 @@ void writeReference(const std::string& path, const ReferenceVolume& ref) {
         fs::create_directories(target.parent_path(), ec);
         if (ec) throw UserError(path, 0, "", "cannot create its folder: " + ec.message());
     }
-    AtomicFile f(path);
-    const uint64_t n = text.size();
-    f.write(kMagic, 8);
-    f.write(&n, 8);
-    f.write(text);
+    FilmContainerWriter f(path, std::string_view(kMagic, 8), text);
     for (const ArraySpec& s : specs) {
         const std::vector<float>* a = arrayByName(const_cast<ReferenceVolume&>(ref), s.name);
         f.write(a->data(), a->size() * sizeof(float));
     }
-    f.commit();
+    f.commit(/*seal=*/true);
 }
 
 ReferenceInfo readReferenceInfo(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
+    FilmContainerReader f = openReference(path);
     const json header = readHeader(f, path);
     try {
         return infoFromJson(header);
@@ -289,7 +284,7 @@ ReferenceInfo readReferenceInfo(const std::string& path) {
 }
 
 ReferenceVolume readReference(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
+    FilmContainerReader f = openReference(path);
     const json header = readHeader(f, path);
     ReferenceVolume r;
     try {
@@ -315,18 +310,17 @@ ReferenceVolume readReference(const std::string& path) {
     for (const char* need : {"real", "unwarped", "steady"})
         if (std::none_of(listed.begin(), listed.end(), [&](const ArraySpec& s) { return s.name == need; }))
             corrupt(path, std::string("array \"") + need + "\" missing");
-    const std::streamoff start = f.tellg();
-    std::error_code ec;
-    const uintmax_t size = fs::file_size(path, ec);
-    if (ec || size != static_cast<uintmax_t>(start) + expectBytes)
-        corrupt(path, "file size " + std::to_string(size) + " bytes, expected " +
-                          std::to_string(static_cast<uintmax_t>(start) + expectBytes) + " (truncated?)");
+    const bool sealed = header.value("sealed", false);
+    const uint64_t expect = f.payloadOffset() + expectBytes + (sealed ? 8 : 0);
+    if (f.fileBytes() != expect)
+        corrupt(path, "file size " + std::to_string(f.fileBytes()) + " bytes, expected " + std::to_string(expect) +
+                          " (truncated?)");
     for (const ArraySpec& s : listed) {
         std::vector<float>* a = arrayByName(r, s.name);
         a->resize(s.count());
-        if (!f.read(reinterpret_cast<char*>(a->data()), static_cast<std::streamsize>(s.count() * sizeof(float))))
-            corrupt(path, "truncated array " + s.name);
+        f.read(a->data(), s.count() * sizeof(float), ("array " + s.name).c_str());
     }
+    if (sealed) f.readSeal();
     return r;
 }
 

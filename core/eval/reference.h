@@ -2,12 +2,14 @@
 // beams, or the single-scattering quadrature), saving/loading them, and measuring a film against
 // one (relative RMSE, error_metrics.h).
 //
-// ---- File format (".tpbref", version 1) ---------------------------------------------------------
+// ---- File format (".tpbref", version 2; tpb's film container, io/film_container.h) ---------------
 //   bytes 0..7    magic "TPBREF1\n"
 //   bytes 8..15   N: length of the JSON header in bytes, unsigned 64-bit little-endian
 //   bytes 16..    the JSON header (N bytes, UTF-8)
 //   then          the arrays listed in header["arrays"], in that order, back to back, each
-//                 float32 little-endian, count = product of its "shape"; nothing after them.
+//                 float32 little-endian, count = product of its "shape"
+//   then          when header["sealed"] (every version-2 file): the 64-bit hash of the arrays
+//                 (WordHash, array by array); nothing after it.
 // Arrays (row-major, top image row first):
 //   "real"       [H, W, bins, 3]  delta-emission transient volume on the real time axis
 //   "unwarped"   [H, W, bins, 3]  the same on the camera-unwarped axis
@@ -17,13 +19,15 @@
 //                                 real axis, the unwarped axis and the steady image; all zero for
 //                                 a quadrature reference; absent when unknown (beams)
 // Bin k covers OPL [start_opl_m + k bin_width_opl_m, + bin_width_opl_m) (m; ns = m / 0.299792458).
-// Header keys: format ("tpb-reference"), version (1), scene (path as given), scene_hash (FNV-1a 64
-// of the scene file's bytes; meshes it references are not hashed), method ("pt", "beams" or
-// "analytic-single-scattering"), passes, samples_per_pixel, seed, max_depth, photons_per_pass,
-// beam_radius0_m, resolution [W, H], bins, start_opl_m, bin_width_opl_m, emission ("delta"),
+// Header keys: format ("tpb-reference"), version (2; 1 is read too), scene (path as given),
+// scene_hash (FNV-1a 64 of the scene file's bytes; meshes it references are not hashed), method
+// ("pt", "beams" or "analytic-single-scattering"), passes, settings (settingsRecord: seed,
+// max_depth, samples_per_pixel, photons_per_pass, radius...; version 1 wrote seed, max_depth,
+// samples_per_pixel, photons_per_pass and beam_radius0_m at the top), resolution [W, H], bins, start_opl_m, bin_width_opl_m, emission ("delta"),
 // requested_passes, requested_time_s (the budget it was asked for; 0 = not given), wall_seconds,
 // interrupted, halves [na, nb] (passes in each half), self_error {real, unwarped, steady, estimate}
-// (the reference's own relative RMSE, error_metrics.h; -1 = unknown), arrays [{name, shape}].
+// (the reference's own relative RMSE, error_metrics.h; -1 = unknown), arrays [{name, shape}],
+// sealed (true: the hash follows the arrays).
 #pragma once
 #include "render/driver.h"
 #include "eval/error_metrics.h"

@@ -4,7 +4,7 @@
 #include "base/text.h"
 
 #include "base/error.h"
-#include "io/atomic_file.h"
+#include "io/film_container.h"
 
 #include <nlohmann/json.hpp>
 
@@ -29,18 +29,6 @@ constexpr int kVersion = 1;
 
 // A 64-bit hash of a byte stream taken 8 bytes at a time (FNV-1a's step on words): fast enough
 // for a 12 GiB film (one multiply per 8 bytes), and any flipped or lost word changes it.
-struct WordHash {
-    uint64_t h = 0xcbf29ce484222325ull;
-    void add(const void* data, size_t bytes) {  // bytes: a multiple of 8 (every field is)
-        const unsigned char* p = static_cast<const unsigned char*>(data);
-        for (size_t i = 0; i + 8 <= bytes; i += 8) {
-            uint64_t w;
-            std::memcpy(&w, p + i, 8);
-            h = (h ^ w) * 0x100000001b3ull;
-        }
-    }
-};
-
 json colorJson(const Color& c) { return {c.x, c.y, c.z}; }
 Color colorFrom(const json& j) { return Color(j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()); }
 
@@ -228,27 +216,19 @@ uint64_t payloadBytes(const FilmLayout& layout) {
 }
 
 struct Opened {
-    std::ifstream in;
+    std::unique_ptr<FilmContainerReader> in;
     json header;
-    uint64_t payloadOffset = 0;
 };
 
 Opened openCheckpoint(const std::string& path) {
     Opened o;
-    o.in.open(path, std::ios::binary);
-    if (!o.in) throw UserError(path + ": cannot open the checkpoint: " + std::strerror(errno) +
-                               " (resume from the folder of a render that wrote " + kCheckpointFile + ")");
-    char magic[8];
-    uint64_t n = 0;
-    if (!o.in.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0) bad(path, "wrong magic bytes");
-    if (!o.in.read(reinterpret_cast<char*>(&n), 8)) bad(path, "truncated header");
-    std::error_code ec;
-    const uint64_t size = fs::file_size(path, ec);
-    if (ec || n > size - 16 || n > (64u << 20)) bad(path, "truncated or oversized header");
-    std::string text(n, '\0');
-    if (!o.in.read(text.data(), static_cast<std::streamsize>(n))) bad(path, "truncated header");
+    o.in = std::make_unique<FilmContainerReader>(path, std::string_view(kMagic, 8),
+                                                 [path](const std::string& why) { bad(path, why); });
+    if (!o.in->opened())
+        throw UserError(path + ": cannot open the checkpoint: " + std::strerror(errno) +
+                        " (resume from the folder of a render that wrote " + kCheckpointFile + ")");
     try {
-        o.header = json::parse(text);
+        o.header = json::parse(o.in->header());
     } catch (const std::exception& e) {
         bad(path, std::string("header is not JSON (") + e.what() + ")");
     }
@@ -256,11 +236,11 @@ Opened openCheckpoint(const std::string& path) {
     if (o.header.value("version", 0) != kVersion)
         bad(path, "version " + std::to_string(o.header.value("version", 0)) + ", this tpb reads version 1");
     if (o.header.value("byte_order", "") != "little") bad(path, "byte order is not little-endian");
-    o.payloadOffset = 16 + n;
     const uint64_t payload = o.header.value("payload_bytes", uint64_t(0));
-    if (size != o.payloadOffset + payload + 8)
+    const uint64_t size = o.in->fileBytes();
+    if (size != o.in->payloadOffset() + payload + 8)
         bad(path, "the file has " + std::to_string(size) + " bytes, its header announces " +
-                      std::to_string(o.payloadOffset + payload + 8) + " (truncated or cut while copying)");
+                      std::to_string(o.in->payloadOffset() + payload + 8) + " (truncated or cut while copying)");
     return o;
 }
 
@@ -330,30 +310,20 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
     h["history"] = hist;
     const std::string text = h.dump();
 
-    AtomicFile f(path);
-    const uint64_t n = text.size();
-    f.write(kMagic, 8);
-    f.write(&n, 8);
-    f.write(text);
-    WordHash hash;
-    auto put = [&](const void* data, size_t bytes) {
-        hash.add(data, bytes);
-        f.write(data, bytes);
-    };
+    FilmContainerWriter f(path, std::string_view(kMagic, 8), text);
     for (int t = 0; t < snap->tileCount(); ++t) {
         const TileSums& s = snap->block(t).sums;
-        put(&s.passes, 8);
-        put(&s.absBound, 8);
-        put(s.steady.data(), s.steady.size() * 8);
-        put(s.bins[0].data(), s.bins[0].size() * 8);
-        put(s.bins[1].data(), s.bins[1].size() * 8);
-        put(s.before[0].data(), s.before[0].size() * 8);
-        put(s.before[1].data(), s.before[1].size() * 8);
-        put(s.after[0].data(), s.after[0].size() * 8);
-        put(s.after[1].data(), s.after[1].size() * 8);
+        f.write(&s.passes, 8);
+        f.write(&s.absBound, 8);
+        f.write(s.steady.data(), s.steady.size() * 8);
+        f.write(s.bins[0].data(), s.bins[0].size() * 8);
+        f.write(s.bins[1].data(), s.bins[1].size() * 8);
+        f.write(s.before[0].data(), s.before[0].size() * 8);
+        f.write(s.before[1].data(), s.before[1].size() * 8);
+        f.write(s.after[0].data(), s.after[0].size() * 8);
+        f.write(s.after[1].data(), s.after[1].size() * 8);
     }
-    f.write(&hash.h, 8);
-    f.commit();
+    f.commit(/*seal=*/true);
 }
 
 CheckpointInfo readCheckpointInfo(const std::string& path) {
@@ -377,11 +347,7 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
     }
     if (!into) c.film = std::make_unique<TransientFilm>(c.info.width, c.info.height, c.info.time);
     TransientFilm& film = into ? *into : *c.film;
-    WordHash hash;
-    auto get = [&](void* data, size_t bytes) {
-        if (!o.in.read(static_cast<char*>(data), static_cast<std::streamsize>(bytes))) bad(path, "truncated film");
-        hash.add(data, bytes);
-    };
+    auto get = [&](void* data, size_t bytes) { o.in->read(data, bytes, "film"); };
     // Each pass weighs at most 1 (render_settings.h passWeight), a pass at least 1 photon's share.
     double weight = static_cast<double>(c.info.passes);
     try {
@@ -410,9 +376,7 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
         s.weight = weight;
         film.restoreTile(t, std::move(s));
     }
-    uint64_t stored = 0;
-    if (!o.in.read(reinterpret_cast<char*>(&stored), 8)) bad(path, "truncated (no payload hash)");
-    if (stored != hash.h) bad(path, "the film's hash does not match (the file is corrupted)");
+    o.in->readSeal();
     try {
         const json& st = o.header.at("stats");
         film.stats.rejectedSamples = st.at("rejected_samples").get<int64_t>();

@@ -8,7 +8,7 @@
 // run of N passes (tests/render/test_checkpoint.cpp). A checkpoint is written only between passes,
 // when every tile holds the same passes (an aborted pass leaves some tiles ahead: refused).
 //
-// ---- File format (".tpbck", version 1) ----------------------------------------------------------
+// ---- File format (".tpbck", version 1; tpb's film container, io/film_container.h) ---------------
 //   bytes 0..7    magic "TPBCKPT\n"
 //   bytes 8..15   N: length of the JSON header, unsigned 64-bit little-endian
 //   bytes 16..    the JSON header (N bytes, UTF-8): format "tpb-checkpoint", version 1, byte_order
@@ -20,7 +20,7 @@
 //                 int64 passes, float64 abs_bound, then float64 arrays: steady [pixels][rgb],
 //                 bins real [pixels][bins][rgb], bins unwarped, before real, before unwarped, after
 //                 real, after unwarped ([pixels][rgb] each)
-//   then          8 bytes: a 64-bit hash of the payload's 64-bit words (FNV-style), to refuse a
+//   then          8 bytes: a 64-bit hash of the payload's 64-bit words (WordHash), to refuse a
 //                 corrupted file; nothing after it.
 #pragma once
 #include "film/transient_film.h"

@@ -246,7 +246,7 @@ void expectUserErrorMentioning(const std::function<void()>& f, const std::vector
 }  // namespace
 
 // A version-1 file (before the settings had one object: seed, max_depth, samples_per_pixel at the
-// top of the header) still reads, with the same fields.
+// top of the header; no hash after the arrays) still reads, with the same fields.
 TEST(Reference, VersionOneHeadersStillRead) {
     const std::string dir = tempDir("version1");
     const std::string path = dir + "/v1.tpbref";
@@ -263,6 +263,7 @@ TEST(Reference, VersionOneHeadersStillRead) {
     h["max_depth"] = h["settings"]["max_depth"];
     h["samples_per_pixel"] = h["settings"]["samples_per_pixel"];
     h.erase("settings");
+    h.erase("sealed");  // version 1 had no hash after the arrays
     const std::string text = h.dump(2) + "\n";
     const uint64_t m = text.size();
     {
@@ -270,7 +271,7 @@ TEST(Reference, VersionOneHeadersStillRead) {
         out.write(bytes.data(), 8);
         out.write(reinterpret_cast<const char*>(&m), 8);
         out << text;
-        out.write(bytes.data() + 16 + n, static_cast<std::streamsize>(bytes.size() - 16 - n));
+        out.write(bytes.data() + 16 + n, static_cast<std::streamsize>(bytes.size() - 16 - n - 8));
     }
     const ReferenceVolume q = readReference(path);
     EXPECT_EQ(q.info.seed, 42u);
@@ -329,7 +330,8 @@ TEST(Reference, FileRoundTripIsBitIdentical) {
     f.read(magic, 8);
     f.read(reinterpret_cast<char*>(&n), 8);
     EXPECT_EQ(std::string(magic, 8), "TPBREF1\n");
-    EXPECT_EQ(fs::file_size(path), 16 + n + 4 * (2 * 5 * 3 * 4 * 3 + 2 * 5 * 3 * 3));
+    // magic, length, header, the arrays, and the 8-byte hash that seals them (version 2).
+    EXPECT_EQ(fs::file_size(path), 16 + n + 4 * (2 * 5 * 3 * 4 * 3 + 2 * 5 * 3 * 3) + 8);
     // Without the optional self_diff2 array.
     ReferenceVolume s = r;
     s.selfDiff2.clear();
@@ -378,6 +380,19 @@ TEST(Reference, MismatchesAndCorruptFilesAreClearErrorsNamingTheFile) {
     fs::copy_file(path, truncated);
     fs::resize_file(truncated, fs::file_size(path) - 4);
     expectUserErrorMentioning([&] { readReference(truncated); }, {truncated, "truncated"});
+    // One flipped bit in an array: the hash that seals the arrays refuses it.
+    const std::string flipped = dir + "/flipped.tpbref";
+    fs::copy_file(path, flipped);
+    {
+        std::fstream f(flipped, std::ios::binary | std::ios::in | std::ios::out);
+        f.seekg(-20, std::ios::end);
+        char c = 0;
+        f.read(&c, 1);
+        c = static_cast<char>(c ^ 0x10);
+        f.seekp(-20, std::ios::end);
+        f.write(&c, 1);
+    }
+    expectUserErrorMentioning([&] { readReference(flipped); }, {flipped, "corrupted"});
     const std::string bad = dir + "/bad.tpbref";
     {
         std::ofstream f(bad, std::ios::binary);
