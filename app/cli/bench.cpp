@@ -50,8 +50,8 @@ std::string commandLine() {
 void run(BenchCmd& c) {
     InterruptScope interrupts;  // Ctrl-C/SIGTERM: stop after the pass in progress, print what was measured
     if (c.binsList.empty()) throw UserError("--bins-list needs at least one bin count, e.g. 1,256,1024");
-    std::printf("%8s %8s %12s %12s %12s %14s %16s %12s %10s\n", "bins", "threads", "pass_s(med)", "photon_s", "camera_s", "beams/s",
-                "estimates/s", "film", "peak_rss");
+    std::printf("%8s %8s %12s %12s %12s %14s %16s %12s %10s\n", "bins", "threads", "pass_s(med)", "photon_s",
+                "camera_s", "beams/s", "estimates/s", "film", "peak_rss");
     if (!c.threadsList.empty() && c.ov.threads)
         throw UserError("--threads-list and --threads both set the thread count: keep one (e.g. --threads-list 1,2)");
     // One configuration per (bins, threads); without --threads-list, one thread count (--threads).
@@ -77,8 +77,9 @@ void run(BenchCmd& c) {
             // estimate (volume + surface), per bin written. Each divides the whole camera pass by one
             // count, so they are costs per unit of that work, not exclusive shares.
             std::vector<double> nsPerRay, nsPerEstimate, nsPerBin, rays, estimates, bins1;
-            const int threads = prepared.settings.threads > 0 ? prepared.settings.threads
-                                                              : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+            const int threads = prepared.settings.threads > 0
+                                    ? prepared.settings.threads
+                                    : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
             for (int p = 1; p <= c.passes; ++p) {
                 if (interrupted() || !drv.runPass(p)) break;
                 const PassStats s = drv.lastPass();
@@ -100,36 +101,43 @@ void run(BenchCmd& c) {
             if (passSec.empty()) break;  // interrupted before a pass of this configuration finished
             const double med = median(passSec);
             results.push_back({bins, threads, med});
-            std::printf("%8d %8d %12.3f %12.3f %12.3f %14.4g %16.4g %12s %10s\n", bins, threads, med, median(photonSec), median(cameraSec),
-                        median(beamsPerSec), median(estPerSec), humanBytes(drv.film().bytes()).c_str(),
-                        humanBytes(peakRssBytes()).c_str());
-            const double pixelBins = static_cast<double>(prepared.scene->camera.width) * prepared.scene->camera.height *
-                                     prepared.time.bins;
-            configs.push_back({{"bins", bins},
-                               {"passes", passSec.size()},
-                               {"threads", threads},
-                               {"volume_estimator", prepared.settings.volumeEstimator},
-                               {"median_s", {{"pass", med}, {"photon", median(photonSec)}, {"build", median(buildSec)},
-                                             {"camera", median(cameraSec)}}},
-                               {"share_of_pass", {{"photon", median(photonSec) / std::max(med, 1e-12)},
-                                                  {"build", median(buildSec) / std::max(med, 1e-12)},
-                                                  {"camera", median(cameraSec) / std::max(med, 1e-12)}}},
-                               {"per_pass", {{"camera_rays", median(rays)}, {"estimates", median(estimates)},
-                                             {"bins_splatted", median(bins1)}}},
-                               {"camera_thread_ns", {{"per_camera_ray", median(nsPerRay)},
-                                                     {"per_estimate", median(nsPerEstimate)},
-                                                     {"per_splatted_bin", median(nsPerBin)}}},
-                               {"beams_per_photon_s", median(beamsPerSec)},
-                               {"film_bytes", drv.film().bytes()},
-                               {"film_bytes_per_pixel_bin", static_cast<double>(drv.film().bytes()) / std::max(1.0, pixelBins)},
-                               {"peak_rss_bytes", peakRssBytes()}});
+            std::printf("%8d %8d %12.3f %12.3f %12.3f %14.4g %16.4g %12s %10s\n", bins, threads, med, median(photonSec),
+                        median(cameraSec), median(beamsPerSec), median(estPerSec),
+                        humanBytes(drv.film().bytes()).c_str(), humanBytes(peakRssBytes()).c_str());
+            const double pixelBins =
+                static_cast<double>(prepared.scene->camera.width) * prepared.scene->camera.height * prepared.time.bins;
+            configs.push_back(
+                {{"bins", bins},
+                 {"passes", passSec.size()},
+                 {"threads", threads},
+                 {"volume_estimator", prepared.settings.volumeEstimator},
+                 {"median_s",
+                  {{"pass", med},
+                   {"photon", median(photonSec)},
+                   {"build", median(buildSec)},
+                   {"camera", median(cameraSec)}}},
+                 {"share_of_pass",
+                  {{"photon", median(photonSec) / std::max(med, 1e-12)},
+                   {"build", median(buildSec) / std::max(med, 1e-12)},
+                   {"camera", median(cameraSec) / std::max(med, 1e-12)}}},
+                 {"per_pass",
+                  {{"camera_rays", median(rays)}, {"estimates", median(estimates)}, {"bins_splatted", median(bins1)}}},
+                 {"camera_thread_ns",
+                  {{"per_camera_ray", median(nsPerRay)},
+                   {"per_estimate", median(nsPerEstimate)},
+                   {"per_splatted_bin", median(nsPerBin)}}},
+                 {"beams_per_photon_s", median(beamsPerSec)},
+                 {"film_bytes", drv.film().bytes()},
+                 {"film_bytes_per_pixel_bin", static_cast<double>(drv.film().bytes()) / std::max(1.0, pixelBins)},
+                 {"peak_rss_bytes", peakRssBytes()}});
         }
     if (!c.json.empty()) {
         nlohmann::json j;
         j["command"] = commandLine();
         j["scene"] = c.scene;
-        j["note"] = "medians over passes; camera_thread_ns = camera-pass seconds x threads per unit of work "
-                    "(not exclusive shares); peak_rss_bytes is the process's high-water mark so far";
+        j["note"] =
+            "medians over passes; camera_thread_ns = camera-pass seconds x threads per unit of work "
+            "(not exclusive shares); peak_rss_bytes is the process's high-water mark so far";
         j["configs"] = configs;
         writeFileAtomic(c.json, j.dump(2) + "\n");
         std::printf("wrote %s\n", c.json.c_str());
@@ -148,33 +156,38 @@ void run(BenchCmd& c) {
     };
     for (const Result& r : results)
         if (const Result* b = find(c.binsList.front(), r.threads); b && b->median > 0)
-            std::printf("ratio time/pass %d bins : %d bins = %.3f%s\n", r.bins, c.binsList.front(), r.median / b->median,
+            std::printf("ratio time/pass %d bins : %d bins = %.3f%s\n", r.bins, c.binsList.front(),
+                        r.median / b->median,
                         threadCounts.size() > 1 ? (" (" + std::to_string(r.threads) + " threads)").c_str() : "");
     if (threadCounts.size() > 1)
         for (const Result& r : results)
             if (const Result* b = find(r.bins, results.front().threads); b && r.median > 0 && b != &r)
                 std::printf("speed-up %d threads over %d at %d bins = %.3f\n", r.threads, b->threads, r.bins,
                             b->median / r.median);
-    std::printf("(peak_rss is the process's high-water mark so far; beams/s = beams stored per second of photon tracing;\n"
-                " estimates/s = ray-beam estimates per second of camera pass; all threads)\n");
+    std::printf(
+        "(peak_rss is the process's high-water mark so far; beams/s = beams stored per second of photon tracing;\n"
+        " estimates/s = ray-beam estimates per second of camera pass; all threads)\n");
 }
 
 }  // namespace
 
 void registerBench(CLI::App& app) {
     auto c = std::make_shared<BenchCmd>();
-    CLI::App* cmd = app.add_subcommand("bench", "Measure time per pass, beams/s, estimates/s and memory for several bin counts");
+    CLI::App* cmd =
+        app.add_subcommand("bench", "Measure time per pass, beams/s, estimates/s and memory for several bin counts");
     cmd->add_option("scene", c->scene, "Scene file, JSON or Mitsuba 3 XML (default: scenes/cornell_medium.json)");
     cmd->add_option("--bins-list", c->binsList, "Bin counts to measure (the first is the ratio's base)")
         ->delimiter(',')
         ->transform(flags::integer(1, INT_MAX, "each a number of time bins, e.g. 1,256,1024"));
-    cmd->add_option("--threads-list", c->threadsList, "Thread counts to measure at each bin count (speed-ups reported against the first)")
+    cmd->add_option("--threads-list", c->threadsList,
+                    "Thread counts to measure at each bin count (speed-ups reported against the first)")
         ->delimiter(',')
         ->transform(flags::integer(1, 1024, "each a number of worker threads, e.g. 1,2"));
     cmd->add_option("--bench-passes", c->passes, "Passes per configuration (median reported)")
         ->transform(flags::integer(1, 100000, "passes measured per bin count"));
-    cmd->add_option("--json", c->json, "Also write the measurements (medians, stage shares, thread-ns per camera ray, "
-                                       "estimate and splatted bin, memory, the command) to FILE");
+    cmd->add_option("--json", c->json,
+                    "Also write the measurements (medians, stage shares, thread-ns per camera ray, "
+                    "estimate and splatted bin, memory, the command) to FILE");
     c->ov.add(cmd);
     cmd->callback([c] { run(*c); });
 }

@@ -25,5 +25,8 @@ inline constexpr int kExitUserError = 2;
 
 namespace tpb::app {
 // Exit code a subcommand asks for (set by its callback; main returns it).
-inline int& exitCode() { static int code = 0; return code; }
+inline int& exitCode() {
+    static int code = 0;
+    return code;
+}
 }  // namespace tpb::app

@@ -40,10 +40,14 @@ namespace {
 // "0.4 s", "12 s", "17 min", "2.3 h".
 std::string humanSeconds(double s) {
     char b[32];
-    if (s < 10.0) std::snprintf(b, sizeof b, "%.1f s", s);
-    else if (s < 120.0) std::snprintf(b, sizeof b, "%.0f s", s);
-    else if (s < 7200.0) std::snprintf(b, sizeof b, "%.0f min", s / 60.0);
-    else std::snprintf(b, sizeof b, "%.1f h", s / 3600.0);
+    if (s < 10.0)
+        std::snprintf(b, sizeof b, "%.1f s", s);
+    else if (s < 120.0)
+        std::snprintf(b, sizeof b, "%.0f s", s);
+    else if (s < 7200.0)
+        std::snprintf(b, sizeof b, "%.0f min", s / 60.0);
+    else
+        std::snprintf(b, sizeof b, "%.1f h", s / 3600.0);
     return b;
 }
 
@@ -83,8 +87,9 @@ CLI::Validator integer(int64_t lo, int64_t hi, const std::string& meaning) {
 
 CLI::Validator number(double lo, double hi, bool loOpen, const std::string& meaning) {
     const bool noHi = hi == std::numeric_limits<double>::infinity();
-    const std::string rule = noHi ? std::string("a finite number ") + (loOpen ? "> " : ">= ") + shortNumber(lo)
-                                  : std::string("a number in ") + (loOpen ? "(" : "[") + shortNumber(lo) + ", " + shortNumber(hi) + "]";
+    const std::string rule =
+        noHi ? std::string("a finite number ") + (loOpen ? "> " : ">= ") + shortNumber(lo)
+             : std::string("a number in ") + (loOpen ? "(" : "[") + shortNumber(lo) + ", " + shortNumber(hi) + "]";
     return CLI::Validator(
         [=](std::string& s) -> std::string {
             char* end = nullptr;
@@ -158,15 +163,17 @@ void RenderOverrides::add(CLI::App* cmd) {
         ->transform(integer(0, INT64_MAX, "0 = no pass limit: until --time or Ctrl-C"));
     cmd->add_option("--time", timeBudget, "Time budget in seconds")
         ->check(number(0.0, kInf, false, "seconds; 0 = no time budget"));
-    cmd->add_option("--photons", photons, "Photons traced per pass")->transform(integer(1, INT64_MAX, "photons per pass"));
+    cmd->add_option("--photons", photons, "Photons traced per pass")
+        ->transform(integer(1, INT64_MAX, "photons per pass"));
     cmd->add_option("--warmup", warmup,
                     "Warm-up passes: the first W passes trace photons/2^W, ..., photons/2 (a first picture sooner; "
                     "default 0, the viewer 3)")
         ->transform(integer(0, kMaxWarmupPasses, "0 = no warm-up"));
     cmd->add_option("--radius", radius, "Initial beam kernel radius, m (absolute)")
         ->check(number(0.0, kMaxSceneCoordinateM, true, "meters"));
-    cmd->add_flag("--auto-radius", autoRadius,
-                  "Initial radius from the photon density of a pilot pass (as \"radius\": \"auto\"; `tpb info` shows it)")
+    cmd->add_flag(
+           "--auto-radius", autoRadius,
+           "Initial radius from the photon density of a pilot pass (as \"radius\": \"auto\"; `tpb info` shows it)")
         ->excludes(cmd->get_option("--radius"));
     cmd->add_option("--alpha", alpha, "Progressive radius shrink parameter in (0, 1]")
         ->check(number(0.0, 1.0, true, "1 = no shrinking"));
@@ -190,8 +197,9 @@ void RenderOverrides::add(CLI::App* cmd) {
     std::string volumeNames, surfaceNames;
     for (const std::string& n : volumeEstimatorNames()) volumeNames += (volumeNames.empty() ? "" : " | ") + n;
     for (const std::string& n : surfaceEstimatorNames()) surfaceNames += (surfaceNames.empty() ? "" : " | ") + n;
-    cmd->add_option("--estimator", estimator,
-                    "Volume density estimator of the photon-beams method: " + volumeNames + " (docs/user/estimators.md)");
+    cmd->add_option(
+        "--estimator", estimator,
+        "Volume density estimator of the photon-beams method: " + volumeNames + " (docs/user/estimators.md)");
     cmd->add_option("--surface-estimator", surfaceEstimator, "Surface density estimator: " + surfaceNames);
     cmd->add_option("--time-kernel", timeKernel,
                     "Progressive time kernel of the estimators: none | box (width chosen from the scene) | box:WIDTH "
@@ -199,11 +207,13 @@ void RenderOverrides::add(CLI::App* cmd) {
         ->check(CLI::Validator(
             [](std::string& s) {
                 if (parseTimeKernel(s)) return std::string();
-                return s + ": allowed none, box or box:WIDTH with WIDTH > 0 in m of optical path "
+                return s +
+                       ": allowed none, box or box:WIDTH with WIDTH > 0 in m of optical path "
                        "(e.g. box:0.05)";
             },
             "none|box|box:WIDTH"));
-    cmd->add_option("--accel", accel, "Beam query backend: bvh | embree | brute")->check(CLI::IsMember({"bvh", "embree", "brute"}));
+    cmd->add_option("--accel", accel, "Beam query backend: bvh | embree | brute")
+        ->check(CLI::IsMember({"bvh", "embree", "brute"}));
 }
 
 SettingsOverrides RenderOverrides::settings() const {
@@ -234,11 +244,14 @@ SettingsOverrides RenderOverrides::settings() const {
 }
 
 void RenderOverrides::rejectBeamsOnlyFlags(const std::string& method) const {
-    const char* flag = estimator ? "--estimator" : surfaceEstimator ? "--surface-estimator" : timeKernel ? "--time-kernel" : nullptr;
+    const char* flag = estimator          ? "--estimator"
+                       : surfaceEstimator ? "--surface-estimator"
+                       : timeKernel       ? "--time-kernel"
+                                          : nullptr;
     if (!flag) return;
     throw UserError(std::string(flag) + " applies to the photon-beams estimators only; --method " + method +
-                    (method == "pt" ? " is the unbiased path tracer, which has no kernel" : " has no kernel") + ": drop " +
-                    flag + " or use --method beams");
+                    (method == "pt" ? " is the unbiased path tracer, which has no kernel" : " has no kernel") +
+                    ": drop " + flag + " or use --method beams");
 }
 
 PreparedRender loadAndBuild(const std::string& path, const RenderOverrides& ov, const LoadOptions& lo) {
@@ -276,8 +289,11 @@ PreparedRender loadAndBuild(const std::string& path, const SettingsOverrides& ov
 }
 
 nlohmann::json filmJson(const TimeBins& time) {
-    return {{"bins", time.bins}, {"start_opl_m", time.startOpl}, {"bin_width_opl_m", time.binWidth},
-            {"start_ns", time.startOpl / kC_m_per_ns}, {"bin_width_ns", time.binWidth / kC_m_per_ns}};
+    return {{"bins", time.bins},
+            {"start_opl_m", time.startOpl},
+            {"bin_width_opl_m", time.binWidth},
+            {"start_ns", time.startOpl / kC_m_per_ns},
+            {"bin_width_ns", time.binWidth / kC_m_per_ns}};
 }
 
 nlohmann::json summaryHeader(const PreparedRender& p, const char* method, size_t passes, double wallSec,
@@ -352,12 +368,14 @@ void checkTimeResponseFitsFilm(const std::string& pulse, const std::string& sens
         narrower = "a narrower --pulse or --sensor";
     }
     const double fewerBins = std::floor(time.bins * (kMaxResponseBins / span));
-    const std::string wider = fewerBins >= 1.0 ? "wider bins (--bins " + std::to_string(static_cast<long long>(fewerBins)) +
-                                                     " or fewer, or a longer film time range)"
-                                               : "wider bins (a longer film time range with fewer --bins)";
+    const std::string wider = fewerBins >= 1.0
+                                  ? "wider bins (--bins " + std::to_string(static_cast<long long>(fewerBins)) +
+                                        " or fewer, or a longer film time range)"
+                                  : "wider bins (a longer film time range with fewer --bins)";
     throw UserError(what + " spans " + ns(span) + " bins of this film (bins of " + ns(time.binWidth / kC_m_per_ns) +
                     " ns); the limit is 1048576 (2^20) bins, beyond which the response's weights are rounding "
-                    "noise: use " + wider + (narrower.empty() ? "" : ", or " + narrower));
+                    "noise: use " +
+                    wider + (narrower.empty() ? "" : ", or " + narrower));
 }
 
 int64_t warnFilmOverflow(const SceneSource& source, const TransientFilm& film) {
@@ -450,8 +468,10 @@ PreviousOutputs previousOutputs(const fs::path& dir) {
     for (const auto& f : files) {
         if (!f.is_string()) continue;
         const std::string name = f.get<std::string>();
-        if (name.rfind("frames/", 0) == 0) frames = true;
-        else if (safeRelative(name) && name.find('/') == std::string::npos) prev.files.insert(name);
+        if (name.rfind("frames/", 0) == 0)
+            frames = true;
+        else if (safeRelative(name) && name.find('/') == std::string::npos)
+            prev.files.insert(name);
     }
     prev.files.insert(kPreviewExrName);
     prev.files.insert(kPreviewPngName);
@@ -483,7 +503,8 @@ std::vector<std::string> removeOutputs(const fs::path& dir, const PreviousOutput
         const fs::path folder = dir / sub;
         if (!fs::is_directory(folder, ec)) continue;
         std::vector<std::string> names;
-        for (const fs::directory_entry& e : fs::directory_iterator(folder, ec)) names.push_back(e.path().filename().string());
+        for (const fs::directory_entry& e : fs::directory_iterator(folder, ec))
+            names.push_back(e.path().filename().string());
         for (const std::string& name : names) {
             const std::string rel = (sub / baseOfTemporary(name)).generic_string();
             removeIf(folder, (sub / name).generic_string(), name, prev.files.count(rel) > 0);
@@ -550,7 +571,9 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& command, c
     m["pid"] = ::getpid();
     m["files"] = outputs.files;
     if (!outputs.framesDir.empty())
-        m["frames"] = {{"folder", outputs.framesDir}, {"first", outputs.firstBin}, {"last", outputs.lastBin},
+        m["frames"] = {{"folder", outputs.framesDir},
+                       {"first", outputs.firstBin},
+                       {"last", outputs.lastBin},
                        {"step", outputs.binStep}};
     m["note"] = "the files the last tpb run wrote into this folder; the next run removes them first";
     writeTextFile((fs::path(dir) / kManifestName).string(), m.dump(2) + "\n");
@@ -598,19 +621,22 @@ void reportPlannedOutputs(const PreparedRender& p, const RenderOutputs& r, doubl
     if (r.noFrames) return;
     const Scene& scene = *p.scene;
     const uint64_t frames = static_cast<uint64_t>(exportFrameCount(p.time.bins, r.opt));
-    const uint64_t perFrame = static_cast<uint64_t>(scene.camera.width) * scene.camera.height * 3 *
-                              (r.opt.pixel == ExrPixel::Half ? 2 : 4);
+    const uint64_t perFrame =
+        static_cast<uint64_t>(scene.camera.width) * scene.camera.height * 3 * (r.opt.pixel == ExrPixel::Half ? 2 : 4);
     const uint64_t need = frames * perFrame;
     const double writeSec = static_cast<double>(frames) * previewExrSec;
     if (!r.quiet) {
         const bool large = writeSec > 60.0 || need > (uint64_t(1) << 30);
-        const auto about = [](double sec) { return sec < 0.1 ? std::string("under 0.1 s") : "about " + humanSeconds(sec); };
-        std::printf("frames: %llu EXR files of %dx%d (%s), up to %s uncompressed; writing them will take %s after "
-                    "the render (estimated from preview.exr: %s)%s\n",
-                    static_cast<unsigned long long>(frames), scene.camera.width, scene.camera.height,
-                    r.opt.pixel == ExrPixel::Half ? "half" : "float", humanBytes(need).c_str(), about(writeSec).c_str(),
-                    previewExrSec < 0.1 ? "under 0.1 s" : humanSeconds(previewExrSec).c_str(),
-                    large ? "; --frame-step K, --half or --no-frames write less" : "");
+        const auto about = [](double sec) {
+            return sec < 0.1 ? std::string("under 0.1 s") : "about " + humanSeconds(sec);
+        };
+        std::printf(
+            "frames: %llu EXR files of %dx%d (%s), up to %s uncompressed; writing them will take %s after "
+            "the render (estimated from preview.exr: %s)%s\n",
+            static_cast<unsigned long long>(frames), scene.camera.width, scene.camera.height,
+            r.opt.pixel == ExrPixel::Half ? "half" : "float", humanBytes(need).c_str(), about(writeSec).c_str(),
+            previewExrSec < 0.1 ? "under 0.1 s" : humanSeconds(previewExrSec).c_str(),
+            large ? "; --frame-step K, --half or --no-frames write less" : "");
         std::fflush(stdout);
     }
     struct statvfs fsInfo {};
@@ -629,15 +655,16 @@ namespace {
 // A progress bar on a terminal, a line every 10 s in a log.
 class ExportProgress {
 public:
-    ExportProgress(const char* what, bool tty, bool quiet) : what_(what), tty_(tty), quiet_(quiet), t0_(nowSec()), last_(t0_) {}
+    ExportProgress(const char* what, bool tty, bool quiet)
+        : what_(what), tty_(tty), quiet_(quiet), t0_(nowSec()), last_(t0_) {}
     ~ExportProgress() {
         if (tty_ && shown_) std::fprintf(stderr, "\n");
     }
     void operator()(int done, int total) {
         if (tty_) {
             const int width = 30, fill = total > 0 ? static_cast<int>(30.0 * done / total) : 0;
-            std::fprintf(stderr, "\r%s [%.*s%*s] %d/%d", what_, fill, "##############################", width - fill, "",
-                         done, total);
+            std::fprintf(stderr, "\r%s [%.*s%*s] %d/%d", what_, fill, "##############################", width - fill,
+                         "", done, total);
             shown_ = true;
         } else if (!quiet_ && nowSec() - last_ >= 10.0) {
             last_ = nowSec();
@@ -707,8 +734,10 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         if (r.previewEv) ev["preview.png"] = *r.previewEv;
         for (const auto& [name, e] : rep.exposureEv) ev[name] = e;
         o["exposure_ev"] = ev;
-        if (final) o["frames_written"] = rep.framesWritten;
-        else o["frames_written"] = nullptr;  // being written: the final summary replaces this one
+        if (final)
+            o["frames_written"] = rep.framesWritten;
+        else
+            o["frames_written"] = nullptr;  // being written: the final summary replaces this one
         if (!rep.error.empty()) o["error"] = rep.error;
         j["outputs"] = o;
         writeTextFile(r.out + "/summary.json", j.dump(2) + "\n");
@@ -718,7 +747,8 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         const std::vector<float> steady = steadyImage(*snap);  // one image for both files
         writeExr(r.out + "/" + kSteadyExrName, film.width(), film.height(), steady, r.opt.pixel);
         rep.kept.push_back(kSteadyExrName);
-        const float ev = writeAutoExposedPng(r.out + "/" + kSteadyPngName, film.width(), film.height(), steady, ToneMap{});
+        const float ev =
+            writeAutoExposedPng(r.out + "/" + kSteadyPngName, film.width(), film.height(), steady, ToneMap{});
         rep.kept.push_back(kSteadyPngName);
         rep.exposureEv.emplace_back(kSteadyPngName, ev);
     }
@@ -733,15 +763,18 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         if (!r.noFrames) {
             const double t0 = nowSec();
             double lastPrint = t0;
-            exportFrames(*snap, r.out + "/frames", r.opt, [&](int done, int total) {
-                rep.framesWritten = done;
-                if (tty) {
-                    std::fprintf(stderr, "\rwriting frames %d/%d", done, total);
-                } else if (!r.quiet && nowSec() - lastPrint >= 10.0) {
-                    lastPrint = nowSec();
-                    std::fprintf(stderr, "writing frames: %d/%d after %.0f s\n", done, total, lastPrint - t0);
-                }
-            }, cancel);
+            exportFrames(
+                *snap, r.out + "/frames", r.opt,
+                [&](int done, int total) {
+                    rep.framesWritten = done;
+                    if (tty) {
+                        std::fprintf(stderr, "\rwriting frames %d/%d", done, total);
+                    } else if (!r.quiet && nowSec() - lastPrint >= 10.0) {
+                        lastPrint = nowSec();
+                        std::fprintf(stderr, "writing frames: %d/%d after %.0f s\n", done, total, lastPrint - t0);
+                    }
+                },
+                cancel);
             if (tty) std::fprintf(stderr, "\n");
             if (rep.framesWritten > 0) rep.kept.push_back("frames/");
             if (cancel && cancel->load() && rep.framesWritten < rep.framesExpected) {
@@ -793,10 +826,11 @@ double checkEnergyInsideFilm(const PreparedRender& p, const TransientFilm& film,
     const TimeBins& t = film.time();
     const char* axisName = axis == TimeAxis::Real ? "real-time" : "unwarped";
     const SceneSource& d = p.source;
-    const std::string key = d.wrote("film.start_m") ? "film.start_m"
-                            : d.wrote("film.start_ns") ? "film.start_ns"
-                            : d.wrote("film.bin_width_m") ? "film.bin_width_m"
-                            : d.wrote("film.bin_width_ns") ? "film.bin_width_ns" : "film";
+    const std::string key = d.wrote("film.start_m")        ? "film.start_m"
+                            : d.wrote("film.start_ns")     ? "film.start_ns"
+                            : d.wrote("film.bin_width_m")  ? "film.bin_width_m"
+                            : d.wrote("film.bin_width_ns") ? "film.bin_width_ns"
+                                                           : "film";
     char range[160];
     std::snprintf(range, sizeof range, "%.4g to %.4g m OPL (%.4g to %.4g ns)", t.startOpl, t.endOpl(),
                   t.startOpl / kC_m_per_ns, t.endOpl() / kC_m_per_ns);
@@ -808,9 +842,10 @@ double checkEnergyInsideFilm(const PreparedRender& p, const TransientFilm& film,
         const char* side = before > 0.5 * out ? "before its start" : "after its end";
         const std::string fixIt =
             p.film.autoRange
-                ? std::string("the range is already automatic (\"range\": \"auto\" fits it to the arrivals a pilot "
-                              "pass measured) and most of the rest arrived ") + side +
-                      ": set a fixed range that covers it with film.start_m and film.bin_width_m (and bins)"
+                ? std::string(
+                      "the range is already automatic (\"range\": \"auto\" fits it to the arrivals a pilot "
+                      "pass measured) and most of the rest arrived ") +
+                      side + ": set a fixed range that covers it with film.start_m and film.bin_width_m (and bins)"
                 : std::string("most of it arrived ") + side +
                       ": fit the range with \"film\": {\"range\": \"auto\"} or widen start_m/bin_width_m (or bins)";
         std::fprintf(stderr,

@@ -112,13 +112,13 @@ struct RenderOutputs {
     bool noFrames = false, quiet = false;
     int strip = 8;
     double stripEv = 0.0;
-    bool npy = false;         // --npy: transient.npy, steady/before/after.npy, transient.json (volume_export.h)
-    bool mp4 = false;         // --mp4: transient.mp4 (picture_export.h, ffmpeg)
-    double fps = 24.0;        // --fps
-    int contactSheet = 0;     // --contact-sheet N: contact_sheet.png of N frames (0 = none)
-    ToneMap tone;             // the MP4's and contact sheet's mapping; its exposure is added to the automatic one
+    bool npy = false;      // --npy: transient.npy, steady/before/after.npy, transient.json (volume_export.h)
+    bool mp4 = false;      // --mp4: transient.mp4 (picture_export.h, ffmpeg)
+    double fps = 24.0;     // --fps
+    int contactSheet = 0;  // --contact-sheet N: contact_sheet.png of N frames (0 = none)
+    ToneMap tone;          // the MP4's and contact sheet's mapping; its exposure is added to the automatic one
     std::optional<float> previewEv;  // the EV preview.png was written with (for summary.json), if it was
-    VolumeProvenance provenance;  // for transient.json; filled after the render (provenanceOf)
+    VolumeProvenance provenance;     // for transient.json; filled after the render (provenanceOf)
 };
 // The files RenderOutputs writes for a film of `bins` bins (preview.exr/png included).
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins);

@@ -157,8 +157,11 @@ struct MethodResult {
     std::vector<double> errors(Which w) const {
         std::vector<double> e;
         for (const Row& r : rows)
-            e.push_back(w == Volume ? r.err.volume : w == Steady ? r.err.steady : w == VolumeCorrected ? r.corrVolume
-                                                   : w == VolumeL1 ? r.err.volumeL1 : r.err.steadyL1);
+            e.push_back(w == Volume            ? r.err.volume
+                        : w == Steady          ? r.err.steady
+                        : w == VolumeCorrected ? r.corrVolume
+                        : w == VolumeL1        ? r.err.volumeL1
+                                               : r.err.steadyL1);
         return e;
     }
 };
@@ -240,9 +243,10 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
         if (cx.ref.info.method == "pt" && ps.seed == cx.ref.info.seed) {
             ps.seed = cx.ref.info.seed + 1;
             if (!c.quiet)
-                std::printf("note: the reference was path traced with seed %llu; this run uses seed %llu so the two "
-                            "are independent\n",
-                            static_cast<unsigned long long>(cx.ref.info.seed), static_cast<unsigned long long>(ps.seed));
+                std::printf(
+                    "note: the reference was path traced with seed %llu; this run uses seed %llu so the two "
+                    "are independent\n",
+                    static_cast<unsigned long long>(cx.ref.info.seed), static_cast<unsigned long long>(ps.seed));
         }
         ps.method = Method::PathTracer;
         res.driver = std::make_unique<Driver>(cx.scene, ps, cx.prepared.time);
@@ -250,9 +254,9 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
     // Checkpoints: geometric in render time (or in passes without a time budget), plus --at, plus
     // the first --every-pass passes, plus the last pass.
     const bool byTime = cx.budget > 0.0;
-    std::vector<double> marks = byTime ? geometricCheckpoints(std::min(c.firstCheckpoint, 0.5 * cx.budget), cx.budget,
-                                                              c.checkpoints, c.at)
-                                       : geometricCheckpoints(1.0, static_cast<double>(cx.passes), c.checkpoints, c.at);
+    std::vector<double> marks =
+        byTime ? geometricCheckpoints(std::min(c.firstCheckpoint, 0.5 * cx.budget), cx.budget, c.checkpoints, c.at)
+               : geometricCheckpoints(1.0, static_cast<double>(cx.passes), c.checkpoints, c.at);
     size_t next = 0;
     double elapsed = 0.0, wall = 0.0, cpu = 0.0;
     const bool cpuClock = c.clock == "cpu";
@@ -292,14 +296,16 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
             take = true;
             ++next;
         }
-        const bool last = (byTime && elapsed >= cx.budget) || (cx.passes > 0 && static_cast<int64_t>(pass) == cx.passes);
+        const bool last =
+            (byTime && elapsed >= cx.budget) || (cx.passes > 0 && static_cast<int64_t>(pass) == cx.passes);
         if (take || last) record();
     }
     if (done > 0 && (res.rows.empty() || res.rows.back().passes != done)) record();
     for (const PassStats& p : res.driver->history())
-        res.peakMapBytes = std::max<uint64_t>(res.peakMapBytes, static_cast<uint64_t>(p.beams) * sizeof(Beam) +
-                                                                    static_cast<uint64_t>(p.points) * sizeof(VolumePhoton) +
-                                                                    static_cast<uint64_t>(p.surfacePhotons) * sizeof(SurfacePhoton));
+        res.peakMapBytes =
+            std::max<uint64_t>(res.peakMapBytes, static_cast<uint64_t>(p.beams) * sizeof(Beam) +
+                                                     static_cast<uint64_t>(p.points) * sizeof(VolumePhoton) +
+                                                     static_cast<uint64_t>(p.surfacePhotons) * sizeof(SurfacePhoton));
     if (!res.rows.empty()) {
         const std::vector<double> t = res.times();
         res.fitVolume = fitPowerLawSecondHalf(t, res.errors(MethodResult::Volume));
@@ -307,7 +313,8 @@ MethodResult runMethod(const ConvergeContext& cx, const std::string& method) {
         res.fitVolumeCorr = fitPowerLawSecondHalf(t, res.errors(MethodResult::VolumeCorrected));
         res.fitVolumeL1 = fitPowerLawSecondHalf(t, res.errors(MethodResult::VolumeL1));
         res.fitSteadyL1 = fitPowerLawSecondHalf(t, res.errors(MethodResult::SteadyL1));
-        res.finalPerFrame = compareWithReference(res.film(), cx.ref, cx.axis, true, cx.mask.empty() ? nullptr : &cx.mask).perFrame;
+        res.finalPerFrame =
+            compareWithReference(res.film(), cx.ref, cx.axis, true, cx.mask.empty() ? nullptr : &cx.mask).perFrame;
     }
     return res;
 }
@@ -349,9 +356,12 @@ void writeCsv(const std::string& path, const std::vector<MethodResult>& results)
             for (size_t i = 0; i < cols.size(); ++i) {
                 const json& v = cols[i].second;
                 os << (i ? "," : "");
-                if (v.is_string()) os << v.get<std::string>();
-                else if (v.is_number_integer()) os << v.get<int64_t>();
-                else if (v.is_number()) os << csvNum(v.get<double>());
+                if (v.is_string())
+                    os << v.get<std::string>();
+                else if (v.is_number_integer())
+                    os << v.get<int64_t>();
+                else if (v.is_number())
+                    os << csvNum(v.get<double>());
             }
             os << '\n';
         }
@@ -390,7 +400,8 @@ std::string gnuplotScript(const ConvergeContext& cx, const std::vector<MethodRes
          "set datafile separator ','\n"
          "set logscale xy\n"
          "set format x '%g'\nset format y '%g'\n"
-         "set xlabel '" << (cx.cmd.clock == "cpu" ? "CPU time per method, all threads (s)" : "render time per method (s)")
+         "set xlabel '"
+      << (cx.cmd.clock == "cpu" ? "CPU time per method, all threads (s)" : "render time per method (s)")
       << "'\n"
          "set ylabel 'relative RMSE against the reference'\n"
          "set grid xtics ytics mxtics mytics lc rgb '#dddddd'\n"
@@ -403,7 +414,8 @@ std::string gnuplotScript(const ConvergeContext& cx, const std::vector<MethodRes
     auto color = [&results](const std::string& m) {
         if (m == "pt") return std::string("#2471a3");
         // The photon-beams variants in the order they ran.
-        static const char* palette[] = {"#c0392b", "#27ae60", "#8e44ad", "#d68910", "#16a085", "#7f8c8d", "#e84393", "#2c3e50"};
+        static const char* palette[] = {"#c0392b", "#27ae60", "#8e44ad", "#d68910",
+                                        "#16a085", "#7f8c8d", "#e84393", "#2c3e50"};
         int k = 0;
         for (const MethodResult& r : results) {
             if (r.method == m) break;
@@ -425,10 +437,12 @@ std::string gnuplotScript(const ConvergeContext& cx, const std::vector<MethodRes
         curvesL1.push_back(curve(m, 15, true, m.fitSteadyL1.slope));
     }
     if (cx.floorVolume > 0.0)
-        curves.push_back(fmt("%.6g", cx.floorVolume) + " with lines dt 3 lw 1.5 lc rgb '#555555' title "
+        curves.push_back(fmt("%.6g", cx.floorVolume) +
+                         " with lines dt 3 lw 1.5 lc rgb '#555555' title "
                          "'own error of the reference (transient volume)'");
     if (cx.floorSteady > 0.0)
-        curves.push_back(fmt("%.6g", cx.floorSteady) + " with lines dt 4 lw 1 lc rgb '#999999' title "
+        curves.push_back(fmt("%.6g", cx.floorSteady) +
+                         " with lines dt 4 lw 1 lc rgb '#999999' title "
                          "'own error of the reference (steady image)'");
     auto plotCmd = [](const std::vector<std::string>& cs) {
         std::string plot = "plot ";
@@ -437,10 +451,12 @@ std::string gnuplotScript(const ConvergeContext& cx, const std::vector<MethodRes
     };
     auto both = [&](const std::string& name, const std::string& plot) {
         g << "set terminal svg size 900,640 dynamic font 'Helvetica,13' background rgb 'white'\n"
-             "set output '" << name << ".svg'\n"
+             "set output '"
+          << name << ".svg'\n"
           << plot << "\n"
           << "set terminal pngcairo size 900,640 font 'Helvetica,11' background rgb 'white'\n"
-             "set output '" << name << ".png'\nreplot\nset output\n";
+             "set output '"
+          << name << ".png'\nreplot\nset output\n";
     };
     both("convergence", plotCmd(curves));
     // The same against the relative mean absolute error sum |x - ref| / sum ref: robust to the rare
@@ -474,8 +490,10 @@ void writeEqualTimeStrip(const std::string& path, const ConvergeContext& cx, con
     std::fill(strip.begin(), strip.end(), bg);
     for (int r = 0; r < R; ++r)
         for (int i = 0; i < K; ++i) {
-            if (r < static_cast<int>(rows.size())) rows[r]->frame(bins[i], cx.axis, EmissionMode::Delta, img);
-            else referenceFrame(cx.ref, cx.axis, bins[i], img);
+            if (r < static_cast<int>(rows.size()))
+                rows[r]->frame(bins[i], cx.axis, EmissionMode::Delta, img);
+            else
+                referenceFrame(cx.ref, cx.axis, bins[i], img);
             const int ox = i * (W + kGap), oy = r * (H + kGap);
             for (int y = 0; y < H; ++y)
                 for (int x = 0; x < W; ++x)
@@ -522,8 +540,16 @@ void runConverge(ConvergeCmd& c) {
         printReference(c.reference, ref.info);
     }
 
-    ConvergeContext cx{c, *scene, ref, c.axis == "unwarped" ? TimeAxis::Unwarped : TimeAxis::Real, {}, -1.0, -1.0,
-                       c.ov.timeBudget.value_or(0.0), c.ov.passes.value_or(0), prepared};
+    ConvergeContext cx{c,
+                       *scene,
+                       ref,
+                       c.axis == "unwarped" ? TimeAxis::Unwarped : TimeAxis::Real,
+                       {},
+                       -1.0,
+                       -1.0,
+                       c.ov.timeBudget.value_or(0.0),
+                       c.ov.passes.value_or(0),
+                       prepared};
     cx.mask = lightPixelMask(*scene, c.maskLights);
     const std::vector<uint8_t>* maskPtr = cx.mask.empty() ? nullptr : &cx.mask;
     cx.floorVolume = referenceSelfError(ref, cx.axis, false, maskPtr);
@@ -540,8 +566,8 @@ void runConverge(ConvergeCmd& c) {
     if (c.perFrame) files.files.push_back("convergence_frames.csv");
     if (c.frames > 0) files.files.insert(files.files.end(), {"equal_time.png", "equal_time.csv"});
     if (!c.noPlot)
-        files.files.insert(files.files.end(), {"convergence.svg", "convergence.png", "convergence_l1.svg",
-                                               "convergence_l1.png"});
+        files.files.insert(files.files.end(),
+                           {"convergence.svg", "convergence.png", "convergence_l1.svg", "convergence_l1.png"});
     const OutputFolder folder(c.out, "converge", files);
     std::vector<MethodResult> results;
     {
@@ -553,7 +579,8 @@ void runConverge(ConvergeCmd& c) {
                                           : (std::to_string(cx.passes) + " passes").c_str());
             results.push_back(runMethod(cx, m));
         }
-        if (interrupted()) std::fprintf(stderr, "interrupted by %s: writing what was measured\n", interruptName().c_str());
+        if (interrupted())
+            std::fprintf(stderr, "interrupted by %s: writing what was measured\n", interruptName().c_str());
     }
     if (results.empty() || results.front().rows.empty()) {
         throwIfInterrupted("before the first pass finished");
@@ -565,9 +592,13 @@ void runConverge(ConvergeCmd& c) {
     if (c.perFrame) writePerFrameCsv(c.out + "/convergence_frames.csv", results, prepared.time);
     json j;
     j["scene"] = prepared.source.path;
-    j["reference"] = {{"path", c.reference}, {"method", ref.info.method}, {"passes", ref.info.passes},
-                      {"samples_per_pixel", ref.info.samplesPerPixel}, {"wall_seconds", ref.info.wallSeconds},
-                      {"own_error_volume", jnum(cx.floorVolume)}, {"own_error_steady", jnum(cx.floorSteady)},
+    j["reference"] = {{"path", c.reference},
+                      {"method", ref.info.method},
+                      {"passes", ref.info.passes},
+                      {"samples_per_pixel", ref.info.samplesPerPixel},
+                      {"wall_seconds", ref.info.wallSeconds},
+                      {"own_error_volume", jnum(cx.floorVolume)},
+                      {"own_error_steady", jnum(cx.floorSteady)},
                       {"own_error_estimate", ref.info.selfErrorEstimate}};
     j["resolution"] = {scene->camera.width, scene->camera.height};
     j["film"] = filmJson(prepared.time);
@@ -587,16 +618,22 @@ void runConverge(ConvergeCmd& c) {
         e["passes"] = m.rows.back().passes;
         e["elapsed_s"] = m.rows.back().elapsed;
         e["photon_map_bytes"] = m.peakMapBytes;
-        e["final"] = {{"volume", jnum(m.rows.back().err.volume)}, {"steady", jnum(m.rows.back().err.steady)},
+        e["final"] = {{"volume", jnum(m.rows.back().err.volume)},
+                      {"steady", jnum(m.rows.back().err.steady)},
                       {"steady_total_diff", jnum(m.rows.back().err.steadyTotalDiff)},
                       {"volume_corrected", jnum(m.rows.back().corrVolume)},
-                      {"volume_l1", jnum(m.rows.back().err.volumeL1)}, {"steady_l1", jnum(m.rows.back().err.steadyL1)}};
-        e["slope"] = {{"volume", jnum(m.fitVolume.slope)}, {"steady", jnum(m.fitSteady.slope)},
-                      {"volume_corrected", jnum(m.fitVolumeCorr.slope)}, {"volume_l1", jnum(m.fitVolumeL1.slope)},
-                      {"steady_l1", jnum(m.fitSteadyL1.slope)}, {"points", m.fitVolume.points}};
+                      {"volume_l1", jnum(m.rows.back().err.volumeL1)},
+                      {"steady_l1", jnum(m.rows.back().err.steadyL1)}};
+        e["slope"] = {{"volume", jnum(m.fitVolume.slope)},
+                      {"steady", jnum(m.fitSteady.slope)},
+                      {"volume_corrected", jnum(m.fitVolumeCorr.slope)},
+                      {"volume_l1", jnum(m.fitVolumeL1.slope)},
+                      {"steady_l1", jnum(m.fitSteadyL1.slope)},
+                      {"points", m.fitVolume.points}};
         json atj = json::array();
         for (double T : c.at)
-            atj.push_back({{"time_s", T}, {"volume", jnum(interpolateLogLog(t, ev, T))},
+            atj.push_back({{"time_s", T},
+                           {"volume", jnum(interpolateLogLog(t, ev, T))},
                            {"steady", jnum(interpolateLogLog(t, es, T))},
                            {"volume_corrected", jnum(interpolateLogLog(t, ec, T))},
                            {"volume_l1", jnum(interpolateLogLog(t, el, T))},
@@ -604,7 +641,8 @@ void runConverge(ConvergeCmd& c) {
         e["at"] = atj;
         json tt = json::array();
         for (double target : c.targets)
-            tt.push_back({{"target", target}, {"volume_s", jnum(timeToReach(t, ev, target))},
+            tt.push_back({{"target", target},
+                          {"volume_s", jnum(timeToReach(t, ev, target))},
                           {"steady_s", jnum(timeToReach(t, es, target))},
                           {"volume_l1_s", jnum(timeToReach(t, el, target))},
                           {"volume_s_extrapolated", jnum(m.fitVolume.timeFor(target))}});
@@ -646,8 +684,10 @@ void runConverge(ConvergeCmd& c) {
         const int rc = std::system(cmd.c_str());
         plotted = rc == 0;
         if (!plotted)
-            std::fprintf(stderr, "warning: gnuplot failed or is not installed (exit %d): no plot; install gnuplot-nox and "
-                                 "run tools/plot_convergence %s\n", rc, c.out.c_str());
+            std::fprintf(stderr,
+                         "warning: gnuplot failed or is not installed (exit %d): no plot; install gnuplot-nox and "
+                         "run tools/plot_convergence %s\n",
+                         rc, c.out.c_str());
     }
 
     // ---- report
@@ -655,10 +695,12 @@ void runConverge(ConvergeCmd& c) {
     std::printf("\nrelative RMSE against %s (%s axis, delta emission%s):\n", c.reference.c_str(), axisName.c_str(),
                 cx.mask.empty() ? "" : ", light pixels masked");
     if (cx.floorVolume >= 0.0)
-        std::printf("  the reference's own error (%s): volume %.4g, steady %.4g: smaller errors cannot be resolved; "
-                    "'corrected' = sqrt(err^2 - own^2)\n", ref.info.selfErrorEstimate.c_str(), cx.floorVolume, cx.floorSteady);
-    std::printf("  %-13s %8s %9s %11s %11s %11s %12s %10s\n", "method", "passes", "time_s", "volume", "corrected", "steady",
-                "steady_total", "map_MiB");
+        std::printf(
+            "  the reference's own error (%s): volume %.4g, steady %.4g: smaller errors cannot be resolved; "
+            "'corrected' = sqrt(err^2 - own^2)\n",
+            ref.info.selfErrorEstimate.c_str(), cx.floorVolume, cx.floorSteady);
+    std::printf("  %-13s %8s %9s %11s %11s %11s %12s %10s\n", "method", "passes", "time_s", "volume", "corrected",
+                "steady", "steady_total", "map_MiB");
     for (const MethodResult& m : results) {
         const Row& r = m.rows.back();
         std::printf("  %-13s %8lld %9.2f %11.4g %11.4g %11.4g %+11.3f%% %10.2f\n", methodLabel(m.method).c_str(),
@@ -667,18 +709,21 @@ void runConverge(ConvergeCmd& c) {
     }
     std::printf("fitted convergence slope (least squares of log error vs log time, second half of the checkpoints):\n");
     for (const MethodResult& m : results)
-        std::printf("  %-13s volume %.3f, steady %.3f, volume corrected for the reference's error %.3f; relative L1: "
-                    "volume %.3f, steady %.3f  (%d points)\n",
-                    methodLabel(m.method).c_str(), m.fitVolume.slope, m.fitSteady.slope, m.fitVolumeCorr.slope,
-                    m.fitVolumeL1.slope, m.fitSteadyL1.slope, m.fitVolume.points);
+        std::printf(
+            "  %-13s volume %.3f, steady %.3f, volume corrected for the reference's error %.3f; relative L1: "
+            "volume %.3f, steady %.3f  (%d points)\n",
+            methodLabel(m.method).c_str(), m.fitVolume.slope, m.fitSteady.slope, m.fitVolumeCorr.slope,
+            m.fitVolumeL1.slope, m.fitSteadyL1.slope, m.fitVolume.points);
     if (!c.at.empty()) {
-        std::printf("error at given times (log-log interpolation between checkpoints; RMSE volume / steady, "
-                    "relative L1 volume / steady):\n");
+        std::printf(
+            "error at given times (log-log interpolation between checkpoints; RMSE volume / steady, "
+            "relative L1 volume / steady):\n");
         for (const MethodResult& m : results) {
             std::printf("  %-13s", methodLabel(m.method).c_str());
             const std::vector<double> t = m.times();
             for (double T : c.at)
-                std::printf("  %g s: %.4g / %.4g, L1 %.4g / %.4g", T, interpolateLogLog(t, m.errors(MethodResult::Volume), T),
+                std::printf("  %g s: %.4g / %.4g, L1 %.4g / %.4g", T,
+                            interpolateLogLog(t, m.errors(MethodResult::Volume), T),
                             interpolateLogLog(t, m.errors(MethodResult::Steady), T),
                             interpolateLogLog(t, m.errors(MethodResult::VolumeL1), T),
                             interpolateLogLog(t, m.errors(MethodResult::SteadyL1), T));
@@ -686,13 +731,16 @@ void runConverge(ConvergeCmd& c) {
         }
     }
     if (!c.targets.empty()) {
-        std::printf("time to reach a relative RMSE of the transient volume (interpolated; [extrapolated from the fit]):\n");
+        std::printf(
+            "time to reach a relative RMSE of the transient volume (interpolated; [extrapolated from the fit]):\n");
         for (double target : c.targets) {
             std::printf("  %-8g", target);
             for (const MethodResult& m : results) {
                 const double tr = timeToReach(m.times(), m.errors(MethodResult::Volume), target);
-                if (std::isfinite(tr)) std::printf("  %s %9.3g s  ", m.method.c_str(), tr);
-                else std::printf("  %s [%9.3g s]", m.method.c_str(), m.fitVolume.timeFor(target));
+                if (std::isfinite(tr))
+                    std::printf("  %s %9.3g s  ", m.method.c_str(), tr);
+                else
+                    std::printf("  %s [%9.3g s]", m.method.c_str(), m.fitVolume.timeFor(target));
             }
             std::printf("\n");
         }
@@ -701,8 +749,10 @@ void runConverge(ConvergeCmd& c) {
             std::printf("  %-8g", target);
             for (const MethodResult& m : results) {
                 const double tr = timeToReach(m.times(), m.errors(MethodResult::VolumeL1), target);
-                if (std::isfinite(tr)) std::printf("  %s %9.3g s  ", m.method.c_str(), tr);
-                else std::printf("  %s  not reached", m.method.c_str());
+                if (std::isfinite(tr))
+                    std::printf("  %s %9.3g s  ", m.method.c_str(), tr);
+                else
+                    std::printf("  %s  not reached", m.method.c_str());
             }
             std::printf("\n");
         }
@@ -710,14 +760,15 @@ void runConverge(ConvergeCmd& c) {
     if (!stripK.empty()) {
         std::printf("equal-time frames (%s): relative RMSE per frame at the end of each run\n", "equal_time.png");
         for (int k : stripK) {
-            std::printf("  bin %4d (%.3f ns)", k, (prepared.time.startOpl + (k + 0.5) * prepared.time.binWidth) / kC_m_per_ns);
+            std::printf("  bin %4d (%.3f ns)", k,
+                        (prepared.time.startOpl + (k + 0.5) * prepared.time.binWidth) / kC_m_per_ns);
             for (const MethodResult& m : results) std::printf("  %s %.4g", m.method.c_str(), m.finalPerFrame[k]);
             std::printf("\n");
         }
     }
     std::printf("wrote %s/convergence.csv, convergence.json, convergence.gp%s%s%s\n", c.out.c_str(),
-                plotted ? ", convergence{,_l1}.svg, convergence{,_l1}.png" : "", c.perFrame ? ", convergence_frames.csv" : "",
-                stripK.empty() ? "" : ", equal_time.png, equal_time.csv");
+                plotted ? ", convergence{,_l1}.svg, convergence{,_l1}.png" : "",
+                c.perFrame ? ", convergence_frames.csv" : "", stripK.empty() ? "" : ", equal_time.png, equal_time.csv");
     if (interrupted() && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
 }
 
@@ -727,19 +778,22 @@ void registerConverge(CLI::App& app) {
     {
         auto c = std::make_shared<ConvergeCmd>();
         CLI::App* cmd = app.add_subcommand(
-            "converge", "Error against a reference as a function of render time: convergence.csv, a log-log plot, "
-                        "the fitted slope, an equal-time strip");
+            "converge",
+            "Error against a reference as a function of render time: convergence.csv, a log-log plot, "
+            "the fitted slope, an equal-time strip");
         cmd->add_option("scene", c->scene, "Scene file (JSON or Mitsuba 3 XML)")->required();
-        cmd->add_option("--reference", c->reference, "Reference file made by `tpb reference` (--width, --height, "
-                                                      "--bins and --max-depth default to its values)")
+        cmd->add_option("--reference", c->reference,
+                        "Reference file made by `tpb reference` (--width, --height, "
+                        "--bins and --max-depth default to its values)")
             ->required();
         cmd->add_option("-o,--out", c->out, "Output folder (created if needed)");
         cmd->add_option("--method", c->method,
                         "What to measure, one after the other with the same budget each, comma-separated: beams (the "
                         "scene's estimator, with --estimator/--time-kernel) | pt | both (= beams,pt) | an estimator "
                         "with an optional time kernel, e.g. beam1d,beam2d,point2d+box,point3d+box:0.05");
-        cmd->add_option("--clock", c->clock, "Time axis: wall (seconds of rendering) | cpu (process CPU seconds, "
-                                             "all threads; steadier on a shared machine)")
+        cmd->add_option("--clock", c->clock,
+                        "Time axis: wall (seconds of rendering) | cpu (process CPU seconds, "
+                        "all threads; steadier on a shared machine)")
             ->check(CLI::IsMember({"wall", "cpu"}));
         cmd->add_option("--axis", c->axis, "Time axis of the volume error: real | unwarped")
             ->check(CLI::IsMember({"real", "unwarped"}));
@@ -752,8 +806,9 @@ void registerConverge(CLI::App& app) {
             ->check(flags::number(0.0, std::numeric_limits<double>::infinity(), true, "seconds"));
         cmd->add_option("--every-pass", c->everyPass, "Also record each of the first N passes")
             ->transform(flags::integer(0, INT_MAX, "passes"));
-        cmd->add_flag("--per-frame", c->perFrame, "Also write the error of every frame at every checkpoint "
-                                                  "(convergence_frames.csv)");
+        cmd->add_flag("--per-frame", c->perFrame,
+                      "Also write the error of every frame at every checkpoint "
+                      "(convergence_frames.csv)");
         cmd->add_option("--frames", c->frames, "Write equal_time.png: K frames per method (rows), same exposure")
             ->transform(flags::integer(0, 4096, "frames per row; 0 = no equal_time.png"));
         cmd->add_option("--strip-ev", c->stripEv, "Extra exposure of equal_time.png, EV")

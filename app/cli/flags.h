@@ -29,5 +29,4 @@ CLI::Validator pulse();
 CLI::Validator sensor();
 }  // namespace flags
 
-
 }  // namespace tpb::app

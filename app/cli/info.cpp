@@ -34,16 +34,20 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
     const Camera& cam = s->camera;
     json j;
     j["scene"] = {{"path", path}, {"version", p.source.version}};
-    j["camera"] = {{"width", cam.width}, {"height", cam.height},
-                   {"fov_y_deg", 2.0 * std::atan(cam.tanHalfFovY) * 180.0 / kPi}, {"position", vec3(cam.position)}};
+    j["camera"] = {{"width", cam.width},
+                   {"height", cam.height},
+                   {"fov_y_deg", 2.0 * std::atan(cam.tanHalfFovY) * 180.0 / kPi},
+                   {"position", vec3(cam.position)}};
     j["bounds"] = {{"min", vec3(s->bounds.lo)}, {"max", vec3(s->bounds.hi)}, {"diagonal_m", s->bounds.diagonal()}};
-    j["geometry"] = {{"triangles", s->geometry.triangleCount()}, {"spheres", s->geometry.sphereCount()},
+    j["geometry"] = {{"triangles", s->geometry.triangleCount()},
+                     {"spheres", s->geometry.sphereCount()},
                      {"shapes", s->shapes.size()}};
     json shapes = json::array();
     for (const ShapeInfo& sh : s->shapes)
         shapes.push_back({{"name", sh.name},
-                          {"kind", sh.areaLight >= 0 ? "area light surface"
-                                   : sh.material >= 0 ? materialName(s->materials[sh.material].type) : "no material"},
+                          {"kind", sh.areaLight >= 0  ? "area light surface"
+                                   : sh.material >= 0 ? materialName(s->materials[sh.material].type)
+                                                      : "no material"},
                           {"interior_region", sh.interiorRegion > 0 ? json(sh.interiorRegion) : json(nullptr)}});
     j["shapes"] = shapes;
     json regions = json::array();
@@ -51,13 +55,18 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
         const Region& g = s->regions[r];
         json m = nullptr;
         if (g.hasMedium)
-            m = {{"sigma_s_per_m", vec3(g.medium.sigma_s)}, {"sigma_a_per_m", vec3(g.medium.sigma_a)}, {"g", g.medium.phase.g}};
-        regions.push_back({{"index", r}, {"where", r == 0 ? "outside" : "inside a shape"}, {"ior", g.ior}, {"medium", m}});
+            m = {{"sigma_s_per_m", vec3(g.medium.sigma_s)},
+                 {"sigma_a_per_m", vec3(g.medium.sigma_a)},
+                 {"g", g.medium.phase.g}};
+        regions.push_back(
+            {{"index", r}, {"where", r == 0 ? "outside" : "inside a shape"}, {"ior", g.ior}, {"medium", m}});
     }
     j["regions"] = regions;
     json lights = json::array();
     for (const Light& l : s->lights)
-        lights.push_back({{"type", lightTypeName(l.type)}, {"power_w", vec3(l.power)}, {"pulse_opl_m", l.emitOpl},
+        lights.push_back({{"type", lightTypeName(l.type)},
+                          {"power_w", vec3(l.power)},
+                          {"pulse_opl_m", l.emitOpl},
                           {"pulse_ns", l.emitOpl / kC_m_per_ns}});
     j["lights"] = lights;
     const TimeBins& t = p.time;
@@ -65,10 +74,10 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
     j["film"]["end_opl_m"] = t.endOpl();
     j["film"]["end_ns"] = t.endOpl() / kC_m_per_ns;
     j["film"]["auto_range"] = p.film.autoRange;
-    j["memory"] = {{"film_bytes", filmBytes(cam.width, cam.height, t.bins)},
-                   {"pixel_accumulator_bytes_per_thread", static_cast<uint64_t>(t.bins) * 2 * 3 * sizeof(double)},
-                   {"photon_map_bytes_per_pass_rough",
-                    static_cast<uint64_t>(ds.photonsPerPass) * 4 * (sizeof(double) * 12 + 16)}};
+    j["memory"] = {
+        {"film_bytes", filmBytes(cam.width, cam.height, t.bins)},
+        {"pixel_accumulator_bytes_per_thread", static_cast<uint64_t>(t.bins) * 2 * 3 * sizeof(double)},
+        {"photon_map_bytes_per_pass_rough", static_cast<uint64_t>(ds.photonsPerPass) * 4 * (sizeof(double) * 12 + 16)}};
     j["render"] = recordJson(settingsRecord(ds));  // the one serialisation of the settings
     j["density"] = nullptr;
     // The photon density of a pilot pass, and the radius "auto" picks from it (render/auto_radius.h).
@@ -89,26 +98,33 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
 }
 
 void printText(const nlohmann::json& j) {
-    const auto v3 = [](const nlohmann::json& a) { return std::array<double, 3>{a[0].get<double>(), a[1].get<double>(), a[2].get<double>()}; };
+    const auto v3 = [](const nlohmann::json& a) {
+        return std::array<double, 3>{a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+    };
     const auto& cam = j["camera"];
     const auto pos = v3(cam["position"]);
-    std::printf("scene      %s (version %d)\n", j["scene"]["path"].get<std::string>().c_str(), j["scene"]["version"].get<int>());
-    std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam["width"].get<int>(), cam["height"].get<int>(),
-                cam["fov_y_deg"].get<double>(), pos[0], pos[1], pos[2]);
+    std::printf("scene      %s (version %d)\n", j["scene"]["path"].get<std::string>().c_str(),
+                j["scene"]["version"].get<int>());
+    std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam["width"].get<int>(),
+                cam["height"].get<int>(), cam["fov_y_deg"].get<double>(), pos[0], pos[1], pos[2]);
     const auto lo = v3(j["bounds"]["min"]), hi = v3(j["bounds"]["max"]);
-    std::printf("bounds     (%.3g, %.3g, %.3g) - (%.3g, %.3g, %.3g), diagonal %.4g m\n", lo[0], lo[1], lo[2], hi[0], hi[1],
-                hi[2], j["bounds"]["diagonal_m"].get<double>());
+    std::printf("bounds     (%.3g, %.3g, %.3g) - (%.3g, %.3g, %.3g), diagonal %.4g m\n", lo[0], lo[1], lo[2], hi[0],
+                hi[1], hi[2], j["bounds"]["diagonal_m"].get<double>());
     std::printf("geometry   %zu triangles, %zu spheres, %zu shapes\n", j["geometry"]["triangles"].get<size_t>(),
                 j["geometry"]["spheres"].get<size_t>(), j["geometry"]["shapes"].get<size_t>());
     for (const auto& sh : j["shapes"])
-        std::printf("  shape %-20s %s%s\n", sh["name"].get<std::string>().c_str(), sh["kind"].get<std::string>().c_str(),
-                    sh["interior_region"].is_null() ? "" : (" -> region " + std::to_string(sh["interior_region"].get<int>())).c_str());
+        std::printf("  shape %-20s %s%s\n", sh["name"].get<std::string>().c_str(),
+                    sh["kind"].get<std::string>().c_str(),
+                    sh["interior_region"].is_null()
+                        ? ""
+                        : (" -> region " + std::to_string(sh["interior_region"].get<int>())).c_str());
     for (const auto& g : j["regions"]) {
-        std::printf("region %zu   %s, ior %.3g", g["index"].get<size_t>(), g["where"].get<std::string>().c_str(), g["ior"].get<double>());
+        std::printf("region %zu   %s, ior %.3g", g["index"].get<size_t>(), g["where"].get<std::string>().c_str(),
+                    g["ior"].get<double>());
         if (!g["medium"].is_null()) {
             const auto ss = v3(g["medium"]["sigma_s_per_m"]), sa = v3(g["medium"]["sigma_a_per_m"]);
-            std::printf(", sigma_s (%.3g %.3g %.3g) /m, sigma_a (%.3g %.3g %.3g) /m, g %.3g", ss[0], ss[1], ss[2], sa[0], sa[1],
-                        sa[2], g["medium"]["g"].get<double>());
+            std::printf(", sigma_s (%.3g %.3g %.3g) /m, sigma_a (%.3g %.3g %.3g) /m, g %.3g", ss[0], ss[1], ss[2],
+                        sa[0], sa[1], sa[2], g["medium"]["g"].get<double>());
         } else {
             std::printf(", no medium");
         }
@@ -116,14 +132,15 @@ void printText(const nlohmann::json& j) {
     }
     for (const auto& l : j["lights"]) {
         const auto pw = v3(l["power_w"]);
-        std::printf("light      %s, power (%.3g %.3g %.3g) W, pulse at %.4g m OPL (%.4g ns)\n", l["type"].get<std::string>().c_str(),
-                    pw[0], pw[1], pw[2], l["pulse_opl_m"].get<double>(), l["pulse_ns"].get<double>());
+        std::printf("light      %s, power (%.3g %.3g %.3g) W, pulse at %.4g m OPL (%.4g ns)\n",
+                    l["type"].get<std::string>().c_str(), pw[0], pw[1], pw[2], l["pulse_opl_m"].get<double>(),
+                    l["pulse_ns"].get<double>());
     }
     const auto& f = j["film"];
-    std::printf("film       %d bins of %.4g m OPL (%.4g ns), from %.4g to %.4g m (%.4g to %.4g ns)%s\n", f["bins"].get<int>(),
-                f["bin_width_opl_m"].get<double>(), f["bin_width_ns"].get<double>(), f["start_opl_m"].get<double>(),
-                f["end_opl_m"].get<double>(), f["start_ns"].get<double>(), f["end_ns"].get<double>(),
-                f["auto_range"].get<bool>() ? " [auto]" : "");
+    std::printf("film       %d bins of %.4g m OPL (%.4g ns), from %.4g to %.4g m (%.4g to %.4g ns)%s\n",
+                f["bins"].get<int>(), f["bin_width_opl_m"].get<double>(), f["bin_width_ns"].get<double>(),
+                f["start_opl_m"].get<double>(), f["end_opl_m"].get<double>(), f["start_ns"].get<double>(),
+                f["end_ns"].get<double>(), f["auto_range"].get<bool>() ? " [auto]" : "");
     const auto& m = j["memory"];
     std::printf("memory     transient film (2 time axes, RGB float + steady double): %s\n",
                 humanBytes(m["film_bytes"].get<uint64_t>()).c_str());
@@ -145,16 +162,19 @@ void printText(const nlohmann::json& j) {
     const auto& d = j["density"];
     if (!d.is_null()) {
         if (d["measured"].get<bool>())
-            std::printf("density    pilot pass of %lld photons (x%.3g for the pass): %s; the radius %.4g m gathers ~%.3g per ray%s\n",
-                        d["pilot_photons"].get<long long>(), d["scale_to_pass"].get<double>(), d["why"].get<std::string>().c_str(),
-                        r["radius"].get<double>(), d["gathered_per_ray"].get<double>(),
-                        d["radius_chosen_automatically"].get<bool>() ? " (chosen: \"radius\": \"auto\")" : "");
+            std::printf(
+                "density    pilot pass of %lld photons (x%.3g for the pass): %s; the radius %.4g m gathers ~%.3g per "
+                "ray%s\n",
+                d["pilot_photons"].get<long long>(), d["scale_to_pass"].get<double>(),
+                d["why"].get<std::string>().c_str(), r["radius"].get<double>(), d["gathered_per_ray"].get<double>(),
+                d["radius_chosen_automatically"].get<bool>() ? " (chosen: \"radius\": \"auto\")" : "");
         else
             std::printf("density    %s\n", d["why"].get<std::string>().c_str());
     }
     if (r.contains("volume_estimator"))
-        std::printf("estimators volume %s, surface %s, time kernel %s\n", r["volume_estimator"].get<std::string>().c_str(),
-                    r["surface_estimator"].get<std::string>().c_str(), r["time_kernel"].get<std::string>().c_str());
+        std::printf("estimators volume %s, surface %s, time kernel %s\n",
+                    r["volume_estimator"].get<std::string>().c_str(), r["surface_estimator"].get<std::string>().c_str(),
+                    r["time_kernel"].get<std::string>().c_str());
     std::printf("stages\n");
     for (const auto& st : j["stages"]) std::printf("  - %s\n", st.get<std::string>().c_str());
 }
@@ -177,7 +197,8 @@ void registerInfo(CLI::App& app) {
     auto path = std::make_shared<std::string>();
     auto ov = std::make_shared<RenderOverrides>();
     auto asJson = std::make_shared<bool>(false);
-    CLI::App* cmd = app.add_subcommand("info", "Print what a scene contains, the stages that will run and the memory needed");
+    CLI::App* cmd =
+        app.add_subcommand("info", "Print what a scene contains, the stages that will run and the memory needed");
     cmd->add_option("scene", *path, "Scene file (JSON or Mitsuba 3 XML)")->required();
     ov->add(cmd);
     cmd->add_flag("--json", *asJson,

@@ -60,8 +60,9 @@ std::string didYouMean(const CLI::App& app) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    CLI::App app{"tpb: progressive transient photon beams (Marco et al. 2017) - render, inspect and view "
-                 "time-resolved light transport in participating media"};
+    CLI::App app{
+        "tpb: progressive transient photon beams (Marco et al. 2017) - render, inspect and view "
+        "time-resolved light transport in participating media"};
     app.require_subcommand(1);
     app.set_version_flag("--version", versionText(), "Print the version, the git commit and build type, and exit");
     tpb::app::registerRender(app);

@@ -32,13 +32,15 @@ std::string defaultReferencePath(const PreparedRender& p, const std::string& met
     const Scene& scene = *p.scene;
     const std::string stem = fs::path(p.source.path).stem().string();
     const std::string m = method == "analytic-single-scattering" ? "ss" : method;
-    return "ref/" + stem + "-" + m + "-" + std::to_string(scene.camera.width) + "x" + std::to_string(scene.camera.height) +
-           "x" + std::to_string(p.time.bins) + "-d" + std::to_string(p.settings.maxDepth) + ".tpbref";
+    return "ref/" + stem + "-" + m + "-" + std::to_string(scene.camera.width) + "x" +
+           std::to_string(scene.camera.height) + "x" + std::to_string(p.time.bins) + "-d" +
+           std::to_string(p.settings.maxDepth) + ".tpbref";
 }
 
 void runReference(ReferenceCmd& c) {
     InterruptScope interrupts;  // Ctrl-C and SIGTERM: the finished passes are written (marked interrupted)
-    if (c.analytic || c.method != "beams") c.ov.rejectBeamsOnlyFlags(c.analytic ? "analytic-single-scattering" : c.method);
+    if (c.analytic || c.method != "beams")
+        c.ov.rejectBeamsOnlyFlags(c.analytic ? "analytic-single-scattering" : c.method);
     const PreparedRender prepared = loadAndBuild(c.scene, c.ov, LoadOptions{c.quiet});
     const Scene* scene = prepared.scene.get();
     const std::string method = c.analytic ? "analytic-single-scattering" : c.method;
@@ -88,22 +90,24 @@ void runReference(ReferenceCmd& c) {
 
     ReferenceVolume ref;
     if (c.analytic) {
-        if (!c.quiet) std::fprintf(stderr, "single-scattering quadrature, %d x %d rays per pixel...\n", c.subpixels, c.subpixels);
+        if (!c.quiet)
+            std::fprintf(stderr, "single-scattering quadrature, %d x %d rays per pixel...\n", c.subpixels, c.subpixels);
         ref = singleScatteringReference(*scene, prepared.time, prepared.source.path, prepared.settings, c.subpixels,
                                         c.ov.threads.value_or(0));
         throwIfInterrupted("during the single-scattering quadrature");
     } else {
         double lastPrint = 0.0;
         const bool tty = isatty(STDERR_FILENO) && !c.quiet;
-        ref = renderReference(*scene, prepared.time, prepared.source.path, job, &interruptFlag(), [&](int64_t passes, double elapsed) {
-            if (c.quiet) return;
-            if (tty) {
-                std::fprintf(stderr, "\rreference: pass %lld, %.1f s ", static_cast<long long>(passes), elapsed);
-            } else if (elapsed - lastPrint >= 30.0 || passes == 1) {
-                std::fprintf(stderr, "reference: pass %lld, %.1f s\n", static_cast<long long>(passes), elapsed);
-                lastPrint = elapsed;
-            }
-        });
+        ref = renderReference(
+            *scene, prepared.time, prepared.source.path, job, &interruptFlag(), [&](int64_t passes, double elapsed) {
+                if (c.quiet) return;
+                if (tty) {
+                    std::fprintf(stderr, "\rreference: pass %lld, %.1f s ", static_cast<long long>(passes), elapsed);
+                } else if (elapsed - lastPrint >= 30.0 || passes == 1) {
+                    std::fprintf(stderr, "reference: pass %lld, %.1f s\n", static_cast<long long>(passes), elapsed);
+                    lastPrint = elapsed;
+                }
+            });
         if (tty) std::fprintf(stderr, "\n");
         if (interrupted())
             std::fprintf(stderr, "interrupted by %s: writing the %lld finished passes (marked interrupted)\n",
@@ -122,8 +126,9 @@ void runReference(ReferenceCmd& c) {
 void printReference(const std::string& path, const ReferenceInfo& i) {
     std::printf("%s: %s, %dx%d, %d bins [%.4g, %.4g] m OPL, max depth %d", path.c_str(), i.method.c_str(), i.width,
                 i.height, i.bins, i.startOpl, i.startOpl + i.bins * i.binWidth, i.maxDepth);
-    if (i.method == "pt") std::printf(", %lld passes x %d spp, seed %llu", static_cast<long long>(i.passes), i.samplesPerPixel,
-                                      static_cast<unsigned long long>(i.seed));
+    if (i.method == "pt")
+        std::printf(", %lld passes x %d spp, seed %llu", static_cast<long long>(i.passes), i.samplesPerPixel,
+                    static_cast<unsigned long long>(i.seed));
     if (i.method == "beams") std::printf(", %lld passes", static_cast<long long>(i.passes));
     std::printf(", %.1f s%s\n", i.wallSeconds, i.interrupted ? " (interrupted)" : "");
     if (i.selfErrorReal >= 0.0)
@@ -135,18 +140,21 @@ void printReference(const std::string& path, const ReferenceInfo& i) {
 
 void registerReference(CLI::App& app) {
     auto c = std::make_shared<ReferenceCmd>();
-    CLI::App* cmd = app.add_subcommand(
-        "reference", "Render a reference transient volume (path tracer by default, or the single-scattering "
-                     "quadrature) into a .tpbref file; reused when it exists with the same settings");
+    CLI::App* cmd =
+        app.add_subcommand("reference",
+                           "Render a reference transient volume (path tracer by default, or the single-scattering "
+                           "quadrature) into a .tpbref file; reused when it exists with the same settings");
     cmd->add_option("scene", c->scene, "Scene file (JSON or Mitsuba 3 XML)")->required();
-    cmd->add_option("-o,--out", c->out, "Reference file (default: ref/<scene>-<method>-<W>x<H>x<bins>-d<depth>.tpbref)");
+    cmd->add_option("-o,--out", c->out,
+                    "Reference file (default: ref/<scene>-<method>-<W>x<H>x<bins>-d<depth>.tpbref)");
     cmd->add_option("--method", c->method, "Renderer: pt (unbiased path tracer) | beams")
         ->check(CLI::IsMember({"pt", "beams"}));
     cmd->add_option("--spp", c->spp, "Path tracer: camera paths per pixel per pass")
         ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
     cmd->add_flag("--analytic-single-scattering", c->analytic,
                   "Quadrature of single scattering (one point light in an infinite medium, no shapes)");
-    cmd->add_option("--subpixels", c->subpixels, "Quadrature: N x N rays per pixel")->transform(flags::integer(1, 64, "N x N rays per pixel"));
+    cmd->add_option("--subpixels", c->subpixels, "Quadrature: N x N rays per pixel")
+        ->transform(flags::integer(1, 64, "N x N rays per pixel"));
     cmd->add_flag("--force", c->force, "Re-render even if the file exists with the same settings");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
     c->ov.add(cmd);

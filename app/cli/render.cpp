@@ -40,11 +40,11 @@ struct RenderCmd {
     int spp = 1;
     // Checkpoints (render/checkpoint.h, cli/resume.h).
     std::string pulse = "delta", sensor = "ideal";  // --pulse, --sensor (film/time_response.h)
-    std::string resume;            // --resume DIR
-    bool outGiven = false;         // -o given (a resume writes into the checkpoint's folder otherwise)
-    bool checkpoint = false;       // --checkpoint: one when the render ends
-    double checkpointEveryMin = 0.0;  // --checkpoint-every: and every that many minutes
-    bool noCheckpoint = false;     // --no-checkpoint: none when Ctrl-C or SIGTERM stops the render
+    std::string resume;                             // --resume DIR
+    bool outGiven = false;                          // -o given (a resume writes into the checkpoint's folder otherwise)
+    bool checkpoint = false;                        // --checkpoint: one when the render ends
+    double checkpointEveryMin = 0.0;                // --checkpoint-every: and every that many minutes
+    bool noCheckpoint = false;                      // --no-checkpoint: none when Ctrl-C or SIGTERM stops the render
     bool overwriteCheckpoint = false;  // --overwrite-checkpoint: an earlier render's checkpoint in -o may go
     bool npy = false, mp4 = false, falseColour = false, noSrgb = false;
     double fps = 24.0, videoEv = 0.0;
@@ -70,11 +70,21 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
     Color emittedFlux(0.0), cutFlux(0.0);
     int64_t regionOverflows = 0;
     for (const PassStats& p : hist) {
-        per.push_back({{"pass", p.pass}, {"photons", p.photons}, {"beam_radius_m", p.beamRadius}, {"surface_radius_m", p.surfaceRadius},
-                       {"beams", p.beams}, {"points", p.points}, {"beam_pieces", p.beamPieces}, {"surface_photons", p.surfacePhotons},
-                       {"beam_estimates", p.camera.beamEstimates}, {"photon_estimates", p.camera.photonEstimates},
-                       {"photon_s", p.photonSec}, {"build_s", p.buildSec}, {"camera_s", p.cameraSec},
-                       {"pass_s", p.passSec}, {"elapsed_s", p.elapsedSec}});
+        per.push_back({{"pass", p.pass},
+                       {"photons", p.photons},
+                       {"beam_radius_m", p.beamRadius},
+                       {"surface_radius_m", p.surfaceRadius},
+                       {"beams", p.beams},
+                       {"points", p.points},
+                       {"beam_pieces", p.beamPieces},
+                       {"surface_photons", p.surfacePhotons},
+                       {"beam_estimates", p.camera.beamEstimates},
+                       {"photon_estimates", p.camera.photonEstimates},
+                       {"photon_s", p.photonSec},
+                       {"build_s", p.buildSec},
+                       {"camera_s", p.cameraSec},
+                       {"pass_s", p.passSec},
+                       {"elapsed_s", p.elapsedSec}});
         beams += p.beams;
         estimates += p.camera.beamEstimates;
         photonEst += p.camera.photonEstimates;
@@ -87,18 +97,21 @@ nlohmann::json summaryJson(const PreparedRender& p, const Driver& drv, const Exp
     const FilmStats& fs = drv.film().stats;
     const double in0 = fs.inside[0].load(), out0 = fs.outside[0].load();
     const double in1 = fs.inside[1].load(), out1 = fs.outside[1].load();
-    j["totals"] = {{"beams", beams}, {"beam_estimates", estimates}, {"photon_estimates", photonEst},
-                   {"render_seconds", passSec},
-                   {"beams_per_second", passSec > 0 ? beams / passSec : 0.0},
-                   {"beam_estimates_per_second", passSec > 0 ? estimates / passSec : 0.0},
-                   {"rejected_samples", fs.rejectedSamples.load()},
-                   {"energy_outside_film_fraction_real", in0 + out0 > 0 ? out0 / (in0 + out0) : 0.0},
-                   {"energy_outside_film_fraction_unwarped", in1 + out1 > 0 ? out1 / (in1 + out1) : 0.0},
-                   // Long beams in an unbounded medium end past the film's end; the flux they still
-                   // carry there is missing from the steady image only (photon_tracer.cpp).
-                   {"region_stack_overflows", regionOverflows},
-                   {"beam_flux_cut_fraction", luminance(emittedFlux) > 0 ? luminance(cutFlux) / luminance(emittedFlux) : 0.0},
-                   {"peak_rss_bytes", peakRssBytes()}};
+    j["totals"] = {
+        {"beams", beams},
+        {"beam_estimates", estimates},
+        {"photon_estimates", photonEst},
+        {"render_seconds", passSec},
+        {"beams_per_second", passSec > 0 ? beams / passSec : 0.0},
+        {"beam_estimates_per_second", passSec > 0 ? estimates / passSec : 0.0},
+        {"rejected_samples", fs.rejectedSamples.load()},
+        {"energy_outside_film_fraction_real", in0 + out0 > 0 ? out0 / (in0 + out0) : 0.0},
+        {"energy_outside_film_fraction_unwarped", in1 + out1 > 0 ? out1 / (in1 + out1) : 0.0},
+        // Long beams in an unbounded medium end past the film's end; the flux they still
+        // carry there is missing from the steady image only (photon_tracer.cpp).
+        {"region_stack_overflows", regionOverflows},
+        {"beam_flux_cut_fraction", luminance(emittedFlux) > 0 ? luminance(cutFlux) / luminance(emittedFlux) : 0.0},
+        {"peak_rss_bytes", peakRssBytes()}};
     return j;
 }
 
@@ -121,9 +134,12 @@ nlohmann::json summaryJsonPt(const PreparedRender& p, const Driver& drv, const E
     const FilmStats& fs = drv.film().stats;
     const double in0 = fs.inside[0].load(), out0 = fs.outside[0].load();
     const double in1 = fs.inside[1].load(), out1 = fs.outside[1].load();
-    j["totals"] = {{"camera_paths", st.cameraPaths}, {"contributions", st.contributions},
-                   {"shadow_rays", st.shadowRays}, {"laser_samples", st.laserSamples},
-                   {"depth_limited", st.depthLimited}, {"render_seconds", renderSec},
+    j["totals"] = {{"camera_paths", st.cameraPaths},
+                   {"contributions", st.contributions},
+                   {"shadow_rays", st.shadowRays},
+                   {"laser_samples", st.laserSamples},
+                   {"depth_limited", st.depthLimited},
+                   {"render_seconds", renderSec},
                    {"region_stack_overflows", st.regionOverflows},
                    {"paths_per_second", renderSec > 0 ? st.cameraPaths / renderSec : 0.0},
                    {"rejected_samples", fs.rejectedSamples.load()},
@@ -150,23 +166,32 @@ std::string storedPhotons(const PassStats& p, const Stages& stages, const Volume
 void checkFlagConflicts(const RenderCmd& c) {
     if (c.method != "beams") c.ov.rejectBeamsOnlyFlags(c.method);
     if (c.unwarp && c.realTime)
-        throw UserError("--unwarp and --real-time contradict each other: give one of them (frames are in real time "
-                        "unless --unwarp or the scene's render.unwarp asks for unwarped time)");
+        throw UserError(
+            "--unwarp and --real-time contradict each other: give one of them (frames are in real time "
+            "unless --unwarp or the scene's render.unwarp asks for unwarped time)");
     if (c.noCheckpoint && (c.checkpoint || c.checkpointEveryMin > 0.0))
         throw UserError("--no-checkpoint contradicts --checkpoint / --checkpoint-every: give one of them");
     if (c.scene.empty() && c.resume.empty())
-        throw UserError("tpb render: give a scene file (tpb render SCENE), or --resume DIR to continue a render from "
-                        "its checkpoint");
+        throw UserError(
+            "tpb render: give a scene file (tpb render SCENE), or --resume DIR to continue a render from "
+            "its checkpoint");
     // A video flag without the output it shapes would be silently ignored: say which flag is missing.
     if (c.fpsGiven && !c.mp4)
-        throw UserError("--fps sets the frame rate of transient.mp4, which only --mp4 writes: add --mp4, or drop --fps");
-    const char* look = c.videoEvGiven ? "--video-ev" : c.falseColour ? "--false-colour" : c.noSrgb ? "--no-srgb" : nullptr;
+        throw UserError(
+            "--fps sets the frame rate of transient.mp4, which only --mp4 writes: add --mp4, or drop --fps");
+    const char* look = c.videoEvGiven  ? "--video-ev"
+                       : c.falseColour ? "--false-colour"
+                       : c.noSrgb      ? "--no-srgb"
+                                       : nullptr;
     if (look && !c.mp4 && c.contactSheet == 0)
-        throw UserError(std::string(look) + " shapes transient.mp4 and contact_sheet.png, and neither is written: add "
-                        "--mp4 or --contact-sheet N, or drop " + look);
+        throw UserError(std::string(look) +
+                        " shapes transient.mp4 and contact_sheet.png, and neither is written: add "
+                        "--mp4 or --contact-sheet N, or drop " +
+                        look);
     // --preview stops before the render: a flag for the render's outputs would be silently dropped.
     if (c.previewOnly && !c.outputFlagsGiven.empty())
-        throw UserError(c.outputFlagsGiven.front() + " shapes what the render writes, and --preview stops after "
+        throw UserError(c.outputFlagsGiven.front() +
+                        " shapes what the render writes, and --preview stops after "
                         "preview.exr/png, before any photon: drop --preview to render, or drop " +
                         c.outputFlagsGiven.front());
     if (c.sppGiven && c.method != "pt")
@@ -174,13 +199,14 @@ void checkFlagConflicts(const RenderCmd& c) {
                         " traces one camera ray per pixel per pass (its progress comes from more passes or "
                         "--photons): add --method pt, or drop --spp");
     if (c.continuous && c.delta)
-        throw UserError("--continuous and --delta contradict each other: give one of them (frames are for a delta "
-                        "pulse unless --continuous or the scene's render.emission asks for continuous emission)");
+        throw UserError(
+            "--continuous and --delta contradict each other: give one of them (frames are for a delta "
+            "pulse unless --continuous or the scene's render.emission asks for continuous emission)");
 }
 
 void run(RenderCmd& c) {
-    InterruptScope interrupts;  // Ctrl-C and SIGTERM, from the start (the pilot polls them too)
-    checkFlagConflicts(c);      // (each flag's range was checked when the command line was parsed)
+    InterruptScope interrupts;          // Ctrl-C and SIGTERM, from the start (the pilot polls them too)
+    checkFlagConflicts(c);              // (each flag's range was checked when the command line was parsed)
     if (c.mp4) requireFfmpeg("--mp4");  // before hours of rendering, not after
     // Every setting is resolved and checked (prepareRender) before the first file is written (no
     // preview.exr is left behind by a bad --alpha or by photons that would not fit in memory).
@@ -207,11 +233,11 @@ void run(RenderCmd& c) {
 
     ExportOptions opt;
     opt.axis = (ds.unwarp || c.unwarp) && !c.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
-    opt.mode = (ds.emission == EmissionMode::Continuous || c.continuous) && !c.delta
-                   ? EmissionMode::Continuous : EmissionMode::Delta;
+    opt.mode = (ds.emission == EmissionMode::Continuous || c.continuous) && !c.delta ? EmissionMode::Continuous
+                                                                                     : EmissionMode::Delta;
     opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
     opt.response = *parseSensor(c.sensor, *parsePulse(c.pulse));  // (each checked when parsed)
-    checkTimeResponseFitsFilm(c.pulse, c.sensor, prepared.time);   // against the bins: before any pass or file
+    checkTimeResponseFitsFilm(c.pulse, c.sensor, prepared.time);  // against the bins: before any pass or file
     opt.step = c.frameStep;
     RenderOutputs outputs;
     outputs.out = c.out;
@@ -241,15 +267,16 @@ void run(RenderCmd& c) {
         std::printf("removed %zu files of an earlier render in %s (listed in its manifest)\n", folder.removed().size(),
                     c.out.c_str());
     if (std::find(folder.removed().begin(), folder.removed().end(), kCheckpointFile) != folder.removed().end())
-        std::fprintf(stderr, "note: removed the earlier render's %s (--overwrite-checkpoint)\n", checkpointPath.c_str());
+        std::fprintf(stderr, "note: removed the earlier render's %s (--overwrite-checkpoint)\n",
+                     checkpointPath.c_str());
 
     // Geometry/camera check before any photon is traced.
     const std::vector<float> preview = renderPreview(*scene, ds.threads);
     const double tw = nowSec();
     writeExr(c.out + "/preview.exr", scene->camera.width, scene->camera.height, preview);
     const double previewExrSec = nowSec() - tw;
-    outputs.previewEv = writeAutoExposedPng(c.out + "/preview.png", scene->camera.width, scene->camera.height,
-                                            preview, ToneMap{});
+    outputs.previewEv =
+        writeAutoExposedPng(c.out + "/preview.png", scene->camera.width, scene->camera.height, preview, ToneMap{});
     if (!c.quiet) std::printf("wrote %s/preview.exr (eye-light geometry check)\n", c.out.c_str());
     if (c.previewOnly) return;
     reportPlannedOutputs(prepared, outputs, previewExrSec);
@@ -277,7 +304,8 @@ void run(RenderCmd& c) {
             if (!c.quiet)
                 std::fprintf(stderr, "%scheckpoint (%s): %llu passes written to %s in %.2f s\n",
                              isatty(STDERR_FILENO) ? "\r" : "", when,
-                             static_cast<unsigned long long>(drv.history().size()), checkpointPath.c_str(), nowSec() - t);
+                             static_cast<unsigned long long>(drv.history().size()), checkpointPath.c_str(),
+                             nowSec() - t);
         } catch (const UserError& e) {
             // A periodic one is retried at the next period and at the end; the last one decides.
             checkpointError = e.what();
@@ -306,13 +334,13 @@ void run(RenderCmd& c) {
                 std::fprintf(stderr, "pass %llu: %.3f s\n", static_cast<unsigned long long>(p.pass), p.passSec);
         } else if (tty) {
             const int width = 30;
-            const double frac = total > 0 ? double(p.pass) / total
-                                          : (ds.timeBudgetSec > 0 ? std::min(1.0, p.elapsedSec / ds.timeBudgetSec) : 0.0);
+            const double frac = total > 0
+                                    ? double(p.pass) / total
+                                    : (ds.timeBudgetSec > 0 ? std::min(1.0, p.elapsedSec / ds.timeBudgetSec) : 0.0);
             const int fill = static_cast<int>(frac * width);
-            std::fprintf(stderr, "\r[%.*s%*s] pass %llu  r=%.3g m  %s  %.2f s/pass  %.1f s ",
-                         fill, "##############################", width - fill, "",
-                         static_cast<unsigned long long>(p.pass), p.beamRadius,
-                         storedPhotons(p, scene->stages, needs).c_str(), p.passSec, p.elapsedSec);
+            std::fprintf(stderr, "\r[%.*s%*s] pass %llu  r=%.3g m  %s  %.2f s/pass  %.1f s ", fill,
+                         "##############################", width - fill, "", static_cast<unsigned long long>(p.pass),
+                         p.beamRadius, storedPhotons(p, scene->stages, needs).c_str(), p.passSec, p.elapsedSec);
         } else if (p.pass == 1 || p.pass % 10 == 0 || (total > 0 && int64_t(p.pass) == total)) {
             std::fprintf(stderr, "pass %llu: r=%.4g m, %s, %.3f s\n", static_cast<unsigned long long>(p.pass),
                          p.beamRadius, storedPhotons(p, scene->stages, needs).c_str(), p.passSec);
@@ -351,17 +379,21 @@ void run(RenderCmd& c) {
     PathTracerStats paths;
     for (const PassStats& p : drv.history()) paths += p.paths;
     if (paths.laserSamples > 0)
-        std::fprintf(stderr, "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
-                             "light is missing from this render\n", static_cast<long long>(paths.laserSamples));
+        std::fprintf(stderr,
+                     "note: the path tracer cannot connect to lasers (%lld light samples picked one): their "
+                     "light is missing from this render\n",
+                     static_cast<long long>(paths.laserSamples));
     const OutputReport rep = writeRenderOutputs(drv.film(), outputs, [&] {
         nlohmann::json j = pt ? summaryJsonPt(prepared, drv, opt, wall) : summaryJson(prepared, drv, opt, wall);
-        if (resume) j["resumed"] = {{"checkpoint", resume->path}, {"passes", resumedPasses}, {"written", resume->info.created}};
+        if (resume)
+            j["resumed"] = {{"checkpoint", resume->path}, {"passes", resumedPasses}, {"written", resume->info.created}};
         j["checkpoint"] = checkpointWritten;
         return j;
     });
     warnFilmOverflow(prepared.source, drv.film());
     int64_t regionOverflows = 0;
-    for (const PassStats& p : drv.history()) regionOverflows += p.regionOverflows + p.camera.regionOverflows + p.paths.regionOverflows;
+    for (const PassStats& p : drv.history())
+        regionOverflows += p.regionOverflows + p.camera.regionOverflows + p.paths.regionOverflows;
     if (regionOverflows > 0)
         std::fprintf(stderr,
                      "warning: %lld paths were ended because they entered more than 7 nested dielectric/null shapes "
@@ -371,8 +403,10 @@ void run(RenderCmd& c) {
     const double outside = checkEnergyInsideFilm(prepared, drv.film(), opt.axis);
     if (!checkpointError.empty()) {
         // The outputs are written, but the render cannot be resumed: a failure, even after a signal.
-        std::fprintf(stderr, "error: the checkpoint was not written: %s; the outputs are written, but this render "
-                             "cannot be resumed\n", checkpointError.c_str());
+        std::fprintf(stderr,
+                     "error: the checkpoint was not written: %s; the outputs are written, but this render "
+                     "cannot be resumed\n",
+                     checkpointError.c_str());
         exitCode() = kExitUserError;
     }
     if (stoppedBySignal && exitCode() == 0) exitCode() = exitCodeAfterInterrupt();
@@ -380,8 +414,8 @@ void run(RenderCmd& c) {
         const FilmStats& fs = drv.film().stats;
         std::printf("%s%llu passes in %.2f s; %s; %lld rejected samples; %s%% of the energy outside the film\n",
                     pt ? "path tracer: " : "", static_cast<unsigned long long>(drv.completedPasses()), wall,
-                    writtenLine(outputs, rep).c_str(),
-                    static_cast<long long>(fs.rejectedSamples.load()), percentText(outside).c_str());
+                    writtenLine(outputs, rep).c_str(), static_cast<long long>(fs.rejectedSamples.load()),
+                    percentText(outside).c_str());
     }
 }
 
@@ -389,15 +423,19 @@ void run(RenderCmd& c) {
 
 void registerRender(CLI::App& app) {
     auto c = std::make_shared<RenderCmd>();
-    CLI::App* cmd = app.add_subcommand("render", "Render a scene headless: preview.exr, EXR frames per time bin, "
-                                                 "steady.exr and summary.json");
-    cmd->add_option("scene", c->scene, "Scene file, JSON or Mitsuba 3 XML (with --resume: the checkpoint's scene unless given)");
-    CLI::Option* out = cmd->add_option("-o,--out", c->out, "Output folder (created if needed; locked while rendering; the outputs of "
-                                        "an earlier render in it are replaced, other files are kept)");
+    CLI::App* cmd = app.add_subcommand("render",
+                                       "Render a scene headless: preview.exr, EXR frames per time bin, "
+                                       "steady.exr and summary.json");
+    cmd->add_option("scene", c->scene,
+                    "Scene file, JSON or Mitsuba 3 XML (with --resume: the checkpoint's scene unless given)");
+    CLI::Option* out = cmd->add_option("-o,--out", c->out,
+                                       "Output folder (created if needed; locked while rendering; the outputs of "
+                                       "an earlier render in it are replaced, other files are kept)");
     c->ov.add(cmd);
     cmd->add_flag("--unwarp", c->unwarp, "Frames in camera-unwarped time (camera path excluded)");
     cmd->add_flag("--real-time", c->realTime, "Frames in real time (camera path included; the default)");
-    cmd->add_flag("--continuous", c->continuous, "Frames for continuous emission (running integral of the pulse response)");
+    cmd->add_flag("--continuous", c->continuous,
+                  "Frames for continuous emission (running integral of the pulse response)");
     cmd->add_flag("--delta", c->delta, "Frames for a delta pulse (the default)");
     cmd->add_option("--pulse", c->pulse,
                     "Pulse shape the outputs are seen with: delta | gaussian:FWHM_NS | square:WIDTH_NS (a convolution "
@@ -418,19 +456,22 @@ void registerRender(CLI::App& app) {
         ->check(CLI::IsMember({"beams", "pt"}));
     cmd->add_option("--spp", c->spp, "--method pt: camera paths per pixel per pass")
         ->transform(flags::integer(1, 1 << 20, "camera paths per pixel per pass"));
-    cmd->add_flag("--npy", c->npy,
-                  "Also write the transient volume for NumPy: transient.npy (H x W x bins x 3 float32, the frames' "
-                  "axis and emission), steady.npy, before.npy, after.npy and transient.json (the time axis, the render)");
+    cmd->add_flag(
+        "--npy", c->npy,
+        "Also write the transient volume for NumPy: transient.npy (H x W x bins x 3 float32, the frames' "
+        "axis and emission), steady.npy, before.npy, after.npy and transient.json (the time axis, the render)");
     cmd->add_flag("--mp4", c->mp4, "Also write transient.mp4, the frames as a video (H.264, needs ffmpeg on PATH)");
     cmd->add_option("--fps", c->fps, "Frames per second of transient.mp4")
         ->check(flags::number(0.0, 240.0, true, "frames per second"));
     cmd->add_option("--contact-sheet", c->contactSheet,
                     "Also write contact_sheet.png: N frames in a grid, each labelled with its time (0 = none)")
         ->transform(flags::integer(0, 4096, "frames in the grid; 0 = no contact sheet"));
-    cmd->add_option("--video-ev", c->videoEv,
-                    "Extra exposure (EV) of transient.mp4 and contact_sheet.png (auto-exposed to the brightest frame first)")
+    cmd->add_option(
+           "--video-ev", c->videoEv,
+           "Extra exposure (EV) of transient.mp4 and contact_sheet.png (auto-exposed to the brightest frame first)")
         ->check(flags::number(-64.0, 64.0, false, "EV"));
-    cmd->add_flag("--false-colour", c->falseColour, "transient.mp4 and contact_sheet.png in false colour (log luminance)");
+    cmd->add_flag("--false-colour", c->falseColour,
+                  "transient.mp4 and contact_sheet.png in false colour (log luminance)");
     cmd->add_flag("--no-srgb", c->noSrgb, "transient.mp4 and contact_sheet.png without sRGB encoding");
     cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");

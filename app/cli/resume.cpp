@@ -55,7 +55,8 @@ uint64_t restoreCheckpoint(const ResumeSource& src, const PreparedRender& p, Dri
     return passes;
 }
 
-void saveCheckpoint(const std::string& path, const PreparedRender& p, const SettingsOverrides& flags, const Driver& drv) {
+void saveCheckpoint(const std::string& path, const PreparedRender& p, const SettingsOverrides& flags,
+                    const Driver& drv) {
     const std::vector<PassStats> history = drv.history();
     writeCheckpoint(path, checkpointInfoFor(p, drv.settings(), flags, history.size()), drv.film(), history);
 }

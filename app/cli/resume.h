@@ -30,6 +30,7 @@ uint64_t restoreCheckpoint(const ResumeSource& src, const PreparedRender& p, Dri
 
 // Writes `drv`'s finished passes to `path` (only between passes, or after the run: the film's
 // tiles must agree). UserError on failure (the previous checkpoint is kept).
-void saveCheckpoint(const std::string& path, const PreparedRender& p, const SettingsOverrides& flags, const Driver& drv);
+void saveCheckpoint(const std::string& path, const PreparedRender& p, const SettingsOverrides& flags,
+                    const Driver& drv);
 
 }  // namespace tpb::app

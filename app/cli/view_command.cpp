@@ -36,7 +36,8 @@ void checkScreenshotPasses(const ViewCmd& c, uint64_t resumedPasses) {
     const int64_t total = c.view.afterPasses + static_cast<int64_t>(resumedPasses);
     if (total <= *c.ov.passes) return;
     const std::string after = std::to_string(c.view.afterPasses), passes = std::to_string(*c.ov.passes);
-    std::string msg = "--passes " + passes + " and --after-passes " + after + " disagree: --passes is the total (as in "
+    std::string msg = "--passes " + passes + " and --after-passes " + after +
+                      " disagree: --passes is the total (as in "
                       "tpb render --resume) and --after-passes the passes rendered before the screenshot";
     if (resumedPasses > 0)
         msg += " beyond the checkpoint's " + std::to_string(resumedPasses) + ", so the render would go to pass " +
@@ -54,7 +55,8 @@ void run(const ViewCmd& c) {
     view.launchedAt = nowSec();  // the viewer's timeline counts from here (the scene's loading included)
     view.flags = c.ov.settings();
     if (!c.resume.empty()) {  // the checkpoint's scene and settings (cli/resume.h), refined further
-        if (c.method != "beams") throw UserError("--resume: checkpoints are of the photon beams; drop --method " + c.method);
+        if (c.method != "beams")
+            throw UserError("--resume: checkpoints are of the photon beams; drop --method " + c.method);
         const ResumeSource src = findCheckpoint(c.resume);
         checkScreenshotPasses(c, src.info.passes);
         view.flags = resumeOverrides(src.info.overrides, c.ov.settings());
@@ -81,7 +83,8 @@ void registerView(CLI::App& app) {
     ViewOptions* o = &c->view;
     CLI::App* cmd = app.add_subcommand(
         "view", "Interactive viewer: the render refines in the background while you scrub through time");
-    cmd->add_option("scene", c->scene, "Scene file, JSON or Mitsuba 3 XML (with --resume: the checkpoint's scene unless given)");
+    cmd->add_option("scene", c->scene,
+                    "Scene file, JSON or Mitsuba 3 XML (with --resume: the checkpoint's scene unless given)");
     cmd->add_option("--resume", c->resume,
                     "Go on refining the checkpoint in this folder (or this .tpbck file): same scene and settings; "
                     "\"Save checkpoint\" writes it back there")
@@ -117,8 +120,9 @@ void registerView(CLI::App& app) {
         ->needs(shot)
         ->expected(1)
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-    CLI::Option* t = cmd->add_option(
-        "--time", o->timeNs, "Time shown, in ns, within the film (the bin containing it; default: the bin of peak energy)");
+    CLI::Option* t =
+        cmd->add_option("--time", o->timeNs,
+                        "Time shown, in ns, within the film (the bin containing it; default: the bin of peak energy)");
     cmd->add_option("--bin", o->bin, "Time bin shown, 0 to bins - 1 (default: the bin of peak energy)")->excludes(t);
     CLI::Option* unwarp = cmd->add_flag("--unwarp", o->unwarp, "Start in camera-unwarped time");
     cmd->add_flag("--real-time", o->realTime, "Start in real time (the default)")->excludes(unwarp);
@@ -133,8 +137,9 @@ void registerView(CLI::App& app) {
         ->check(flags::sensor());
     cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
     cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
-    CLI::Option* steady = cmd->add_flag(
-        "--steady", o->steady, "Start on the steady-state image (the default without --bin/--time, until a time is picked)");
+    CLI::Option* steady =
+        cmd->add_flag("--steady", o->steady,
+                      "Start on the steady-state image (the default without --bin/--time, until a time is picked)");
     cmd->add_flag("--frame", o->frame, "Start on a time frame (the bin of peak energy without --bin/--time)")
         ->excludes(steady);
     cmd->add_option("--pixel", o->pixel, "Selected pixel: X Y (time profile; Y is the streak row)")->expected(2);

@@ -29,9 +29,9 @@ struct GLFWwindow;
 
 namespace tpb::app {
 
-inline constexpr int kViewerExitUserError = 2;   // the CLI's kExitUserError (view_command.cpp checks)
+inline constexpr int kViewerExitUserError = 2;  // the CLI's kExitUserError (view_command.cpp checks)
 inline constexpr double kMaxExposureEv = 40.0;  // the Display section's exposure slider spans -40 to 40 EV
-inline constexpr int64_t kMaxWindowPx = 16384;   // beyond any OpenGL 3.3 framebuffer
+inline constexpr int64_t kMaxWindowPx = 16384;  // beyond any OpenGL 3.3 framebuffer
 // The automatic bin (the brightest one, chosen while the first passes render) is found from every
 // 4th pixel in x and y: its job then reads 1/16 of the film and holds its snapshot 16x shorter (a
 // held tile makes the render copy it: with every pixel read, the first seven passes of the default
@@ -56,7 +56,7 @@ struct ViewOptions {
     // <export folder>/checkpoint.tpbck: render/checkpoint.h) so `--resume` can reproduce it.
     SettingsOverrides flags;
     std::string pulse = "delta", sensor = "ideal";  // --pulse, --sensor (film/time_response.h; checked)
-    double launchedAt = 0.0;  // nowSec() when `tpb view` started (the timeline's origin)
+    double launchedAt = 0.0;                        // nowSec() when `tpb view` started (the timeline's origin)
 };
 
 // What the user looks at (changed by the UI, never by other threads).
@@ -82,7 +82,7 @@ struct ViewState {
     bool autoBin = true;
     bool playing = false, loop = true;
     bool profileLog = false;  // the pixel profile on a log scale (kProfileDecades below its peak)
-    float speed = 8.0f;  // bins per second
+    float speed = 8.0f;       // bins per second
     double playAccum = 0.0;
     int selX = 0, selY = 0;  // pixel of the profile; selY is the streak's row
     std::string outDir = "out/view";
@@ -152,9 +152,10 @@ private:
     void fitPendingExposure(const FetchKey& key);
     void fitHiddenFrameExposure();
     void trackNoise(const FetchKey& key);  // after a frame fetch
-    void drawTimeResponse();   // View section: pulse shape and sensor response
+    void drawTimeResponse();               // View section: pulse shape and sensor response
     std::string responseNote() const;
-    const char* emissionLabel() const;  // "delta pulse", "pulse response" or "continuous emission"  // " (gaussian pulse, FWHM 1 ns; ideal sensor)" or ""
+    const char* emissionLabel()
+        const;  // "delta pulse", "pulse response" or "continuous emission"  // " (gaussian pulse, FWHM 1 ns; ideal sensor)" or ""
 
     FetchKey frameKey() const;
     FetchKey profileKey() const;
@@ -176,9 +177,9 @@ private:
     void drawMessages();
     void drawPopups();  // the confirmations: restart the accumulation, quit during an export
     void askRestart(const RenderSettings& s, const std::string& what);  // restart, asking first once passes are in
-    void requestQuit();  // Esc / Q
-    bool section(const char* label, ImGuiTreeNodeFlags flags = 0);  // a collapsing header, tracked
-    void track(const char* label);  // records the last item as control "<section>/<label>"
+    void requestQuit();                                                 // Esc / Q
+    bool section(const char* label, ImGuiTreeNodeFlags flags = 0);      // a collapsing header, tracked
+    void track(const char* label);                  // records the last item as control "<section>/<label>"
     void handleKeys(const std::vector<int>& keys);  // GLFW key codes pressed since the last frame
     void advancePlayback(double dt);
     void setBin(int bin);  // the user's choice: ends the automatic bin
@@ -188,7 +189,7 @@ private:
     // main loop (view.cpp); the screenshot-mode script (script.cpp)
     bool waitForFilm();  // draws "preparing" frames until the first driver is made; false: closed
     void drawPreparing();
-    bool settled();  // nothing left to fetch, render or export
+    bool settled();        // nothing left to fetch, render or export
     void scriptedInput();  // screenshot mode: --click / --export, injected as ImGui mouse input
     void endFrameChecks();
     void takeScreenshot(int fbWidth, int fbHeight);
@@ -217,8 +218,8 @@ private:
     bool frameComplete_ = false;
     double lastFetch_ = 0.0, fetchSec_ = 0.0;  // when and how long the last fetch took
     ExposureFit lastFit_;
-    BatchNoise noise_;     // of the picture shown (noiseKey_), from the spread between passes
-    FetchKey noiseKey_;    // its key without the passes
+    BatchNoise noise_;              // of the picture shown (noiseKey_), from the spread between passes
+    FetchKey noiseKey_;             // its key without the passes
     uint64_t hiddenFitPasses_ = 0;  // the passes the frames' exposure was last fitted to behind the steady image
 
     std::future<BinEnergyResult> binEnergyJob_;
@@ -255,9 +256,9 @@ private:
     ImVec2 imageMin_{0, 0}, imageSize_{0, 0};
     ImVec2 canvasMin_{0, 0}, canvasSize_{0, 0};  // the panel's area for the image
     float imageZoom_ = 1.0f;
-    ImageViewport view_;  // fitted, or the user's zoom and pan
+    ImageViewport view_;                                    // fitted, or the user's zoom and pan
     std::vector<AxisTick> streakTicksNs_, profileTicksNs_;  // as drawn (screenshot report)
-    std::vector<AxisTick> colourBarTicks_;  // value: position on the bar (0..1), label: film luminance
+    std::vector<AxisTick> colourBarTicks_;                  // value: position on the bar (0..1), label: film luminance
 
     bool snapRequested_ = false;  // F12 / the button: save the window to the export folder
     int snapCount_ = 0;
@@ -274,7 +275,6 @@ private:
     std::string scriptError_;  // a --click that could not be done
     int exitCode_ = 0;
 };
-
 
 // Keys pressed (GLFW codes) since the UI last handled them: the GLFW key callback's and the
 // script's (view.cpp).

@@ -71,9 +71,7 @@ void Viewer::adopted(const std::string& why, uint64_t resumedPasses) {
     std::fflush(stdout);
 }
 
-float Viewer::binCentreOpl(int bin) const {
-    return static_cast<float>(time_.startOpl + (bin + 0.5) * time_.binWidth);
-}
+float Viewer::binCentreOpl(int bin) const { return static_cast<float>(time_.startOpl + (bin + 0.5) * time_.binWidth); }
 
 FetchKey Viewer::frameKey() const {
     FetchKey k;

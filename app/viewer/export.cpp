@@ -91,7 +91,8 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
         }
         if (req.profile && !cancel_) {
             step("pixel profile");
-            const std::string path = req.dir + "/" + profileName(req.x, req.y, outputTag(req.axis, req.mode, req.response));
+            const std::string path =
+                req.dir + "/" + profileName(req.x, req.y, outputTag(req.axis, req.mode, req.response));
             exportProfileCsv(film, req.x, req.y, path, opt);
             wrote(path);
             ++done_;
@@ -102,12 +103,12 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
             const int base = done_.load();
             int n = 0;
             try {
-                n = exportFrames(film, dir, opt, [&](int d, int) { done_ = base + (n = d); }, &cancel_);
+                n = exportFrames(
+                    film, dir, opt, [&](int d, int) { done_ = base + (n = d); }, &cancel_);
             } catch (...) {  // a full disk: the frames written are marked as a partial set, if it can be
                 try {
                     markFramesComplete(dir, n, frames);
-                } catch (const std::exception&) {
-                }
+                } catch (const std::exception&) {}
                 throw;
             }
             markFramesComplete(dir, n, frames);
@@ -138,7 +139,8 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
             step("MP4");
             const std::string path = req.dir + "/" + mp4Name(outputTag(req.axis, req.mode, req.response));
             const int base = done_.load();
-            if (exportMp4(film, path, opt, req.tone, req.fps, [&](int d, int) { done_ = base + d; }, &cancel_) > 0)
+            if (exportMp4(
+                    film, path, opt, req.tone, req.fps, [&](int d, int) { done_ = base + d; }, &cancel_) > 0)
                 wrote(path);
         }
         if (cancel_) {

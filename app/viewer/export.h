@@ -22,17 +22,17 @@ namespace tpb::app {
 struct ExportRequest {
     std::string dir = "out/view";
     bool frame = false, allFrames = false, steady = false, streak = false, profile = false;
-    bool volume = false;       // volume_<tag>/: transient.npy & co (film/volume_export.h)
-    bool mp4 = false;          // transient_<tag>.mp4 (film/picture_export.h, ffmpeg)
-    bool contactSheet = false; // contact_sheet_<tag>.png
+    bool volume = false;        // volume_<tag>/: transient.npy & co (film/volume_export.h)
+    bool mp4 = false;           // transient_<tag>.mp4 (film/picture_export.h, ffmpeg)
+    bool contactSheet = false;  // contact_sheet_<tag>.png
     int bin = 0, row = 0, x = 0, y = 0;
     TimeAxis axis = TimeAxis::Real;
     EmissionMode mode = EmissionMode::Delta;
-    ToneMap tone;              // the MP4's and contact sheet's mapping: what the screen shows
+    ToneMap tone;  // the MP4's and contact sheet's mapping: what the screen shows
     double fps = 24.0;
     int sheetFrames = 16;
-    std::string scenePath;     // for transient.json
-    TimeResponse response;     // pulse shape and sensor response shown (film/time_response.h)
+    std::string scenePath;  // for transient.json
+    TimeResponse response;  // pulse shape and sensor response shown (film/time_response.h)
 };
 
 // File names: film/output_names.h, each tagged with outputTag(axis, mode, response).

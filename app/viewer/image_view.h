@@ -9,9 +9,9 @@ inline constexpr float kMinImageZoom = 1.0f / 64.0f, kMaxImageZoom = 256.0f;  //
 inline constexpr float kFitMarginPx = 12.0f;  // left and right of a fitted image: the streak row's markers
 
 struct ImageViewport {
-    bool fit = true;                   // fitted to the panel, centred (the other fields unused)
-    float zoom = 1.0f;                 // screen pixels per film pixel
-    float centreX = 0, centreY = 0;    // the film point (film pixels) at the panel's centre
+    bool fit = true;                 // fitted to the panel, centred (the other fields unused)
+    float zoom = 1.0f;               // screen pixels per film pixel
+    float centreX = 0, centreY = 0;  // the film point (film pixels) at the panel's centre
 };
 
 // The image's top-left corner in the panel (pixels from the panel's top-left) and its zoom.

@@ -42,8 +42,8 @@ public:
     double relativeError() const;
 
 private:
-    std::vector<double> prevSum_;            // W_{n-1} m_{n-1} per pixel
-    std::vector<double> sumW_x_, sumW_x2_;   // sum over batches of w x and w x^2 per pixel
+    std::vector<double> prevSum_;           // W_{n-1} m_{n-1} per pixel
+    std::vector<double> sumW_x_, sumW_x2_;  // sum over batches of w x and w x^2 per pixel
     double prevWeight_ = 0.0, sumW_ = 0.0;
     int batches_ = 0;
 };

@@ -30,9 +30,9 @@ namespace {
 
 // The keys a script can press (--click key:NAME), as GLFW codes; -1 for another name.
 int scriptedKey(const std::string& name) {
-    const std::pair<const char*, int> keys[] = {{"Escape", GLFW_KEY_ESCAPE}, {"Q", GLFW_KEY_Q},   {"F", GLFW_KEY_F},
-                                                {"1", GLFW_KEY_1},           {"Left", GLFW_KEY_LEFT}, {"Right", GLFW_KEY_RIGHT},
-                                                {"Space", GLFW_KEY_SPACE}};
+    const std::pair<const char*, int> keys[] = {
+        {"Escape", GLFW_KEY_ESCAPE}, {"Q", GLFW_KEY_Q},         {"F", GLFW_KEY_F},        {"1", GLFW_KEY_1},
+        {"Left", GLFW_KEY_LEFT},     {"Right", GLFW_KEY_RIGHT}, {"Space", GLFW_KEY_SPACE}};
     for (const auto& [n, code] : keys)
         if (name == n) return code;
     return -1;

@@ -109,11 +109,11 @@ void refuseForeignCheckpoint(const std::string& path, const std::vector<std::str
         const CheckpointInfo info = readCheckpointInfo(path);
         what = "the checkpoint of another render (" + std::to_string(info.passes) + " passes of " + info.scene +
                ", written " + info.created + ")";
-    } catch (const UserError&) {
-    }
+    } catch (const UserError&) {}
     throw UserError(path, 0, "",
-                    "holds " + what + "; the viewer does not replace it: choose another folder in the Export "
-                    "section, or continue that render with `tpb view --resume " +
+                    "holds " + what +
+                        "; the viewer does not replace it: choose another folder in the Export "
+                        "section, or continue that render with `tpb view --resume " +
                         std::filesystem::path(path).parent_path().string() + "`");
 }
 
@@ -138,8 +138,8 @@ void ViewerSession::pollCheckpoint() {
     if (checkpointStage_ == CheckpointStage::WaitingForPassEnd) {
         const std::vector<PassStats> history = driver_->history();
         const auto snap = driver_->snapshot();
-        const bool between = snap->minPasses() == snap->maxPasses() &&
-                             snap->minPasses() == static_cast<int64_t>(history.size());
+        const bool between =
+            snap->minPasses() == snap->maxPasses() && snap->minPasses() == static_cast<int64_t>(history.size());
         if (!between) return;  // a pass is still being added (paused takes effect after it)
         const std::string path = (std::filesystem::path(checkpointFolder_) / kCheckpointFile).string();
         std::shared_ptr<FolderLock> lock;
@@ -173,11 +173,13 @@ void ViewerSession::pollCheckpoint() {
         return;
     const std::string err = checkpointJob_.get();
     const std::string path = (std::filesystem::path(checkpointFolder_) / kCheckpointFile).string();
-    status_ = err.empty() ? "checkpoint of " + std::to_string(driver_->history().size()) + " passes written to " + path +
-                                " (tpb render --resume " + checkpointFolder_ + ")"
+    status_ = err.empty() ? "checkpoint of " + std::to_string(driver_->history().size()) + " passes written to " +
+                                path + " (tpb render --resume " + checkpointFolder_ + ")"
                           : "checkpoint failed: " + err;
-    if (err.empty()) ownCheckpoints_.push_back(path);
-    else checkpointFailed_ = true;
+    if (err.empty())
+        ownCheckpoints_.push_back(path);
+    else
+        checkpointFailed_ = true;
     std::fprintf(err.empty() ? stdout : stderr, "%s\n", status_.c_str());
     std::fflush(stdout);
     checkpointStage_ = CheckpointStage::Idle;

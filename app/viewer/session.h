@@ -93,7 +93,7 @@ private:
     TimeBins time_;
     SettingsOverrides flags_;
     Wake wake_;
-    std::shared_ptr<Driver> driver_;           // null until the first one is adopted
+    std::shared_ptr<Driver> driver_;          // null until the first one is adopted
     std::future<PreparedDriver> prepareJob_;  // the first driver, made while the window shows
     std::shared_ptr<Driver> preview_;
     uint64_t generation_ = 0;

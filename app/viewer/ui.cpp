@@ -22,9 +22,8 @@ namespace tpb::app {
 
 namespace {
 
-constexpr ImGuiWindowFlags kPanel = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
-                                    ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings |
-                                    ImGuiWindowFlags_NoBringToFrontOnFocus;
+constexpr ImGuiWindowFlags kPanel = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                                    ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus;
 
 constexpr ImU32 kTickColour = IM_COL32(200, 200, 210, 220);  // axis ticks and their labels
 
@@ -173,7 +172,8 @@ void Viewer::drawUi() {
     ImGui::SetNextWindowPos(ImVec2(left, 0));
     ImGui::SetNextWindowSize(ImVec2(ds.x - left, topH));
     section_ = "Image";
-    if (ImGui::Begin("Image", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse)) drawImagePanel();
+    if (ImGui::Begin("Image", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse))
+        drawImagePanel();
     ImGui::End();
 
     ImGui::SetNextWindowPos(ImVec2(left, topH));
@@ -254,7 +254,8 @@ void Viewer::drawControls() {
             st_.autoFrame = true;
         }
         track("Continuous emission");
-        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Light on from the pulse instant (running sum of the delta response)");
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("Light on from the pulse instant (running sum of the delta response)");
         drawTimeResponse();
     }
 
@@ -277,8 +278,9 @@ void Viewer::drawControls() {
         if (st_.display.falseColor) {
             ImGui::SliderFloat("decades", &st_.display.decades, 1.0f, 12.0f, "%.1f");
             track("decades");
-            hint("log10 luminance over the decades below the white point: blue (dim) to red; "
-                 "white = clipped, black = no energy");
+            hint(
+                "log10 luminance over the decades below the white point: blue (dim) to red; "
+                "white = clipped, black = no energy");
         }
     }
     drawProgressSection();
@@ -329,11 +331,12 @@ void drawFilmStats(const FilmStats& fs, TimeAxis shownAxis) {
         ImGui::TextColored(ImVec4(1.0f, 0.75f, 0.2f, 1.0f), "warning: %lld rejected, %lld overflowed (hover)", rejected,
                            overflowed);
         if (ImGui::IsItemHovered())
-            ImGui::SetTooltip("%lld non-finite (NaN/Inf) estimates were rejected (they are not in the film).\n"
-                              "%lld pixel sums would have exceeded the film's float images (3.4e38) and were dropped\n"
-                              "from their passes (those pixels are too dark): lower the lights' power (the\n"
-                              "film scales with it).",
-                              rejected, overflowed);
+            ImGui::SetTooltip(
+                "%lld non-finite (NaN/Inf) estimates were rejected (they are not in the film).\n"
+                "%lld pixel sums would have exceeded the film's float images (3.4e38) and were dropped\n"
+                "from their passes (those pixels are too dark): lower the lights' power (the\n"
+                "film scales with it).",
+                rejected, overflowed);
     } else {
         ImGui::TextDisabled("rejected samples 0, overflowed pixels 0");
     }
@@ -344,9 +347,10 @@ void drawFilmStats(const FilmStats& fs, TimeAxis shownAxis) {
         const double beforePct = 100.0 * before / total, afterPct = 100.0 * std::max(0.0, out - before) / total;
         ImGui::Text("outside the film %.2g %% (%.2g before, %.2g after)", 100.0 * out / total, beforePct, afterPct);
         if (ImGui::IsItemHovered())
-            ImGui::SetTooltip("Of the energy that reached the camera, on the %s axis:\n%.3g %% arrived before the "
-                              "film's start, %.3g %% after its end.",
-                              shownAxis == TimeAxis::Real ? "real-time" : "camera-unwarped", beforePct, afterPct);
+            ImGui::SetTooltip(
+                "Of the energy that reached the camera, on the %s axis:\n%.3g %% arrived before the "
+                "film's start, %.3g %% after its end.",
+                shownAxis == TimeAxis::Real ? "real-time" : "camera-unwarped", beforePct, afterPct);
     } else {
         ImGui::TextDisabled("outside the film -");
     }
@@ -361,10 +365,13 @@ void Viewer::drawProgressSection() {
     const PassStats last = driver().lastPass();
     const bool running = driver().running();
     const bool failed = !running && driver().failure();
-    const char* state = failed ? "stopped by an error, see below" : !running ? "finished"
-                        : driver().paused() ? "paused" : "rendering";
+    const char* state = failed              ? "stopped by an error, see below"
+                        : !running          ? "finished"
+                        : driver().paused() ? "paused"
+                                            : "rendering";
     if (s.passes > 0)
-        ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes), state);
+        ImGui::Text("pass %llu / %lld  (%s)", static_cast<unsigned long long>(done), static_cast<long long>(s.passes),
+                    state);
     else
         ImGui::Text("pass %llu  (%s)", static_cast<unsigned long long>(done), state);
     ImGui::SameLine();  // on the pass row: the Export buttons stay in view in an 800-pixel window
@@ -375,10 +382,11 @@ void Viewer::drawProgressSection() {
         ImGui::ProgressBar(0.0f, ImVec2(-1, 0), "no pass limit");
     // Always these rows, with "-" until the first pass is in.
     if (s.method == Method::PathTracer) {
-        ImGui::Text("path tracer: %d sample%s per pixel per pass", s.samplesPerPixel, s.samplesPerPixel == 1 ? "" : "s");
+        ImGui::Text("path tracer: %d sample%s per pixel per pass", s.samplesPerPixel,
+                    s.samplesPerPixel == 1 ? "" : "s");
         if (done > 0)
-            ImGui::Text("camera paths per pass %lld  (%lld connections)", static_cast<long long>(last.paths.cameraPaths),
-                        static_cast<long long>(last.paths.shadowRays));
+            ImGui::Text("camera paths per pass %lld  (%lld connections)",
+                        static_cast<long long>(last.paths.cameraPaths), static_cast<long long>(last.paths.shadowRays));
         else
             ImGui::TextDisabled("camera paths per pass -");
     } else if (s.method == Method::Preview) {
@@ -390,8 +398,9 @@ void Viewer::drawProgressSection() {
         ImGui::Text("kernel radius %.4g m (surface %.4g m)", last.beamRadius, last.surfaceRadius);
         char photons[64];
         if (warmup)
-            std::snprintf(photons, sizeof photons, "%lld photons, warm-up %llu/%d", static_cast<long long>(last.photons),
-                          static_cast<unsigned long long>(last.pass), s.warmupPasses);
+            std::snprintf(photons, sizeof photons, "%lld photons, warm-up %llu/%d",
+                          static_cast<long long>(last.photons), static_cast<unsigned long long>(last.pass),
+                          s.warmupPasses);
         else
             std::snprintf(photons, sizeof photons, "%lld photons", static_cast<long long>(last.photons));
         // What the volume estimator gathers from: beams, photon points (point2d/point3d) or both.
@@ -403,19 +412,22 @@ void Viewer::drawProgressSection() {
         else
             ImGui::Text("beams per pass %lld  (%s)", static_cast<long long>(last.beams), photons);
         if (warmup && ImGui::IsItemHovered())
-            ImGui::SetTooltip("the first %d passes trace photons/2^%d ... photons/2 for a first picture sooner\n"
-                              "(Render settings: warm-up passes; --warmup)", s.warmupPasses, s.warmupPasses);
+            ImGui::SetTooltip(
+                "the first %d passes trace photons/2^%d ... photons/2 for a first picture sooner\n"
+                "(Render settings: warm-up passes; --warmup)",
+                s.warmupPasses, s.warmupPasses);
     } else {
         ImGui::TextDisabled(failed ? "kernel radius -" : "kernel radius -  (first pass in progress...)");
         ImGui::TextDisabled("stored per pass -");
     }
     if (done > 0) {
         ImGui::Text("time per pass %.3f s", last.passSec);
-        ImGui::TextDisabled("trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec,
-                            last.cameraSec);
+        ImGui::TextDisabled("trace %.2f s, build %.2f s, camera %.2f s", last.photonSec, last.buildSec, last.cameraSec);
         // How fast the picture came (issue 15): the first fetched image with light in it.
-        if (firstLightSec_ >= 0.0) ImGui::Text("total time %.2f s  (first light after %.2f s)", last.elapsedSec, firstLightSec_);
-        else ImGui::Text("total time %.2f s", last.elapsedSec);
+        if (firstLightSec_ >= 0.0)
+            ImGui::Text("total time %.2f s  (first light after %.2f s)", last.elapsedSec, firstLightSec_);
+        else
+            ImGui::Text("total time %.2f s", last.elapsedSec);
     } else {
         ImGui::TextDisabled("time per pass -");
         ImGui::TextDisabled("trace -, build -, camera -");
@@ -426,8 +438,10 @@ void Viewer::drawProgressSection() {
     const char* pause = running && driver().paused() ? "Resume###render" : "Pause###render";
     ImGui::BeginDisabled(!running);
     if (ImGui::Button(pause, ImVec2(80, 0))) {
-        if (driver().paused()) driver().resume();
-        else driver().pause();
+        if (driver().paused())
+            driver().resume();
+        else
+            driver().pause();
     }
     ImGui::EndDisabled();
     track(pause);
@@ -444,8 +458,9 @@ void Viewer::drawProgressSection() {
     ImGui::EndDisabled();
     track("Save checkpoint");
     if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
-        ImGui::SetTooltip("the film and its passes to <export folder>/checkpoint.tpbck, between passes;\n"
-                          "go on later with tpb render --resume FOLDER or tpb view --resume FOLDER");
+        ImGui::SetTooltip(
+            "the film and its passes to <export folder>/checkpoint.tpbck, between passes;\n"
+            "go on later with tpb render --resume FOLDER or tpb view --resume FOLDER");
 }
 
 void Viewer::drawNoise() {
@@ -455,17 +470,19 @@ void Viewer::drawNoise() {
         ImGui::TextDisabled("noise -");
     } else {
         // Colour: red above 10 %, yellow above 2 %, green below (a clean picture to the eye).
-        const ImVec4 c = e > 0.10 ? ImVec4(1.0f, 0.45f, 0.4f, 1.0f)
-                         : e > 0.02 ? ImVec4(1.0f, 0.85f, 0.3f, 1.0f) : ImVec4(0.5f, 0.9f, 0.5f, 1.0f);
+        const ImVec4 c = e > 0.10   ? ImVec4(1.0f, 0.45f, 0.4f, 1.0f)
+                         : e > 0.02 ? ImVec4(1.0f, 0.85f, 0.3f, 1.0f)
+                                    : ImVec4(0.5f, 0.9f, 0.5f, 1.0f);
         ImGui::TextColored(c, "noise %.*f %%", e < 0.1 ? 1 : 0, 100.0 * e);
     }
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("%d batches of passes so far (known from 2 on).\n"
-                          "The picture's relative standard error: RMS over the pixels of the standard error of\n"
-                          "each pixel's value, over the mean pixel value (luminance). Estimated from the spread of\n"
-                          "the batches of passes this picture was read at (restarts on a change of time, axis,\n"
-                          "emission or view). It falls as 1/sqrt(passes); the kernels' blur (bias) is not in it.",
-                          noise_.batches());
+        ImGui::SetTooltip(
+            "%d batches of passes so far (known from 2 on).\n"
+            "The picture's relative standard error: RMS over the pixels of the standard error of\n"
+            "each pixel's value, over the mean pixel value (luminance). Estimated from the spread of\n"
+            "the batches of passes this picture was read at (restarts on a change of time, axis,\n"
+            "emission or view). It falls as 1/sqrt(passes); the kernels' blur (bias) is not in it.",
+            noise_.batches());
 }
 
 // Pulse shape and sensor response (film/time_response.h): a convolution along time applied when
@@ -491,8 +508,9 @@ void Viewer::drawTimeResponse() {
     if (ImGui::Combo("##pulse", &p, pulses, 3)) r.pulse = static_cast<PulseShape>(p);
     track("pulse");
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("the source's pulse: gaussian (FWHM in ns, centred on the emission instant) or square (on\n"
-                          "for WIDTH ns from the emission instant); the delta response convolved along time, no re-render");
+        ImGui::SetTooltip(
+            "the source's pulse: gaussian (FWHM in ns, centred on the emission instant) or square (on\n"
+            "for WIDTH ns from the emission instant); the delta response convolved along time, no re-render");
     if (r.pulse != PulseShape::Delta) {
         ImGui::SameLine(0, 2);
         ImGui::SetNextItemWidth(56);
@@ -508,7 +526,8 @@ void Viewer::drawTimeResponse() {
     if (ImGui::Combo("##sensor", &q, sensors, 3)) r.sensor = static_cast<SensorShape>(q);
     track("sensor");
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("the detector's time response: gaussian timing jitter (FWHM in ns) or exponential decay (TAU in ns)");
+        ImGui::SetTooltip(
+            "the detector's time response: gaussian timing jitter (FWHM in ns) or exponential decay (TAU in ns)");
     if (r.sensor != SensorShape::Ideal) {
         ImGui::SameLine(0, 2);
         ImGui::SetNextItemWidth(56);
@@ -523,8 +542,10 @@ void Viewer::drawTimeResponse() {
     // keep the last response and say why.
     if (const double span = responseSpanBins(r, time_.binWidth); !(span <= kMaxResponseBins)) {
         char b[200];
-        std::snprintf(b, sizeof b, "pulse/sensor not applied: it spans %.3g bins of this film, the limit is 2^20; "
-                      "narrow it (or render with fewer --bins)", span);
+        std::snprintf(b, sizeof b,
+                      "pulse/sensor not applied: it spans %.3g bins of this film, the limit is 2^20; "
+                      "narrow it (or render with fewer --bins)",
+                      span);
         session_.setStatus(b);
         return;
     }
@@ -547,13 +568,15 @@ bool Viewer::drawEstimatorSettings() {
     for (const std::string& n : names) labels.push_back(n.c_str());
     SettingsOverrides o;
     std::string what;
-    if (ImGui::Combo("volume estimator", &e, labels.data(), static_cast<int>(labels.size())) && names[e] != cur.volumeEstimator) {
+    if (ImGui::Combo("volume estimator", &e, labels.data(), static_cast<int>(labels.size())) &&
+        names[e] != cur.volumeEstimator) {
         o.volumeEstimator = names[e];
         what = "estimator " + names[e];
     }
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("beam1d / beam2d: beams x camera ray with a 1D / 2D kernel; point2d / point3d: photon points\n"
-                          "with a 2D kernel across the ray / a 3D kernel (docs/user/estimators.md)");
+        ImGui::SetTooltip(
+            "beam1d / beam2d: beams x camera ray with a 1D / 2D kernel; point2d / point3d: photon points\n"
+            "with a 2D kernel across the ray / a 3D kernel (docs/user/estimators.md)");
     track("volume estimator");
     const char* kernels[] = {"none", "box"};
     int k = cur.timeKernel.kind == TimeKernelKind::Box ? 1 : 0;
@@ -562,8 +585,9 @@ bool Viewer::drawEstimatorSettings() {
         what = std::string("time kernel ") + kernels[k];
     }
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("smooths every estimate along time with a box whose width shrinks with the radius\n"
-                          "(docs/theory/derivations.md)");
+        ImGui::SetTooltip(
+            "smooths every estimate along time with a box whose width shrinks with the radius\n"
+            "(docs/theory/derivations.md)");
     track("time kernel");
     if (cur.timeKernel.kind == TimeKernelKind::Box) {
         ImGui::InputDouble("time kernel width (m)", &edit_.timeKernel.width, 0.0, 0.0, "%.6g");
@@ -640,9 +664,10 @@ void Viewer::drawSettingsSection() {
         session_.setStatus("auto radius: " + rp.why);
     }
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("the initial radius from a pilot pass's photon density: a camera ray through the\n"
-                          "medium gathers about %.0f beams (%.0f photon points) per pass (--auto-radius)",
-                          kAutoBeamsPerRay, kAutoPointsPerRay);
+        ImGui::SetTooltip(
+            "the initial radius from a pilot pass's photon density: a camera ray through the\n"
+            "medium gathers about %.0f beams (%.0f photon points) per pass (--auto-radius)",
+            kAutoBeamsPerRay, kAutoPointsPerRay);
     track("auto radius");
     const int64_t one = 1, ten = 10;
     ImGui::InputScalar("pass limit (0: none)", ImGuiDataType_S64, &edit_.passes, &one, &ten);
@@ -650,8 +675,8 @@ void Viewer::drawSettingsSection() {
     track("pass limit (0: none)");
     if (!apply) return;
     const RenderSettings& cur = driver().settings();
-    if (edit_.photonsPerPass == cur.photonsPerPass && edit_.warmupPasses == cur.warmupPasses && edit_.alpha == cur.alpha &&
-        edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
+    if (edit_.photonsPerPass == cur.photonsPerPass && edit_.warmupPasses == cur.warmupPasses &&
+        edit_.alpha == cur.alpha && edit_.beamRadius0 == cur.beamRadius0 && edit_.passes == cur.passes)
         return;
     // The edited fields as overrides, checked by the one validate() (render_settings.h); everything
     // else (seed, threads, surface radius...) as before.
@@ -791,8 +816,9 @@ void Viewer::drawExportSection() {
     if (ImGui::Button("Volume (.npy)")) go = r.volume = true;
     track("Volume (.npy)");
     if (ImGui::IsItemHovered())
-        ImGui::SetTooltip("transient.npy (H x W x bins x 3 float32) + steady/before/after.npy and transient.json\n"
-                          "(time axis, render) for numpy.load, in volume_<axis>_<emission>/");
+        ImGui::SetTooltip(
+            "transient.npy (H x W x bins x 3 float32) + steady/before/after.npy and transient.json\n"
+            "(time axis, render) for numpy.load, in volume_<axis>_<emission>/");
     ImGui::SameLine();
     if (ImGui::Button("MP4")) go = r.mp4 = true;
     track("MP4");
@@ -812,7 +838,8 @@ void Viewer::drawExportSection() {
 void Viewer::drawMessages() {
     // The export in progress, the render's error, the last action's status, the last export.
     if (session_.exportJob().busy()) {
-        ImGui::ProgressBar(session_.exportJob().progress(), ImVec2(-70, 0), session_.exportJob().progressLabel().c_str());
+        ImGui::ProgressBar(session_.exportJob().progress(), ImVec2(-70, 0),
+                           session_.exportJob().progressLabel().c_str());
         ImGui::SameLine();
         if (ImGui::Button("Cancel")) session_.exportJob().cancel();
         track("Cancel");
@@ -836,12 +863,13 @@ void Viewer::drawMessages() {
 void Viewer::drawImagePanel() {
     const int w = scene_.camera.width, h = scene_.camera.height;
     // The title row: what is shown, and the zoom buttons at its right end.
-    const float buttonsW = ImGui::CalcTextSize("Fit 1:1").x + 4.0f * ImGui::GetStyle().FramePadding.x +
-                           ImGui::GetStyle().ItemSpacing.x;
+    const float buttonsW =
+        ImGui::CalcTextSize("Fit 1:1").x + 4.0f * ImGui::GetStyle().FramePadding.x + ImGui::GetStyle().ItemSpacing.x;
     ImGui::PushTextWrapPos(ImGui::GetContentRegionMax().x - buttonsW - ImGui::GetStyle().ItemSpacing.x);
     if (st_.showSteady) {
         const bool fromPreview = session_.preview() && frameKey_.passes > driver().completedPasses();
-        ImGui::TextWrapped("Steady state (all time), %llu passes%s%s", static_cast<unsigned long long>(frameKey_.passes),
+        ImGui::TextWrapped("Steady state (all time), %llu passes%s%s",
+                           static_cast<unsigned long long>(frameKey_.passes),
                            fromPreview ? " (the preview's, until the film catches up)" : "",
                            st_.steadyUntilTime ? "  -  pick a time (slider, Left/Right, Play) to see the pulse" : "");
     } else {
@@ -866,9 +894,9 @@ void Viewer::drawImagePanel() {
     const float barH = st_.display.falseColor ? 2.0f * ImGui::GetTextLineHeightWithSpacing() + 6.0f : 0.0f;
     avail.y = std::max(avail.y - barH, 1.0f);
     const ImVec2 c0 = ImGui::GetCursorScreenPos();
-    ImGui::InvisibleButton("##canvas", ImVec2(std::max(avail.x, 1.0f), std::max(avail.y, 1.0f)),
-                           ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight |
-                               ImGuiButtonFlags_MouseButtonMiddle);
+    ImGui::InvisibleButton(
+        "##canvas", ImVec2(std::max(avail.x, 1.0f), std::max(avail.y, 1.0f)),
+        ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
     const bool hovered = ImGui::IsItemHovered();
     const ImagePlacement pl = placeImage(view_, avail.x, avail.y, w, h);
     const ImVec2 p0(c0.x + pl.x, c0.y + pl.y);
@@ -877,8 +905,8 @@ void Viewer::drawImagePanel() {
     ImGuiIO& io = ImGui::GetIO();
     if (hovered && io.MouseWheel != 0.0f)  // zoom about the pointer
         view_ = zoomAbout(pl, std::pow(1.25f, io.MouseWheel), io.MousePos.x - c0.x, io.MousePos.y - c0.y);
-    if (ImGui::IsItemActive() && (ImGui::IsMouseDragging(ImGuiMouseButton_Right) ||
-                                  ImGui::IsMouseDragging(ImGuiMouseButton_Middle))) {
+    if (ImGui::IsItemActive() &&
+        (ImGui::IsMouseDragging(ImGuiMouseButton_Right) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle))) {
         view_ = panBy(pl, io.MouseDelta.x, io.MouseDelta.y);
     }
     ImDrawList* dl = ImGui::GetWindowDrawList();
@@ -957,9 +985,10 @@ void Viewer::drawColourBar(ImVec2 at, float width) {
         colourBarTicks_.push_back({t, label});
     }
     if (ImGui::IsMouseHoveringRect(ImVec2(x0, at.y), ImVec2(x1, at.y + barH)))
-        ImGui::SetTooltip("false colour: log10 luminance (film units) over %.1f decades below the white point;\n"
-                          "black = no energy, white = clipped (above the white point)",
-                          static_cast<double>(decades));
+        ImGui::SetTooltip(
+            "false colour: log10 luminance (film units) over %.1f decades below the white point;\n"
+            "black = no energy, white = clipped (above the white point)",
+            static_cast<double>(decades));
 }
 
 namespace {

@@ -30,9 +30,7 @@ std::atomic<int> gCloseSignal{0};  // the signal that closed the window, 0 = non
 std::atomic<int> gStopSignals{0};  // Ctrl-C and SIGTERM received (a second one cancels an export)
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler only touches lock-free atomics");
 
-void onGlfwError(int code, const char* msg) {
-    gGlfwError = msg ? msg : "GLFW error " + std::to_string(code);
-}
+void onGlfwError(int code, const char* msg) { gGlfwError = msg ? msg : "GLFW error " + std::to_string(code); }
 
 // Ctrl-C, SIGTERM and SIGHUP (a closed terminal) close the window like its close button: the
 // export or checkpoint being written is finished (~Viewer). After a hangup SIGPIPE is ignored (a
@@ -148,7 +146,11 @@ std::vector<int>& pressedKeys() { return gKeys; }
 
 Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, const ViewOptions& opt,
                GLFWwindow* window, const std::string& resumePath)
-    : prepared_(prepared), scene_(*prepared.scene), time_(prepared.time), scenePath_(prepared.source.path), opt_(opt),
+    : prepared_(prepared),
+      scene_(*prepared.scene),
+      time_(prepared.time),
+      scenePath_(prepared.source.path),
+      opt_(opt),
       window_(window),
       // The steady preview while the film is allocated (session.h): not on a resume (the checkpoint
       // has passes to show) nor in screenshot mode (the picture is of --after-passes).
@@ -166,11 +168,13 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
     const RenderSettings& rd = settings;
     st_.axis = (rd.unwarp || opt.unwarp) && !opt.realTime ? TimeAxis::Unwarped : TimeAxis::Real;
     st_.mode = (rd.emission == EmissionMode::Continuous || opt.continuous) && !opt.delta ? EmissionMode::Continuous
-                                                                                        : EmissionMode::Delta;
+                                                                                         : EmissionMode::Delta;
     // --bin and --time were checked against the film (runView). Without them, the bin of peak
     // energy once light arrives (updateBinEnergy): bin 0 is often before any light.
-    if (opt.bin) setBin(*opt.bin);
-    else if (opt.timeNs) setBin(time_.binOf(*opt.timeNs * kC_m_per_ns));
+    if (opt.bin)
+        setBin(*opt.bin);
+    else if (opt.timeNs)
+        setBin(time_.binOf(*opt.timeNs * kC_m_per_ns));
     st_.autoBin = !opt.bin && !opt.timeNs;
     if (opt.exposure) {
         st_.evFrame = st_.evSteady = static_cast<float>(*opt.exposure);
@@ -274,8 +278,8 @@ void Viewer::run() {
     int extraFrames = 3;  // after an event, draw a few frames so ImGui settles
     while (!glfwWindowShouldClose(window_) && gCloseSignal.load() == 0) {
         const bool busyDriver = driver().running() && !driver().paused();
-        const bool animate =
-            shot || st_.playing || session_.exportJob().busy() || profileJob_.valid() || binEnergyJob_.valid() || !frameComplete_;
+        const bool animate = shot || st_.playing || session_.exportJob().busy() || profileJob_.valid() ||
+                             binEnergyJob_.valid() || !frameComplete_;
         if (animate || extraFrames > 0) {
             glfwPollEvents();
             if (extraFrames > 0) --extraFrames;
@@ -408,13 +412,14 @@ int runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::s
     RenderSettings ds = prepared.settings;
     const bool shot = !o.screenshot.empty();
     if (shot) {  // run exactly N passes (beyond a resumed checkpoint's), then take the picture
-        ds.passes = o.afterPasses + (resumePath.empty() ? 0 : static_cast<int64_t>(readCheckpointInfo(resumePath).passes));
+        ds.passes =
+            o.afterPasses + (resumePath.empty() ? 0 : static_cast<int64_t>(readCheckpointInfo(resumePath).passes));
         ds.timeBudgetSec = 0.0;
     }
     if (o.windowSize.size() != 2 || o.windowSize[0] < 64 || o.windowSize[1] < 64)
         throw UserError("--window-size needs two sizes >= 64");
-    if (o.pixel.size() == 2 && (o.pixel[0] < 0 || o.pixel[1] < 0 || o.pixel[0] >= scene->camera.width ||
-                                o.pixel[1] >= scene->camera.height))
+    if (o.pixel.size() == 2 &&
+        (o.pixel[0] < 0 || o.pixel[1] < 0 || o.pixel[0] >= scene->camera.width || o.pixel[1] >= scene->camera.height))
         throw UserError("--pixel " + std::to_string(o.pixel[0]) + " " + std::to_string(o.pixel[1]) +
                         " is outside the image: X is 0 to " + std::to_string(scene->camera.width - 1) + ", Y 0 to " +
                         std::to_string(scene->camera.height - 1));
@@ -426,7 +431,8 @@ int runViewer(const PreparedRender& prepared, const ViewOptions& o, const std::s
     int code = 0;
     {
         Viewer viewer(prepared, ds, o, window.get(), resumePath);
-        std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n", prepared.source.path.c_str());
+        std::printf("window open, rendering %s (close the window or press Ctrl-C to quit)\n",
+                    prepared.source.path.c_str());
         std::fflush(stdout);
         viewer.run();
         viewer.finishBeforeClosing([] { return gStopSignals.load(); });

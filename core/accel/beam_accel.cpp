@@ -20,9 +20,10 @@ void sortBeamPieces(std::vector<BeamPiece>& hits, size_t from) {
     std::sort(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
               [](const BeamPiece& a, const BeamPiece& b) { return beamPieceKey(a) < beamPieceKey(b); });
     // Embree may visit a primitive twice (spatial splits); keep one hit per (beam, piece).
-    hits.erase(std::unique(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
-                           [](const BeamPiece& a, const BeamPiece& b) { return a.beam == b.beam && a.piece == b.piece; }),
-               hits.end());
+    hits.erase(
+        std::unique(hits.begin() + static_cast<std::ptrdiff_t>(from), hits.end(),
+                    [](const BeamPiece& a, const BeamPiece& b) { return a.beam == b.beam && a.piece == b.piece; }),
+        hits.end());
 }
 
 namespace {
@@ -38,7 +39,7 @@ struct Piece {
 // Piece k of the n of beam `b` (every backend cuts the beams with these expressions: the same pieces).
 Piece beamPiece(const Beam& beam, uint32_t b, uint32_t k, uint32_t n) {
     return {beam.origin, beam.dir, beam.length * k / n, k + 1 == n ? beam.length : beam.length * (k + 1) / n,
-            b, k, beam.region};
+            b,           k,        beam.region};
 }
 
 void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece>& pieces) {
@@ -53,7 +54,9 @@ void makePieces(const std::vector<Beam>& beams, double radius, std::vector<Piece
 }
 
 // Points as zero-length pieces: the axis is the point itself (direction 0, sbLo = sbHi = 0).
-Piece pointPiece(const VolumePhoton& point, uint32_t k) { return {point.position, Vec3(0.0), 0.0, 0.0, k, 0, point.region}; }
+Piece pointPiece(const VolumePhoton& point, uint32_t k) {
+    return {point.position, Vec3(0.0), 0.0, 0.0, k, 0, point.region};
+}
 
 void makePointPieces(const std::vector<VolumePhoton>& points, std::vector<Piece>& pieces) {
     pieces.clear();
@@ -96,7 +99,6 @@ void forChunks(size_t n, int threads, const F& f) {
 
 BeamPiece candidate(const Piece& p) { return {p.beam, p.piece, p.sbLo, p.sbHi}; }
 
-
 class BruteForceBeams final : public BeamAccel {
 public:
     using BeamAccel::build;
@@ -112,7 +114,8 @@ public:
     void candidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out,
                     const CandidateTest& test) const override {
         for (const Piece& p : pieces_)
-            if (p.region == region && test(p.sbLo, p.sbHi, p.origin, p.dir)) out.push_back(candidate(p));  // already in (beam, piece) order
+            if (p.region == region && test(p.sbLo, p.sbHi, p.origin, p.dir))
+                out.push_back(candidate(p));  // already in (beam, piece) order
     }
     void boxCandidates(const Vec3&, const Vec3&, double, int region, std::vector<BeamPiece>& out,
                        PieceAxes& axes) const override {
@@ -211,7 +214,8 @@ public:
         const size_t nb = beams.size();
         first_.resize(nb + 1);
         first_[0] = 0;
-        for (size_t b = 0; b < nb; ++b) first_[b + 1] = first_[b] + beamPieceCount(beams[b].length, support.pieceRadius);
+        for (size_t b = 0; b < nb; ++b)
+            first_[b + 1] = first_[b] + beamPieceCount(beams[b].length, support.pieceRadius);
         const size_t n = first_[nb];
         boxes_.resize(n);
         beamOf_.resize(n);
@@ -228,7 +232,8 @@ public:
         });
         storeInOrder(n, threads, [&](uint32_t i) {
             const uint32_t b = beamOf_[i];
-            return beamPiece(beams[b], b, static_cast<uint32_t>(i - first_[b]), static_cast<uint32_t>(first_[b + 1] - first_[b]));
+            return beamPiece(beams[b], b, static_cast<uint32_t>(i - first_[b]),
+                             static_cast<uint32_t>(first_[b + 1] - first_[b]));
         });
     }
     void build(const std::vector<VolumePhoton>& points, double radius, int threads) override {
@@ -266,7 +271,9 @@ private:
 
 class EmbreeBeams final : public IndexedPieces {
 public:
-    ~EmbreeBeams() override { if (scene_) rtcReleaseScene(scene_); }
+    ~EmbreeBeams() override {
+        if (scene_) rtcReleaseScene(scene_);
+    }
 
     using BeamAccel::candidates;
     void candidates(const Vec3& o, const Vec3& d, double sMax, int region, std::vector<BeamPiece>& hits,
@@ -304,7 +311,7 @@ private:
         const EmbreeBeams* self;
         int region;
         std::vector<BeamPiece>* hits;
-        const CandidateTest* test;  // candidates(): keep what it accepts
+        const CandidateTest* test;   // candidates(): keep what it accepts
         std::vector<uint32_t>* ids;  // boxCandidates(): note every piece of the region
     };
 
@@ -328,7 +335,8 @@ private:
         rh.ray.dir_z = static_cast<float>(d.z);
         rh.ray.tnear = 0.0f;
         // Pad the float ray so Embree's culling never drops a piece the double test would accept.
-        rh.ray.tfar = std::isfinite(sMax) ? static_cast<float>(paddedEnd(sMax)) : std::numeric_limits<float>::infinity();
+        rh.ray.tfar =
+            std::isfinite(sMax) ? static_cast<float>(paddedEnd(sMax)) : std::numeric_limits<float>::infinity();
         rh.ray.mask = 0xFFFFFFFFu;
         rh.ray.flags = 0;
         rh.ray.time = 0.0f;

@@ -36,7 +36,8 @@ public:
 
 private:
     glm::i64vec3 cellOf(const Vec3& p) const {
-        return glm::i64vec3(static_cast<int64_t>(std::floor(p.x * invCell_)), static_cast<int64_t>(std::floor(p.y * invCell_)),
+        return glm::i64vec3(static_cast<int64_t>(std::floor(p.x * invCell_)),
+                            static_cast<int64_t>(std::floor(p.y * invCell_)),
                             static_cast<int64_t>(std::floor(p.z * invCell_)));
     }
     uint64_t hash(const glm::i64vec3& c) const {

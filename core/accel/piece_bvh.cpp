@@ -182,9 +182,7 @@ PieceBvh::Split PieceBvh::splitRange(uint32_t begin, uint32_t end, int depth) co
 }
 
 // Range j of a split at `depth` is a leaf slot: one box, or at the depth cap.
-bool PieceBvh::isLeaf(const Split& s, int j, int depth) {
-    return s.r[j][1] - s.r[j][0] == 1 || depth + 2 >= kMaxDepth;
-}
+bool PieceBvh::isLeaf(const Split& s, int j, int depth) { return s.r[j][1] - s.r[j][0] == 1 || depth + 2 >= kMaxDepth; }
 
 void PieceBvh::beginNode(Node4& node) { node.interior = node.single = node.several = 0; }
 

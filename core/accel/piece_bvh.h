@@ -192,7 +192,7 @@ private:
     struct Leaf {
         uint32_t first, count;  // positions [first, first + count) in order_
     };
-    std::vector<Leaf> leaves_;  // the leaves of several boxes (at the depth cap)
+    std::vector<Leaf> leaves_;                  // the leaves of several boxes (at the depth cap)
     std::vector<uint64_t> keys_, scratchKeys_;  // sort keys, sorted after build()
 };
 

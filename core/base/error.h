@@ -15,7 +15,9 @@ class UserError : public std::runtime_error {
 public:
     UserError(std::string file, int line, std::string key, const std::string& message)
         : std::runtime_error(format(file, line, key, message)),
-          file_(std::move(file)), line_(line), key_(std::move(key)) {}
+          file_(std::move(file)),
+          line_(line),
+          key_(std::move(key)) {}
     explicit UserError(const std::string& message) : std::runtime_error(message), line_(0) {}
 
     const std::string& file() const { return file_; }
@@ -23,8 +25,7 @@ public:
     const std::string& key() const { return key_; }
 
 private:
-    static std::string format(const std::string& file, int line, const std::string& key,
-                              const std::string& message) {
+    static std::string format(const std::string& file, int line, const std::string& key, const std::string& message) {
         // (built with append: GCC 12 warns falsely on chained operator+ here)
         std::string s;
         s.reserve(file.size() + key.size() + message.size() + 16);
@@ -61,5 +62,7 @@ inline std::string shortNumber(double v) {
 
 }  // namespace tpb
 
-#define TPB_CHECK(cond) \
-    do { if (!(cond)) ::tpb::checkFailed(#cond, __FILE__, __LINE__); } while (0)
+#define TPB_CHECK(cond)                                             \
+    do {                                                            \
+        if (!(cond)) ::tpb::checkFailed(#cond, __FILE__, __LINE__); \
+    } while (0)

@@ -43,9 +43,13 @@ struct LargeBufferAllocator {
     void deallocate(T* p, size_t) noexcept { std::free(p); }
 
     template <class U>
-    bool operator==(const LargeBufferAllocator<U>&) const { return true; }
+    bool operator==(const LargeBufferAllocator<U>&) const {
+        return true;
+    }
     template <class U>
-    bool operator!=(const LargeBufferAllocator<U>&) const { return false; }
+    bool operator!=(const LargeBufferAllocator<U>&) const {
+        return false;
+    }
 };
 
 }  // namespace tpb

@@ -79,8 +79,14 @@ inline void coordinateSystem(const Vec3& n, Vec3& t, Vec3& b) {
 struct Bounds3 {
     Vec3 lo{kInf, kInf, kInf};
     Vec3 hi{-kInf, -kInf, -kInf};
-    void expand(const Vec3& p) { lo = glm::min(lo, p); hi = glm::max(hi, p); }
-    void expand(const Bounds3& b) { lo = glm::min(lo, b.lo); hi = glm::max(hi, b.hi); }
+    void expand(const Vec3& p) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    void expand(const Bounds3& b) {
+        lo = glm::min(lo, b.lo);
+        hi = glm::max(hi, b.hi);
+    }
     bool valid() const { return lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z; }
     double diagonal() const { return valid() ? glm::length(hi - lo) : 0.0; }
     Vec3 center() const { return 0.5 * (lo + hi); }

@@ -16,7 +16,8 @@ uint64_t maxFilmBytes() {
         uint64_t v = 0;
         const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
         if (ec != std::errc() || ptr != s.data() + s.size() || v == 0)
-            throw UserError("", 0, "TPB_MAX_FILM_BYTES", "expected a positive whole number of bytes, got \"" + s + "\"");
+            throw UserError("", 0, "TPB_MAX_FILM_BYTES",
+                            "expected a positive whole number of bytes, got \"" + s + "\"");
         return v;
     }
     const long pages = sysconf(_SC_PHYS_PAGES);
@@ -38,7 +39,10 @@ std::string humanBytes(uint64_t bytes) {
     if (bytes < 1024) return std::to_string(bytes) + " B";
     double v = static_cast<double>(bytes);
     int u = 0;
-    while (v >= 1024.0 && u < 6) { v /= 1024.0; ++u; }
+    while (v >= 1024.0 && u < 6) {
+        v /= 1024.0;
+        ++u;
+    }
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.*f %s", v < 10.0 ? 2 : 1, v, units[u]);
     return buf;

@@ -15,10 +15,18 @@ namespace tpb {
 
 class PauseGate {
 public:
-    void pause() { update([](bool& p, bool&) { p = true; }); }
-    void resume() { update([](bool& p, bool&) { p = false; }); }
-    void stop() { update([](bool&, bool& s) { s = true; }); }
-    void rearm() { update([](bool&, bool& s) { s = false; }); }  // a new run: not stopped, paused as it was
+    void pause() {
+        update([](bool& p, bool&) { p = true; });
+    }
+    void resume() {
+        update([](bool& p, bool&) { p = false; });
+    }
+    void stop() {
+        update([](bool&, bool& s) { s = true; });
+    }
+    void rearm() {
+        update([](bool&, bool& s) { s = false; });
+    }  // a new run: not stopped, paused as it was
     bool paused() const {
         std::lock_guard<std::mutex> g(mutex_);
         return paused_;
@@ -35,8 +43,10 @@ public:
         const auto stop = [&] { return stopped_ || (alsoStop && alsoStop->load()); };
         while (paused_ && !stop()) {
             if (beforeSleep) beforeSleep();
-            if (alsoStop) cv_.wait_for(lk, std::chrono::milliseconds(20));
-            else cv_.wait(lk);
+            if (alsoStop)
+                cv_.wait_for(lk, std::chrono::milliseconds(20));
+            else
+                cv_.wait(lk);
         }
         return !stop();
     }

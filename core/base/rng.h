@@ -18,8 +18,8 @@ enum class Stream : uint64_t { Photon = 1, Camera = 2, PathTracer = 3, Test = 4 
 class Rng {
 public:
     Rng(uint64_t seed, Stream stream, uint64_t pass, uint64_t index) {
-        const uint64_t key = splitmix64(seed ^ splitmix64(static_cast<uint64_t>(stream) * 0x632BE59BD9B4E019ull +
-                                                          splitmix64(pass + 0x1234567ull)));
+        const uint64_t key = splitmix64(
+            seed ^ splitmix64(static_cast<uint64_t>(stream) * 0x632BE59BD9B4E019ull + splitmix64(pass + 0x1234567ull)));
         inc_ = (splitmix64(key ^ index) << 1u) | 1u;
         state_ = 0;
         next32();

@@ -40,7 +40,10 @@ inline std::string closestName(std::string_view word, const std::vector<std::str
     size_t bestD = SIZE_MAX;
     for (const std::string& c : candidates) {
         const size_t d = editDistance(word, c);
-        if (d < bestD) { bestD = d; best = &c; }
+        if (d < bestD) {
+            bestD = d;
+            best = &c;
+        }
     }
     const size_t longest = best ? std::max(word.size(), best->size()) : 0;
     if (!best || bestD > 2 || 2 * bestD >= longest) return "";
@@ -72,13 +75,17 @@ inline std::string shortest(double v) {
 // rewritten by shortest(), for people; words with digits in them ("beam2d", a hash) are kept.
 inline std::string withShortestNumbers(const std::string& s) {
     const auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; };
-    const auto numeric = [](char c) { return std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'e' || c == 'E' || c == '+' || c == '-'; };
+    const auto numeric = [](char c) {
+        return std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == 'e' || c == 'E' || c == '+' || c == '-';
+    };
     std::string out;
     size_t i = 0;
     while (i < s.size()) {
-        const bool starts = (std::isdigit(static_cast<unsigned char>(s[i])) || s[i] == '-') && (i == 0 || !word(s[i - 1]));
+        const bool starts =
+            (std::isdigit(static_cast<unsigned char>(s[i])) || s[i] == '-') && (i == 0 || !word(s[i - 1]));
         size_t j = i;
-        if (starts) while (j < s.size() && numeric(s[j])) ++j;
+        if (starts)
+            while (j < s.size() && numeric(s[j])) ++j;
         if (starts && (j == s.size() || !word(s[j]))) {
             const std::string token = s.substr(i, j - i);
             char* end = nullptr;

@@ -54,7 +54,8 @@ protected:
     template <class List>
     const std::vector<BeamPiece>* sharedList(const CameraSegment& seg, EstimatorScratch& scratch, List&& list) const {
         SegmentBundle& bundle = scratch.bundle;
-        if (!(pass_.bundleSlack > 0.0) || !bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack))
+        if (!(pass_.bundleSlack > 0.0) ||
+            !bundle.contains(seg.ray.o, seg.ray.d, seg.sMax, seg.region, pass_.bundleSlack))
             return nullptr;
         if (!bundle.built()) {
             const BundleHint& h = bundle.hint();

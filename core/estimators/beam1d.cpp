@@ -57,8 +57,8 @@ int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path,
     const Region& region = scene_->regions[seg.region];
     const Medium& m = region.medium;
     const double r = pass_.radius;
-    const SegmentGather g{*scene_, ray, seg.sMax, m, region.ior, r, beamAttenuation(m, pass_.beamLength), pass_.profile,
-                          path};
+    const SegmentGather g{*scene_,       ray, seg.sMax, m, region.ior, r, beamAttenuation(m, pass_.beamLength),
+                          pass_.profile, path};
     scratch.pieces.clear();
     const ClosestApproachTest test{ray, seg.sMax, r};
     accel_->candidates(ray.o, ray.d, seg.sMax, seg.region, scratch.pieces, {&ClosestApproachTest::accept, &test});
@@ -80,14 +80,16 @@ int64_t Beam1DEstimator::gather(const CameraSegment& seg, const PathState& path,
         const Vec3 xr = ray.at(ca->sr), xb = b.origin + ca->sb * b.dir;
         if (!kernelPointVisible(*scene_, near.get(), xr, xb)) continue;
         const double tx = std::exp(-m.sigma_t.x * ca->sr - g.tauB.x * ca->sb);
-        const Color T = g.grey ? Color(tx) : Color(tx, std::exp(-m.sigma_t.y * ca->sr - g.tauB.y * ca->sb),
-                                                 std::exp(-m.sigma_t.z * ca->sr - g.tauB.z * ca->sb));
+        const Color T = g.grey ? Color(tx)
+                               : Color(tx, std::exp(-m.sigma_t.y * ca->sr - g.tauB.y * ca->sb),
+                                       std::exp(-m.sigma_t.z * ca->sr - g.tauB.z * ca->sb));
         const double rho = m.phase.eval(-ca->cosTheta);  // from w_b into -w_r (towards the camera)
         const Color L = path.beta * m.sigma_s * rho * b.power * T * (kernel / ca->sinTheta);
         // (1D-5): one instant on each axis.
         const double tBeam = b.opl0 + region.ior * ca->sb;
-        sink.instant(L, path.oplCam + tBeam + region.ior * ca->sr, tBeam,
-                     causalFloor(path.oplCam, b.fromOpl, region.ior, b.from, ray.o, tBeam, r));  // via the vertex before
+        sink.instant(
+            L, path.oplCam + tBeam + region.ior * ca->sr, tBeam,
+            causalFloor(path.oplCam, b.fromOpl, region.ior, b.from, ray.o, tBeam, r));  // via the vertex before
         ++estimates;
     }
     return estimates;

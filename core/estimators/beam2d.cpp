@@ -8,14 +8,14 @@
 
 namespace tpb {
 
-bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
-                    double sbLo, double sbHi, double radius, RayBeamOverlap& out) {
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb, double sbLo,
+                    double sbHi, double radius, RayBeamOverlap& out) {
     // Decompose the ray relative to the beam axis: parallel part (along w_b) and perpendicular part.
     const Vec3 d = xr - xb;
     const double c = glm::dot(wr, wb);
     const double sb0 = glm::dot(d, wb);
-    const Vec3 w = d - sb0 * wb;   // perpendicular offset of x_r from the axis
-    const Vec3 dp = wr - c * wb;   // perpendicular part of the ray direction, |dp|^2 = 1 - c^2
+    const Vec3 w = d - sb0 * wb;  // perpendicular offset of x_r from the axis
+    const Vec3 dp = wr - c * wb;  // perpendicular part of the ray direction, |dp|^2 = 1 - c^2
     const double a = glm::dot(dp, dp);
     const double r2 = radius * radius;
     const double w2 = glm::dot(w, w);
@@ -55,8 +55,8 @@ bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb,
     return true;
 }
 
-bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
-                    double beamLength, double radius, RayBeamOverlap& out) {
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb, double beamLength,
+                    double radius, RayBeamOverlap& out) {
     return rayBeamOverlap(xr, wr, sMax, xb, wb, 0.0, beamLength, radius, out);
 }
 
@@ -144,8 +144,15 @@ int64_t Beam2DEstimator::gather(const CameraSegment& seg, const PathState& path,
                                 EstimatorScratch& scratch) const {
     if (!ready_) return 0;
     const Region& region = scene_->regions[seg.region];
-    const SegmentGather g{*scene_, seg.ray, seg.sMax, region.medium, region.ior, pass_.radius,
-                          beamAttenuation(region.medium, pass_.beamLength), pass_.profile, path};
+    const SegmentGather g{*scene_,
+                          seg.ray,
+                          seg.sMax,
+                          region.medium,
+                          region.ior,
+                          pass_.radius,
+                          beamAttenuation(region.medium, pass_.beamLength),
+                          pass_.profile,
+                          path};
     if (const std::vector<BeamPiece>* shared = sharedCylinderCandidates(seg, scratch)) {
         // The block's shared candidates (segment_bundle.h; their fat test batched too), each with the
         // exact test of the query below, in the same (beam, piece) order: the same estimates in the

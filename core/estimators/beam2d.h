@@ -56,11 +56,11 @@ struct RayBeamOverlap {
     double sb0 = 0.0;                  // projection of x_r on the beam axis: s_b(s_r) = sb0 + c s_r
     double cosRB = 0.0;                // c = dot(w_r, w_b)
 };
-bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
-                    double beamLength, double radius, RayBeamOverlap& out);
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb, double beamLength,
+                    double radius, RayBeamOverlap& out);
 // Same, restricted to beam parameters [sbLo, sbHi] (the BVH splits long beams into pieces).
-bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb,
-                    double sbLo, double sbHi, double radius, RayBeamOverlap& out);
+bool rayBeamOverlap(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xb, const Vec3& wb, double sbLo,
+                    double sbHi, double radius, RayBeamOverlap& out);
 
 // Int_{s-}^{s+} exp(-sigma_t s - tau_b (sb0 + c s)) ds for one channel (closed form above), and the
 // unnormalised mass of its time profile, oneMinusExpNeg(|kappa| (s+ - s-)), when the closed form computed it

@@ -61,8 +61,8 @@ struct PixelSink {
     // Energy L along s in [s0, s1] of the camera segment with density exp(-kappa s), arriving at
     // aReal + bReal s (real axis) and aUnwarped + bUnwarped s (unwarped axis), OPL in m; no part
     // earlier than `floor` (the earliest real path through the estimate's photon, causalFloor()).
-    void spread(const Color& L, const Color& kappa, double s0, double s1, double aReal, double bReal,
-                double aUnwarped, double bUnwarped, const ArrivalFloor& floor = {}) {
+    void spread(const Color& L, const Color& kappa, double s0, double s1, double aReal, double bReal, double aUnwarped,
+                double bUnwarped, const ArrivalFloor& floor = {}) {
         splatSpread(time, acc, tally, L, kappa, s0, s1, aReal, bReal, aUnwarped, bUnwarped, kernel, floor);
     }
     // The same with the profile of exp(-kappa s) on [s0, s1] built by the estimator (SegmentProfile,
@@ -98,7 +98,7 @@ struct EstimatorScratch {
     SegmentBundle bundle;           // the block of pixels being rendered (segment_bundle.h)
     OverlapBatch overlaps;          // one segment against the block's pieces (overlap_batch.h)
     PieceAxes boxAxes;              // a shared query's box candidates, for its fat test
-    std::vector<uint64_t> keys;  // the kept ones' (beam, piece) keys above their index, to sort them
+    std::vector<uint64_t> keys;     // the kept ones' (beam, piece) keys above their index, to sort them
 };
 
 // Per-pass parameters of an estimator.
@@ -127,7 +127,7 @@ public:
     virtual Needs needs() const { return {}; }
     // Builds what gather() needs from this pass's photon map (which must outlive the pass).
     virtual void prepare(const Scene& scene, const PhotonMap& map, const EstimatorPass& pass) = 0;
-    virtual bool empty() const = 0;            // nothing to gather this pass
+    virtual bool empty() const = 0;              // nothing to gather this pass
     virtual size_t accelPrimitives() const = 0;  // beam pieces (or points) indexed, for the stats
     // Adds the estimate along `seg` to `sink`; returns the number of beams/points that contributed.
     virtual int64_t gather(const CameraSegment& seg, const PathState& path, PixelSink& sink,
@@ -136,10 +136,10 @@ public:
 
 // The diffuse surface point a camera path ends on.
 struct SurfaceQuery {
-    const Ray& ray;         // the camera ray that hit it
+    const Ray& ray;  // the camera ray that hit it
     const SurfaceHit& hit;
-    Vec3 ng;                // geometric normal facing the ray
-    Color albedo;           // Lambertian albedo (f_r = albedo / pi)
+    Vec3 ng;       // geometric normal facing the ray
+    Color albedo;  // Lambertian albedo (f_r = albedo / pi)
 };
 
 class SurfaceEstimator {

@@ -21,7 +21,8 @@ inline void nearShapes(const Scene& scene, const Ray& ray, double sMax, double r
     const Vec3 pad(r + 8.0 * scene.rayEps);
     for (size_t i = 0; i < scene.shapes.size(); ++i) {
         const Bounds3& b = scene.shapes[i].bounds;
-        const bool apart = glm::any(glm::lessThan(b.hi + pad, seg.lo)) || glm::any(glm::greaterThan(b.lo - pad, seg.hi));
+        const bool apart =
+            glm::any(glm::lessThan(b.hi + pad, seg.lo)) || glm::any(glm::greaterThan(b.lo - pad, seg.hi));
         if (!apart || !std::isfinite(sMax)) out.push_back(static_cast<int>(i));
     }
 }

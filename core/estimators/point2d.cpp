@@ -60,8 +60,9 @@ int64_t Point2DEstimator::gather(const CameraSegment& seg, const PathState& path
         const double rho = m.phase.eval(-glm::dot(p.dirIn, ray.d));  // scattering from w_p into -w_r
         const Color L = path.beta * m.sigma_s * rho * p.power * m.transmittance(disc->s) * invArea;
         // No earlier than the real path leaving the point's flight at its start for x_r (causalFloor).
-        sink.instant(L, path.oplCam + p.opl + eta * disc->s, p.opl,
-                     causalFloor(path.oplCam, p.opl - eta * p.length, eta, p.position - p.length * p.dirIn, ray.o, p.opl, r));
+        sink.instant(
+            L, path.oplCam + p.opl + eta * disc->s, p.opl,
+            causalFloor(path.oplCam, p.opl - eta * p.length, eta, p.position - p.length * p.dirIn, ray.o, p.opl, r));
         ++estimates;
     }
     return estimates;

@@ -72,17 +72,20 @@ int64_t Point3DEstimator::gather(const CameraSegment& seg, const PathState& path
             nearShapes(scene, ray, seg.sMax, r, scratch.shapes);
             haveNear = true;
         }
-        if (!kernelPointVisible(scene, scratch.shapes, ray.at(0.5 * (chord->sMinus + chord->sPlus)), p.position)) return;
+        if (!kernelPointVisible(scene, scratch.shapes, ray.at(0.5 * (chord->sMinus + chord->sPlus)), p.position))
+            return;
         const double ix = chordTransmittance(m.sigma_t.x, chord->sMinus, chord->sPlus);
-        const Color integral = grey ? Color(ix) : Color(ix, chordTransmittance(m.sigma_t.y, chord->sMinus, chord->sPlus),
-                                                        chordTransmittance(m.sigma_t.z, chord->sMinus, chord->sPlus));
+        const Color integral = grey ? Color(ix)
+                                    : Color(ix, chordTransmittance(m.sigma_t.y, chord->sMinus, chord->sPlus),
+                                            chordTransmittance(m.sigma_t.z, chord->sMinus, chord->sPlus));
         const double rho = m.phase.eval(-glm::dot(p.dirIn, ray.d));  // scattering from w_p into -w_r
         const Color L = path.beta * m.sigma_s * rho * p.power * invVolume * integral;
         // t(s) = t_cam + t_p + eta s (real), t_p (unwarped); energy density exp(-sigma_t s) on the chord.
         // No part earlier than the real path leaving the point's flight at its start for x_r
         // (causalFloor): near the camera or the light's line of sight the chord's near part would be.
-        sink.spread(L, kappa, chord->sMinus, chord->sPlus, path.oplCam + p.opl, eta, p.opl, 0.0,
-                    causalFloor(path.oplCam, p.opl - eta * p.length, eta, p.position - p.length * p.dirIn, ray.o, p.opl, r));
+        sink.spread(
+            L, kappa, chord->sMinus, chord->sPlus, path.oplCam + p.opl, eta, p.opl, 0.0,
+            causalFloor(path.oplCam, p.opl - eta * p.length, eta, p.position - p.length * p.dirIn, ray.o, p.opl, r));
         ++estimates;
     };
     if (const std::vector<BeamPiece>* shared = sharedCandidates(seg, scratch, &acceptFatBall)) {

@@ -48,7 +48,7 @@ namespace tpb {
 // segment misses the ball or only touches it (zero length).
 struct RayPointChord {
     double sMinus = 0.0, sPlus = 0.0;  // s interval (m)
-    double sP = 0.0;                    // s_p, the projection of x_p (m)
+    double sP = 0.0;                   // s_p, the projection of x_p (m)
 };
 std::optional<RayPointChord> rayPointChord(const Vec3& xr, const Vec3& wr, double sMax, const Vec3& xp, double radius);
 

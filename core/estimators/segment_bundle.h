@@ -32,8 +32,8 @@ namespace tpb {
 
 // What the camera pass knows about a block before tracing it.
 struct BundleHint {
-    Vec3 origin{0.0};    // the camera's pinhole
-    Vec3 axis{0.0};      // unit, through the block's centre
+    Vec3 origin{0.0};           // the camera's pinhole
+    Vec3 axis{0.0};             // unit, through the block's centre
     double sinHalfAngle = 0.0;  // sin of the largest angle between `axis` and a ray of the block
     double maxLength = 0.0;     // m: no primary segment is longer (the scene's extent seen from origin)
     int region = 0;             // the camera's region

@@ -46,7 +46,9 @@ std::vector<double> perFrameRelativeRmse(const std::vector<double>& x, const std
     return out;
 }
 
-double relativeTotalDifference(const std::vector<double>& x, const std::vector<double>& ref) { return totalDiff(x, ref); }
+double relativeTotalDifference(const std::vector<double>& x, const std::vector<double>& ref) {
+    return totalDiff(x, ref);
+}
 double relativeTotalDifference(const std::vector<float>& x, const std::vector<float>& ref) { return totalDiff(x, ref); }
 
 double halfSplitRelativeError(double diff2, double ref2, double na, double nb) {
@@ -67,7 +69,10 @@ PowerLawFit fitPowerLaw(const std::vector<double>& t, const std::vector<double>&
     for (size_t i = 0; i < std::min(t.size(), e.size()); ++i) {
         if (!(t[i] > 0.0) || !(e[i] > 0.0) || !std::isfinite(t[i]) || !std::isfinite(e[i])) continue;
         const double x = std::log(t[i]), y = std::log(e[i]);
-        sx += x; sy += y; sxx += x * x; sxy += x * y;
+        sx += x;
+        sy += y;
+        sxx += x * x;
+        sxy += x * y;
         ++n;
     }
     f.points = n;

@@ -38,9 +38,7 @@ struct SquaredError {
         ref2 += o.ref2;
     }
     // sqrt(diff2 / ref2); NaN when the reference is all zero.
-    double relative() const {
-        return ref2 > 0.0 ? std::sqrt(diff2 / ref2) : std::numeric_limits<double>::quiet_NaN();
-    }
+    double relative() const { return ref2 > 0.0 ? std::sqrt(diff2 / ref2) : std::numeric_limits<double>::quiet_NaN(); }
 };
 
 // Running sums of a relative mean absolute error sum |x - r| / sum |r| (robust to rare huge

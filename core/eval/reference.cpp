@@ -136,7 +136,8 @@ std::vector<float>* arrayByName(ReferenceVolume& r, const std::string& name) {
 // Opens the container (film_container.h) and parses its header.
 json readHeader(FilmContainerReader& f, const std::string& path) {
     if (!f.opened())
-        throw UserError(path, 0, "", "cannot open the reference file (missing or unreadable); create it with `tpb reference`");
+        throw UserError(path, 0, "",
+                        "cannot open the reference file (missing or unreadable); create it with `tpb reference`");
     try {
         return json::parse(f.header());
     } catch (const std::exception& e) {
@@ -145,7 +146,8 @@ json readHeader(FilmContainerReader& f, const std::string& path) {
 }
 
 FilmContainerReader openReference(const std::string& path) {
-    return FilmContainerReader(path, std::string_view(kMagic, 8), [path](const std::string& why) { corrupt(path, why); });
+    return FilmContainerReader(path, std::string_view(kMagic, 8),
+                               [path](const std::string& why) { corrupt(path, why); });
 }
 
 std::string fmtDouble(double v) {
@@ -179,7 +181,9 @@ void singleScatterRay(const Medium& m, double ior, const Light& light, const Vec
     cuts.clear();
     cuts.push_back(phi0);
     cuts.push_back(phi1);
-    auto add = [&](double phi) { if (phi > phi0 && phi < phi1) cuts.push_back(phi); };
+    auto add = [&](double phi) {
+        if (phi > phi0 && phi < phi1) cuts.push_back(phi);
+    };
     add(0.0);
     for (int k = 0; k <= tb.bins; ++k) {
         const double tau = (tb.startOpl + k * tb.binWidth - light.emitOpl) / ior;  // geometric length
@@ -353,13 +357,15 @@ std::vector<std::string> cacheMismatches(const ReferenceInfo& ref, const Referen
         m.push_back("scene hash: unknown on one side");
     if (ref.method != want.method) m.push_back("method: " + ref.method + " vs " + want.method);
     if (want.method != "analytic-single-scattering") {
-        if (ref.seed != want.seed) m.push_back("seed: " + std::to_string(ref.seed) + " vs " + std::to_string(want.seed));
+        if (ref.seed != want.seed)
+            m.push_back("seed: " + std::to_string(ref.seed) + " vs " + std::to_string(want.seed));
         if (ref.samplesPerPixel != want.samplesPerPixel)
             m.push_back("samples per pixel: " + std::to_string(ref.samplesPerPixel) + " vs " +
                         std::to_string(want.samplesPerPixel));
         if (ref.photonsPerPass != want.photonsPerPass || std::abs(ref.beamRadius0 - want.beamRadius0) > 1e-12)
             m.push_back("photons per pass / initial radius differ");
-        if (ref.requestedPasses != want.requestedPasses || std::abs(ref.requestedTimeSec - want.requestedTimeSec) > 1e-9)
+        if (ref.requestedPasses != want.requestedPasses ||
+            std::abs(ref.requestedTimeSec - want.requestedTimeSec) > 1e-9)
             m.push_back("budget: reference was asked for " + std::to_string(ref.requestedPasses) + " passes / " +
                         fmtDouble(ref.requestedTimeSec) + " s, now " + std::to_string(want.requestedPasses) +
                         " passes / " + fmtDouble(want.requestedTimeSec) + " s");
@@ -526,15 +532,16 @@ ReferenceVolume singleScatteringReference(const Scene& scene, const TimeBins& ti
                                           const RenderSettings& settings, int subpixels, int threads) {
     const std::string where = scenePath.empty() ? std::string("scene") : scenePath;
     auto refuse = [&](const std::string& why) {
-        throw UserError(where, 0, "", "the analytic single-scattering reference needs exactly one point light in an "
-                                      "infinite homogeneous scattering medium and no shapes: " + why);
+        throw UserError(where, 0, "",
+                        "the analytic single-scattering reference needs exactly one point light in an "
+                        "infinite homogeneous scattering medium and no shapes: " +
+                            why);
     };
     if (scene.lights.size() != 1) refuse(std::to_string(scene.lights.size()) + " lights");
     const Light& light = scene.lights[0];
     if (light.type != LightType::Point) refuse("the light is not a point light");
     if (!scene.shapes.empty()) refuse(std::to_string(scene.shapes.size()) + " shapes");
-    if (scene.regions.empty() || !scene.regions[0].hasMedium)
-        refuse("no global medium");
+    if (scene.regions.empty() || !scene.regions[0].hasMedium) refuse("no global medium");
     const Region& region = scene.regions[0];
     if (!region.medium.scattering) refuse("the global medium does not scatter");
     subpixels = std::max(1, subpixels);
@@ -568,8 +575,8 @@ ReferenceVolume singleScatteringReference(const Scene& scene, const TimeBins& ti
             for (int j = 0; j < n; ++j)
                 for (int i = 0; i < n; ++i) {
                     const Ray ray = scene.camera.generate(x + (i + 0.5) / n, static_cast<double>(y) + (j + 0.5) / n);
-                    singleScatterRay(region.medium, region.ior, light, ray.o, ray.d, time, w, real.data(),
-                                     unw.data(), steady, cuts);
+                    singleScatterRay(region.medium, region.ior, light, ray.o, ray.d, time, w, real.data(), unw.data(),
+                                     steady, cuts);
                 }
             const size_t p = static_cast<size_t>(y) * W + x;
             for (int k = 0; k < B; ++k)

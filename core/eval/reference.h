@@ -112,11 +112,11 @@ ReferenceInfo describeScene(const Scene& scene, const TimeBins& time, const std:
 // ---- Rendering references --------------------------------------------------------------------
 
 struct ReferenceJob {
-    std::string method = "pt";  // "pt" or "beams"
-    RenderSettings pt;      // method pt
-    RenderSettings beams;       // method beams (its passes/time budget are ignored: see below)
-    int64_t passes = 0;         // 0 = until timeBudgetSec
-    double timeBudgetSec = 0.0; // 0 = until passes
+    std::string method = "pt";   // "pt" or "beams"
+    RenderSettings pt;           // method pt
+    RenderSettings beams;        // method beams (its passes/time budget are ignored: see below)
+    int64_t passes = 0;          // 0 = until timeBudgetSec
+    double timeBudgetSec = 0.0;  // 0 = until passes
 };
 
 // Renders the reference: method pt alternates its passes between two films (odd / even passes)
@@ -139,11 +139,11 @@ ReferenceVolume singleScatteringReference(const Scene& scene, const TimeBins& ti
 // ---- Measuring a film against a reference ----------------------------------------------------
 
 struct FilmError {
-    double volume = std::numeric_limits<double>::quiet_NaN();  // relative RMSE, one axis, all bins
-    double steady = std::numeric_limits<double>::quiet_NaN();  // relative RMSE, steady image
+    double volume = std::numeric_limits<double>::quiet_NaN();           // relative RMSE, one axis, all bins
+    double steady = std::numeric_limits<double>::quiet_NaN();           // relative RMSE, steady image
     double steadyTotalDiff = std::numeric_limits<double>::quiet_NaN();  // (sum - sum ref) / sum ref
-    std::vector<double> perFrame;  // relative RMSE per bin (when asked)
-    double volumeL1 = std::numeric_limits<double>::quiet_NaN();  // sum |x - ref| / sum |ref| (AbsoluteError)
+    std::vector<double> perFrame;                                       // relative RMSE per bin (when asked)
+    double volumeL1 = std::numeric_limits<double>::quiet_NaN();         // sum |x - ref| / sum |ref| (AbsoluteError)
     double steadyL1 = std::numeric_limits<double>::quiet_NaN();
 };
 

@@ -16,7 +16,9 @@ void exportFrame(const FilmSnapshot& film, int bin, const std::string& path, con
 }
 
 namespace {
-int lastExportBin(int bins, const ExportOptions& opt) { return opt.lastBin < 0 ? bins - 1 : std::min(opt.lastBin, bins - 1); }
+int lastExportBin(int bins, const ExportOptions& opt) {
+    return opt.lastBin < 0 ? bins - 1 : std::min(opt.lastBin, bins - 1);
+}
 }  // namespace
 
 int exportFrameCount(int bins, const ExportOptions& opt) {
@@ -74,13 +76,17 @@ std::vector<int> energeticBins(const FilmSnapshot& film, int count, TimeAxis axi
         for (int k = 0; k < film.bins(); ++k) {
             cum += std::max(perBin[k], 0.0);
             if (kLo < 0 && cum >= 0.005 * total) kLo = k;
-            if (cum >= 0.9 * total) { kHi = k; break; }
+            if (cum >= 0.9 * total) {
+                kHi = k;
+                break;
+            }
         }
         kLo = std::max(kLo, 0);
     }
     std::vector<int> bins;
     for (int i = 0; i < count; ++i)
-        bins.push_back(std::min(kHi, kLo + static_cast<int>(std::lround(i * double(kHi - kLo) / std::max(1, count - 1)))));
+        bins.push_back(
+            std::min(kHi, kLo + static_cast<int>(std::lround(i * double(kHi - kLo) / std::max(1, count - 1)))));
     return bins;
 }
 

@@ -59,7 +59,8 @@ FilmLayout::FilmLayout(int w, int h, const TimeBins& t)
             tiles.push_back({tx * kTile, ty * kTile, std::min(kTile, w - tx * kTile), std::min(kTile, h - ty * kTile)});
 }
 
-FilmSnapshot::FilmSnapshot(std::shared_ptr<const FilmLayout> layout, std::vector<std::shared_ptr<const TileBlock>> blocks)
+FilmSnapshot::FilmSnapshot(std::shared_ptr<const FilmLayout> layout,
+                           std::vector<std::shared_ptr<const TileBlock>> blocks)
     : layout_(std::move(layout)), blocks_(std::move(blocks)) {
     TPB_CHECK(layout_ && blocks_.size() == layout_->tiles.size());
 }

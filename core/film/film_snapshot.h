@@ -36,7 +36,9 @@ namespace tpb {
 
 enum class TimeAxis { Real = 0, Unwarped = 1 };
 
-struct TileRect { int x0, y0, w, h; };
+struct TileRect {
+    int x0, y0, w, h;
+};
 
 // The type of the per-bin sums: double, so that films rendered separately (checkpoints, other
 // machines) merge to what one run of all their passes gives, to < 1e-12 relative per value (one
@@ -58,7 +60,7 @@ struct TileSums {
     // fifth of a 1024-bin pass); a frame reads one value per pixel with a stride of bins x 3.
     FilmSums bins[2];
     int binCount = 0;
-    std::vector<double> steady;                // [pixel][rgb]
+    std::vector<double> steady;               // [pixel][rgb]
     std::vector<double> before[2], after[2];  // per axis, [pixel][rgb]: light before the first bin / after the last
     // An upper bound of |every sum| in the tile (grows by each pass's largest value; merges add the
     // bounds): while bound + the largest value of a pixel's pass stays far from FLT_MAX, that pass

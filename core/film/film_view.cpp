@@ -42,8 +42,9 @@ std::vector<float> perPixelImage(const FilmSnapshot& s, PerPixel which, TimeAxis
     const int a = static_cast<int>(axis);
     for (int t = 0; t < s.tileCount(); ++t) {
         const TileSums& sums = s.block(t).sums;
-        const std::vector<double>& src =
-            which == PerPixel::Steady ? sums.steady : which == PerPixel::Before ? sums.before[a] : sums.after[a];
+        const std::vector<double>& src = which == PerPixel::Steady   ? sums.steady
+                                         : which == PerPixel::Before ? sums.before[a]
+                                                                     : sums.after[a];
         putTile(s, t, src.data(), inversePasses(sums), out);
     }
     return out;
@@ -93,14 +94,18 @@ std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, Emi
     }
     for (int t = 0; t < s.tileCount(); ++t) {
         const TileBlock& b = s.block(t);
-        if (mode == EmissionMode::Continuous) putTileBin(s, t, b.sums, b.cumulative(axis).data(), bin, inversePasses(b.sums), out);
-        else putTileBin(s, t, b.sums, b.sums.bins[a].data(), bin, inversePasses(b.sums), out);
+        if (mode == EmissionMode::Continuous)
+            putTileBin(s, t, b.sums, b.cumulative(axis).data(), bin, inversePasses(b.sums), out);
+        else
+            putTileBin(s, t, b.sums, b.sums.bins[a].data(), bin, inversePasses(b.sums), out);
     }
     return out;
 }
 
 std::vector<float> steadyImage(const FilmSnapshot& s) { return perPixelImage(s, PerPixel::Steady, TimeAxis::Real); }
-std::vector<float> beforeImage(const FilmSnapshot& s, TimeAxis axis) { return perPixelImage(s, PerPixel::Before, axis); }
+std::vector<float> beforeImage(const FilmSnapshot& s, TimeAxis axis) {
+    return perPixelImage(s, PerPixel::Before, axis);
+}
 std::vector<float> afterImage(const FilmSnapshot& s, TimeAxis axis) { return perPixelImage(s, PerPixel::After, axis); }
 
 namespace {
@@ -135,7 +140,8 @@ void forEachBin(const FilmSnapshot& s, int x, int y, TimeAxis axis, EmissionMode
     if (kernel.identity()) return forEachBinRaw(s, x, y, axis, mode, put);
     const int bins = s.bins();
     std::vector<double> series(static_cast<size_t>(bins) * 3), out(series.size());
-    forEachBinRaw(s, x, y, axis, mode, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, &series[static_cast<size_t>(k) * 3]); });
+    forEachBinRaw(s, x, y, axis, mode,
+                  [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, &series[static_cast<size_t>(k) * 3]); });
     double left[3] = {0.0, 0.0, 0.0}, right[3] = {0.0, 0.0, 0.0};
     if (mode == EmissionMode::Continuous) {
         const int tile = s.tileOf(x, y);
@@ -158,9 +164,10 @@ std::vector<float> pixelProfile(const FilmSnapshot& s, int x, int y, TimeAxis ax
                                 const TimeResponse& response) {
     std::vector<float> out(static_cast<size_t>(s.bins()) * 3, 0.0f);
     if (x < 0 || y < 0 || x >= s.width() || y >= s.height()) return out;
-    forEachBin(s, x, y, axis, mode, *sharedBinKernel(response, s.time().binWidth, s.bins()), [&](int k, const double* rgb) {
-        for (int c = 0; c < 3; ++c) out[static_cast<size_t>(k) * 3 + c] = static_cast<float>(rgb[c]);
-    });
+    forEachBin(s, x, y, axis, mode, *sharedBinKernel(response, s.time().binWidth, s.bins()),
+               [&](int k, const double* rgb) {
+                   for (int c = 0; c < 3; ++c) out[static_cast<size_t>(k) * 3 + c] = static_cast<float>(rgb[c]);
+               });
     return out;
 }
 
@@ -184,7 +191,8 @@ std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mo
     for (int y = 0; y < s.height(); ++y)
         for (int x = 0; x < s.width(); ++x) {
             double* dst = &out[(static_cast<size_t>(y) * s.width() + x) * bins * 3];
-            forEachBin(s, x, y, axis, mode, *kernel, [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, dst + k * 3); });
+            forEachBin(s, x, y, axis, mode, *kernel,
+                       [&](int k, const double* rgb) { std::copy(rgb, rgb + 3, dst + k * 3); });
         }
     return out;
 }
@@ -202,7 +210,8 @@ std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis, int stride) 
         const TileRect& r = s.tileRect(t);
         const size_t pixels = static_cast<size_t>(r.w) * r.h;
         for (size_t p = 0; p < pixels; ++p) {
-            const int x = r.x0 + static_cast<int>(p % static_cast<size_t>(r.w)), y = r.y0 + static_cast<int>(p / static_cast<size_t>(r.w));
+            const int x = r.x0 + static_cast<int>(p % static_cast<size_t>(r.w)),
+                      y = r.y0 + static_cast<int>(p / static_cast<size_t>(r.w));
             if (x % stride != 0 || y % stride != 0) continue;
             const FilmSum* v = &sums.bins[a][sums.binIndex(p, 0)];
             for (int k = 0; k < bins; ++k, v += 3) {

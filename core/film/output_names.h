@@ -17,12 +17,12 @@ std::string outputTag(TimeAxis axis, EmissionMode mode, const TimeResponse& r = 
 
 // With an empty tag: the untagged name (in brackets below).
 std::string frameName(int bin, const std::string& tag = "");         // frame_00012[_TAG].exr
-std::string framesDirName(const std::string& tag);                    // frames_TAG
-std::string streakName(int row, const std::string& tag = "");         // streak_row0031[_TAG].exr
-std::string profileName(int x, int y, const std::string& tag = "");   // profile_x12_y40[_TAG].csv
-std::string volumeDirName(const std::string& tag);                    // volume_TAG
-std::string mp4Name(const std::string& tag = "");                     // transient[_TAG].mp4
-std::string contactSheetName(const std::string& tag = "");            // contact_sheet[_TAG].png
+std::string framesDirName(const std::string& tag);                   // frames_TAG
+std::string streakName(int row, const std::string& tag = "");        // streak_row0031[_TAG].exr
+std::string profileName(int x, int y, const std::string& tag = "");  // profile_x12_y40[_TAG].csv
+std::string volumeDirName(const std::string& tag);                   // volume_TAG
+std::string mp4Name(const std::string& tag = "");                    // transient[_TAG].mp4
+std::string contactSheetName(const std::string& tag = "");           // contact_sheet[_TAG].png
 
 // The untagged files of `tpb render`'s folder (and the viewer's steady export).
 inline constexpr const char* kSteadyExrName = "steady.exr";

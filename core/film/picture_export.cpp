@@ -36,7 +36,9 @@ const char* glyph(char c) {
     }
 }
 
-int labelWidth(const std::string& s, int scale) { return s.empty() ? 0 : static_cast<int>(s.size()) * 4 * scale - scale; }
+int labelWidth(const std::string& s, int scale) {
+    return s.empty() ? 0 : static_cast<int>(s.size()) * 4 * scale - scale;
+}
 
 void drawLabel(std::vector<unsigned char>& img, int imgW, int x0, int y0, const std::string& s, int scale) {
     for (size_t i = 0; i < s.size(); ++i) {
@@ -47,7 +49,8 @@ void drawLabel(std::vector<unsigned char>& img, int imgW, int x0, int y0, const 
                 for (int sy = 0; sy < scale; ++sy)
                     for (int sx = 0; sx < scale; ++sx) {
                         const size_t p = (static_cast<size_t>(y0 + gy * scale + sy) * imgW + x0 +
-                                          static_cast<int>(i) * 4 * scale + gx * scale + sx) * 3;
+                                          static_cast<int>(i) * 4 * scale + gx * scale + sx) *
+                                         3;
                         img[p] = img[p + 1] = img[p + 2] = 230;
                     }
             }
@@ -125,11 +128,13 @@ ContactSheet makeContactSheet(const FilmSnapshot& film, int count, const ExportO
         const int fx = cx + (s.cellWidth - W) / 2;
         s.frameX.push_back(fx);
         s.frameY.push_back(cy);
-        const std::vector<unsigned char> px = toneMapImage(frameImage(film, s.bins[i], opt.axis, opt.mode, opt.response), tone);
+        const std::vector<unsigned char> px =
+            toneMapImage(frameImage(film, s.bins[i], opt.axis, opt.mode, opt.response), tone);
         for (int y = 0; y < H; ++y)
             std::copy_n(&px[static_cast<size_t>(y) * W * 3], static_cast<size_t>(W) * 3,
                         &s.rgb[(static_cast<size_t>(cy + y) * s.width + fx) * 3]);
-        drawLabel(s.rgb, s.width, cx + (s.cellWidth - labelWidth(s.labels[i], scale)) / 2, cy + H + gap, s.labels[i], scale);
+        drawLabel(s.rgb, s.width, cx + (s.cellWidth - labelWidth(s.labels[i], scale)) / 2, cy + H + gap, s.labels[i],
+                  scale);
     }
     return s;
 }

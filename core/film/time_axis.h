@@ -13,8 +13,8 @@
 namespace tpb {
 
 struct TimeBins {
-    double startOpl = 0.0;  // m
-    double binWidth = 0.01; // m
+    double startOpl = 0.0;   // m
+    double binWidth = 0.01;  // m
     int bins = 1;
     double endOpl() const { return startOpl + binWidth * bins; }
     // Bin of time t, or -1 before the film / bins after it (clamped, no integer overflow).

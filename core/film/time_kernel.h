@@ -87,7 +87,7 @@ public:
 
     double operator()(double t) const {
         const double p = t - tau_, q = t + tau_;
-        const double window = q - p;  // 2 tau as represented around t
+        const double window = q - p;              // 2 tau as represented around t
         if (!(window > 0.0)) return pointCdf(t);  // tau below the resolution of t: F itself
         const double tB = tA_ + T_;
         const double after = std::max(0.0, q - std::max(p, tB));
@@ -124,9 +124,8 @@ private:
 // mirrored about it: its CDF becomes H_f(t) = H(t) - H(2 floor - t) for t > floor, 0 before (the
 // box is applied first, then the floor: the box alone puts light up to tau before any real path).
 template <class Sink>
-inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, const Color& kappa, double s0,
-                                     double s1, double a, double b, const TimeKernel& kernel, Sink&& sink,
-                                     double floor = -kInf) {
+inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, const Color& kappa, double s0, double s1,
+                                     double a, double b, const TimeKernel& kernel, Sink&& sink, double floor = -kInf) {
     if (!kernel.active()) return splatTimeFloored(tb, energy, SegmentProfile(kappa, s0, s1), a, b, floor, sink);
     const double tau = kernel.halfWidth;
     const double tA0 = a + b * s0, tB0 = a + b * s1;
@@ -145,8 +144,10 @@ inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, co
     const int k0 = std::max(tb.binOf(lowest), 0);
     const int k1 = std::min(tb.binOf(highest), tb.bins - 1);
     if (k1 < k0) {  // the smoothed support lies wholly before or after the film
-        if (tb.binOf(highest) < 0) out.before = energy;
-        else out.after = energy;
+        if (tb.binOf(highest) < 0)
+            out.before = energy;
+        else
+            out.after = energy;
         return out;
     }
 
@@ -209,8 +210,7 @@ inline OutsideFilm splatTimeSmoothed(const TimeBins& tb, const Color& energy, co
         if (!isBlack(f)) sink(k, energy * f);
         lo = hi;
     }
-    if (k1 == tb.bins - 1)
-        out.after = energy * Color(cx.above(lo.x), cy.above(lo.y), cz.above(lo.z));
+    if (k1 == tb.bins - 1) out.after = energy * Color(cx.above(lo.x), cy.above(lo.y), cz.above(lo.z));
     return out;
 }
 

@@ -124,7 +124,8 @@ uint64_t binKernelComputations() { return gKernelComputations.load(); }
 BinKernel binKernel(const TimeResponse& r, double binWidth, int filmBins) {
     BinKernel k;
     if (r.identity()) return k;
-    if ((r.pulse != PulseShape::Delta && !(r.pulseWidth > 0.0)) || (r.sensor != SensorShape::Ideal && !(r.sensorWidth > 0.0)))
+    if ((r.pulse != PulseShape::Delta && !(r.pulseWidth > 0.0)) ||
+        (r.sensor != SensorShape::Ideal && !(r.sensorWidth > 0.0)))
         throw std::invalid_argument("binKernel: a pulse or sensor width must be > 0");
     if (!(responseSpanBins(r, binWidth) <= kMaxResponseBins))
         throw std::invalid_argument("binKernel: the pulse and sensor span more than 2^20 bins");
@@ -133,7 +134,7 @@ BinKernel binKernel(const TimeResponse& r, double binWidth, int filmBins) {
     support(r, lo, hi);
     int mlo = static_cast<int>(std::floor(lo / binWidth)) - 1, mhi = static_cast<int>(std::ceil(hi / binWidth)) + 1;
     // Cut to the weights a film of filmBins bins reads (|m| < filmBins); the rest go to before/after.
-    const bool cutLo = filmBins > 0 && mlo < 1 - filmBins, cutHi = filmBins > 0 && mhi > filmBins - 1;
+    const bool cutLo = filmBins > 0 && mlo<1 - filmBins, cutHi = filmBins> 0 && mhi > filmBins - 1;
     if (cutLo) mlo = 1 - filmBins;
     if (cutHi) mhi = filmBins - 1;
     std::vector<double> G(static_cast<size_t>(mhi - mlo + 3));  // G at (mlo - 1 .. mhi + 1) D
@@ -153,7 +154,8 @@ BinKernel binKernel(const TimeResponse& r, double binWidth, int filmBins) {
     while (!cutLo && a + 1 < b && k.w[a] < 1e-15) ++a;
     while (!cutHi && b > a + 1 && k.w[b - 1] < 1e-15) --b;
     k.lo += static_cast<int>(a);
-    k.w = std::vector<double>(k.w.begin() + static_cast<std::ptrdiff_t>(a), k.w.begin() + static_cast<std::ptrdiff_t>(b));
+    k.w =
+        std::vector<double>(k.w.begin() + static_cast<std::ptrdiff_t>(a), k.w.begin() + static_cast<std::ptrdiff_t>(b));
     return k;
 }
 
@@ -172,8 +174,8 @@ std::shared_ptr<const BinKernel> sharedBinKernel(const TimeResponse& r, double b
     const std::lock_guard<std::mutex> lock(mutex);  // held while computing: each kernel once
     for (size_t i = 0; i < cache.size(); ++i)
         if (cache[i].response == r && cache[i].binWidth == binWidth && cache[i].filmBins == filmBins) {
-            std::rotate(cache.begin() + static_cast<std::ptrdiff_t>(i), cache.begin() + static_cast<std::ptrdiff_t>(i) + 1,
-                        cache.end());
+            std::rotate(cache.begin() + static_cast<std::ptrdiff_t>(i),
+                        cache.begin() + static_cast<std::ptrdiff_t>(i) + 1, cache.end());
             return cache.back().kernel;
         }
     auto kernel = std::make_shared<const BinKernel>(binKernel(r, binWidth, filmBins));
@@ -210,9 +212,12 @@ std::optional<TimeResponse> parsePulse(std::string_view s, TimeResponse r) {
     const std::string_view kind = s.substr(0, colon);
     const std::optional<double> v = positiveNs(s.substr(colon + 1));
     if (!v) return std::nullopt;
-    if (kind == "gaussian") r.pulse = PulseShape::Gaussian;
-    else if (kind == "square") r.pulse = PulseShape::Square;
-    else return std::nullopt;
+    if (kind == "gaussian")
+        r.pulse = PulseShape::Gaussian;
+    else if (kind == "square")
+        r.pulse = PulseShape::Square;
+    else
+        return std::nullopt;
     r.pulseWidth = *v * kC_m_per_ns;
     return r;
 }
@@ -228,9 +233,12 @@ std::optional<TimeResponse> parseSensor(std::string_view s, TimeResponse r) {
     const std::string_view kind = s.substr(0, colon);
     const std::optional<double> v = positiveNs(s.substr(colon + 1));
     if (!v) return std::nullopt;
-    if (kind == "gaussian") r.sensor = SensorShape::Gaussian;
-    else if (kind == "exp") r.sensor = SensorShape::Exponential;
-    else return std::nullopt;
+    if (kind == "gaussian")
+        r.sensor = SensorShape::Gaussian;
+    else if (kind == "exp")
+        r.sensor = SensorShape::Exponential;
+    else
+        return std::nullopt;
     r.sensorWidth = *v * kC_m_per_ns;
     return r;
 }

@@ -111,17 +111,23 @@ TPB_HOT_INLINE double massTo(const ExpProfile& p, double x) { return p.uniform ?
 // cut(i) is x_i, i = 1..n (clamped to [0, len], so that a boundary within rounding of the
 // segment's end gives the piece beyond it exactly nothing).
 template <int C, class Cut, class Dx, class Sink>
-TPB_HOT_INLINE void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, int n, const Cut& cut, const Dx& dxOf,
-                        double len, int kFirst, int step, int bins, OutsideFilm& out, Sink& sink) {
-    const auto emit = [&](int k, const double (&m)[C]) TPB_HOT_LAMBDA {
+TPB_HOT_INLINE void splatPieces(const ExpProfile* const (&ch)[C], const Color& energy, int n, const Cut& cut,
+                                const Dx& dxOf, double len, int kFirst, int step, int bins, OutsideFilm& out,
+                                Sink& sink) {
+    const auto emit = [&](int k, const double(&m)[C]) TPB_HOT_LAMBDA {
         Color f;
-        if constexpr (C == 1) f = Color(std::max(0.0, m[0]));
-        else f = Color(std::max(0.0, m[0]), std::max(0.0, m[1]), std::max(0.0, m[2]));
+        if constexpr (C == 1)
+            f = Color(std::max(0.0, m[0]));
+        else
+            f = Color(std::max(0.0, m[0]), std::max(0.0, m[1]), std::max(0.0, m[2]));
         if (isBlack(f)) return;
         const Color e = energy * f;
-        if (k < 0) out.before += e;
-        else if (k >= bins) out.after += e;
-        else sink(k, e);
+        if (k < 0)
+            out.before += e;
+        else if (k >= bins)
+            out.after += e;
+        else
+            sink(k, e);
     };
     double invT[C], u1[C], m[C];
     const double x1 = cut(1);
@@ -176,8 +182,8 @@ TPB_HOT_INLINE void splatPieces(const ExpProfile* const (&ch)[C], const Color& e
 // otherwise splat_detail::splatPieces: per channel one expm1 per bin boundary it crosses up to
 // three boundaries, three in all beyond (plus the profile's total, shared by both time axes).
 template <class Sink>
-TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a, double b,
-                             Sink&& sink) {
+TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a,
+                                     double b, Sink&& sink) {
     OutsideFilm out;
     const double invWidth = 1.0 / tb.binWidth;  // for binOf's two calls (the same bins as dividing)
     const double s0 = p.s0, s1 = p.s1;
@@ -186,16 +192,22 @@ TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, co
     const double len = s1 - s0;
     if (!(len > 0.0) || (tB - tA) <= 1e-9 * tb.binWidth) {
         const int k = tb.binOf(0.5 * (tA + tB), invWidth);
-        if (k < 0) out.before = energy;
-        else if (k >= tb.bins) out.after = energy;
-        else sink(k, energy);
+        if (k < 0)
+            out.before = energy;
+        else if (k >= tb.bins)
+            out.after = energy;
+        else
+            sink(k, energy);
         return out;
     }
     const int kA = tb.binOf(tA, invWidth), kB = tb.binOf(tB, invWidth);
     if (kA == kB) {  // wholly inside one bin, or wholly before or after the film
-        if (kA < 0) out.before = energy;
-        else if (kA >= tb.bins) out.after = energy;
-        else sink(kA, energy);
+        if (kA < 0)
+            out.before = energy;
+        else if (kA >= tb.bins)
+            out.after = energy;
+        else
+            sink(kA, energy);
         return out;
     }
     // Boundaries T_j = start + j binWidth, j = kA+1 .. kB, cut [tA, tB] (b != 0 here: the interval
@@ -212,8 +224,8 @@ TPB_HOT_INLINE OutsideFilm splatTime(const TimeBins& tb, const Color& energy, co
             const double sj = std::clamp((tb.startOpl + j * tb.binWidth - a) / b, s0, s1);
             return e.reflect ? s1 - sj : sj - s0;
         };
-        splat_detail::splatPieces(channels, en, n, cut, dxOf, len, xWithTime ? kA : kB, xWithTime ? 1 : -1, tb.bins, out,
-                                  sink);
+        splat_detail::splatPieces(channels, en, n, cut, dxOf, len, xWithTime ? kA : kB, xWithTime ? 1 : -1, tb.bins,
+                                  out, sink);
     };
     if (p.grey) {
         const ExpProfile* const ch[1] = {&p.x};
@@ -254,8 +266,9 @@ TPB_HOT_INLINE OutsideFilm splatTimeFloored(const TimeBins& tb, const Color& ene
     if (!(floor > tA + 1e-12 * (1.0 + std::abs(tA)))) return splatTime(tb, energy, p, a, b, sink);
     const double mirrored = 2.0 * floor - a;  // t = mirrored - b s after the reflection
     const bool collapsed = !(p.s1 - p.s0 > 0.0) || (tB - tA) <= 1e-9 * tb.binWidth;  // splatTime's instant rule
-    if (collapsed) return 0.5 * (tA + tB) >= floor ? splatTime(tb, energy, p, a, b, sink)
-                                                   : splatTime(tb, energy, p, mirrored, -b, sink);
+    if (collapsed)
+        return 0.5 * (tA + tB) >= floor ? splatTime(tb, energy, p, a, b, sink)
+                                        : splatTime(tb, energy, p, mirrored, -b, sink);
     if (!(floor < tB)) return splatTime(tb, energy, p, mirrored, -b, sink);
     // t(s) = floor at s_c inside the segment (b != 0 here): the early part is [s0, s_c] when time
     // grows along s, [s_c, s1] when it falls. Its share per channel, from the profile's mass.

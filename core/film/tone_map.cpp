@@ -40,8 +40,10 @@ void toneMapPixel(const float rgb[3], const ToneMap& tm, unsigned char out[3]) {
     if (tm.falseColor) {
         const float lum = 0.2126f * v[0] + 0.7152f * v[1] + 0.0722f * v[2];
         float o[3] = {0.0f, 0.0f, 0.0f};
-        if (lum > 1.0f) o[0] = o[1] = o[2] = 1.0f;
-        else if (lum > 0.0f) ramp(1.0f + std::log(lum) / (std::log(10.0f) * std::max(tm.decades, 0.1f)), o);
+        if (lum > 1.0f)
+            o[0] = o[1] = o[2] = 1.0f;
+        else if (lum > 0.0f)
+            ramp(1.0f + std::log(lum) / (std::log(10.0f) * std::max(tm.decades, 0.1f)), o);
         for (int c = 0; c < 3; ++c) out[c] = toByte(o[c]);
         return;
     }

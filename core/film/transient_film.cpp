@@ -43,7 +43,8 @@ namespace {
 template <class Splat>
 void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, double aReal, double bReal, double aUnw,
                    double bUnw, Splat&& splat) {
-    if (!isFinite(L) || !std::isfinite(aReal) || !std::isfinite(aUnw) || !std::isfinite(bReal) || !std::isfinite(bUnw)) {
+    if (!isFinite(L) || !std::isfinite(aReal) || !std::isfinite(aUnw) || !std::isfinite(bReal) ||
+        !std::isfinite(bUnw)) {
         ++tally.rejected;
         return;
     }
@@ -64,8 +65,10 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
             ++written;
         };
         OutsideFilm out;
-        if constexpr (std::is_invocable_v<Splat&, double, double, decltype(binSink)&, TimeAxis>) out = splat(a, b, binSink, axis);
-        else out = splat(a, b, binSink);
+        if constexpr (std::is_invocable_v<Splat&, double, double, decltype(binSink)&, TimeAxis>)
+            out = splat(a, b, binSink, axis);
+        else
+            out = splat(a, b, binSink);
         if (kMax >= 0) acc.mark(axis, kMin, kMax);
         return out;
     };
@@ -101,7 +104,8 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
                  const SegmentProfile& profile, double aReal, double bReal, double aUnw, double bUnw,
                  const TimeKernel& kernel, const ArrivalFloor& floor) {
     if (kernel.active()) {
-        splatSpread(time, acc, tally, L, profile.kappa, profile.s0, profile.s1, aReal, bReal, aUnw, bUnw, kernel, floor);
+        splatSpread(time, acc, tally, L, profile.kappa, profile.s0, profile.s1, aReal, bReal, aUnw, bUnw, kernel,
+                    floor);
         return;
     }
     if (floor.active()) {
@@ -202,7 +206,8 @@ uint64_t TransientFilm::bytes() const {
         const TileSums& sums = s->block(t).sums;
         n += sums.steady.size() * sizeof(double);
         for (int a = 0; a < 2; ++a)
-            n += sums.bins[a].size() * sizeof(FilmSum) + (sums.before[a].size() + sums.after[a].size()) * sizeof(double);
+            n +=
+                sums.bins[a].size() * sizeof(FilmSum) + (sums.before[a].size() + sums.after[a].size()) * sizeof(double);
     }
     return n;
 }
@@ -224,17 +229,23 @@ void TransientFilm::clear() {
     stats.overflowedPixels = 0;
     stats.copiedTiles = 0;
     stats.stagedTiles = 0;
-    for (int a = 0; a < 2; ++a) { stats.outside[a] = 0.0; stats.before[a] = 0.0; stats.inside[a] = 0.0; }
+    for (int a = 0; a < 2; ++a) {
+        stats.outside[a] = 0.0;
+        stats.before[a] = 0.0;
+        stats.inside[a] = 0.0;
+    }
 }
 
 void TransientFilm::restoreTile(int tile, TileSums sums) {
-    if (tile < 0 || tile >= tileCount()) throw std::invalid_argument("TransientFilm::restoreTile: no tile " + std::to_string(tile));
+    if (tile < 0 || tile >= tileCount())
+        throw std::invalid_argument("TransientFilm::restoreTile: no tile " + std::to_string(tile));
     const size_t px = layout_->pixels(tile);
     bool ok = sums.binCount == bins() && sums.steady.size() == px * 3;
     for (int a = 0; a < 2; ++a)
         ok = ok && sums.bins[a].size() == px * static_cast<size_t>(bins()) * 3 && sums.before[a].size() == px * 3 &&
              sums.after[a].size() == px * 3;
-    if (!ok) throw std::invalid_argument("TransientFilm::restoreTile: tile " + std::to_string(tile) + " has the wrong size");
+    if (!ok)
+        throw std::invalid_argument("TransientFilm::restoreTile: tile " + std::to_string(tile) + " has the wrong size");
     std::lock_guard<std::mutex> g(tiles_[tile].writer);
     publish(tile, std::make_shared<TileBlock>(std::move(sums)));
 }
@@ -290,7 +301,11 @@ TileStaging::Pixel pixelRecord(const PixelAccumulator& acc, uint32_t pixel, Tile
         x = std::abs(x);
         if (!(x <= largest)) largest = x;
     };
-    const auto grow3 = [&grow](const Color& c) { grow(c.x); grow(c.y); grow(c.z); };
+    const auto grow3 = [&grow](const Color& c) {
+        grow(c.x);
+        grow(c.y);
+        grow(c.z);
+    };
     // The largest |value| of the touched bins: four independent maxima (no branch, no chain
     // through one register), the same value as a scan one by one.
     double m[4] = {0.0, 0.0, 0.0, 0.0};
@@ -449,8 +464,12 @@ void TransientFilm::frame(int bin, TimeAxis axis, EmissionMode mode, std::vector
     out = frameImage(*snapshot(), bin, axis, mode);
 }
 void TransientFilm::steadyImage(std::vector<float>& out) const { out = tpb::steadyImage(*snapshot()); }
-void TransientFilm::beforeImage(TimeAxis axis, std::vector<float>& out) const { out = tpb::beforeImage(*snapshot(), axis); }
-void TransientFilm::afterImage(TimeAxis axis, std::vector<float>& out) const { out = tpb::afterImage(*snapshot(), axis); }
+void TransientFilm::beforeImage(TimeAxis axis, std::vector<float>& out) const {
+    out = tpb::beforeImage(*snapshot(), axis);
+}
+void TransientFilm::afterImage(TimeAxis axis, std::vector<float>& out) const {
+    out = tpb::afterImage(*snapshot(), axis);
+}
 void TransientFilm::pixelProfile(int x, int y, TimeAxis axis, EmissionMode mode, std::vector<float>& out) const {
     out = tpb::pixelProfile(*snapshot(), x, y, axis, mode);
 }

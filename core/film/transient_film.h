@@ -51,7 +51,9 @@ public:
     // pixel is read or cleared (the splat marks each estimate's range once, not bin by bin).
     TPB_HOT_INLINE void addUnmarked(TimeAxis axis, int bin, const Color& c) {
         double* p = &data_[(static_cast<size_t>(axis) * bins_ + bin) * 3];
-        p[0] += c.x; p[1] += c.y; p[2] += c.z;
+        p[0] += c.x;
+        p[1] += c.y;
+        p[2] += c.z;
     }
     // Marks bins [k0, k1] touched (0 <= k0 <= k1 < bins).
     TPB_HOT_INLINE void mark(TimeAxis axis, int k0, int k1) {
@@ -179,14 +181,14 @@ struct TileStaging {
         int bin = 0, count = 0;  // bins [bin, bin + count) of one axis
     };
     struct Pixel {
-        uint32_t pixel = 0;                              // index in the tile
+        uint32_t pixel = 0;                                   // index in the tile
         uint32_t firstRun[2] = {0, 0}, runCount[2] = {0, 0};  // its runs in `runs`, per axis
         size_t offset[2] = {0, 0};  // of its first run's rgb in `values`, per axis (the runs follow)
         Color steady{0.0}, before[2] = {Color(0.0), Color(0.0)}, after[2] = {Color(0.0), Color(0.0)};
-        double largest = 0.0;            // largest |value| of the pixel's pass (TileSums::absBound)
+        double largest = 0.0;  // largest |value| of the pixel's pass (TileSums::absBound)
     };
-    std::vector<Pixel> pixels;  // in the order they came
-    std::vector<Run> runs;      // the touched runs, [pixel][axis][run]
+    std::vector<Pixel> pixels;   // in the order they came
+    std::vector<Run> runs;       // the touched runs, [pixel][axis][run]
     std::vector<double> values;  // the touched runs' rgb, [pixel][axis][run][bin][rgb]
     void clear() {
         pixels.clear();
@@ -225,6 +227,7 @@ public:
         TileWriter(const TileWriter&) = delete;
         TileWriter& operator=(const TileWriter&) = delete;
         void addPixel(int x, int y, PixelAccumulator& acc);
+
     private:
         // Adds one staged pixel's pass to `sums` unless a sum would leave float's range (counted);
         // returns the largest |value| it added (for TileSums::absBound), 0 when dropped.
@@ -235,8 +238,8 @@ public:
         std::unique_lock<std::mutex> lock_;
         std::shared_ptr<TileBlock> next_;  // the copy (no staging)
         TileStaging* staging_ = nullptr;
-        TileStaging own_;                   // no staging: one pixel at a time
-        double passMax_ = 0.0;              // largest value added (no staging)
+        TileStaging own_;       // no staging: one pixel at a time
+        double passMax_ = 0.0;  // largest value added (no staging)
         double passWeight_ = 1.0;
     };
 
@@ -269,7 +272,7 @@ public:
 
 private:
     struct Tile {
-        std::mutex writer;   // held by the tile's TileWriter (and merge, clear)
+        std::mutex writer;  // held by the tile's TileWriter (and merge, clear)
         // Guards `block`: held for a pointer copy or swap, and by an in-place add (which needs
         // that no snapshot holds the block, i.e. block->readers() == 0 under this lock).
         mutable std::mutex publish;

@@ -43,14 +43,14 @@ std::string volumeSideJson(const FilmSnapshot& film, const ExportOptions& opt, c
     json j;
     j["format"] = "tpb transient volume";
     j["version"] = 1;
-    j["files"] = {{"volume", "transient.npy"}, {"steady", "steady.npy"}, {"before", "before.npy"},
-                  {"after", "after.npy"}};
+    j["files"] = {
+        {"volume", "transient.npy"}, {"steady", "steady.npy"}, {"before", "before.npy"}, {"after", "after.npy"}};
     j["shape"] = {film.height(), film.width(), film.bins(), 3};
     j["dtype"] = "float32";
     j["index"] = "volume[y, x, k, c]: row y from the top, column x, time bin k, colour c (r, g, b)";
     j["time"] = {{"axis", axisName(opt.axis)},
                  {"emission", emissionName(opt.mode)},
-                 {"pulse", pulseName(opt.response)},    // film/time_response.h: widths in ns
+                 {"pulse", pulseName(opt.response)},  // film/time_response.h: widths in ns
                  {"sensor", sensorName(opt.response)},
                  {"time_response", describe(opt.response)},
                  {"bins", t.bins},
@@ -67,8 +67,9 @@ std::string volumeSideJson(const FilmSnapshot& film, const ExportOptions& opt, c
                    {"before_fraction", share(lumBefore)},
                    {"after_fraction", share(lumAfter)},
                    {"inside_fraction", lumSteady > 0.0 ? finite(1.0 - (lumBefore + lumAfter) / lumSteady) : 0.0},
-                   {"note", "sums over the pixels of before.npy / after.npy / steady.npy; fractions of the steady "
-                            "image's luminance"}};
+                   {"note",
+                    "sums over the pixels of before.npy / after.npy / steady.npy; fractions of the steady "
+                    "image's luminance"}};
     j["render"] = {{"scene", render.scene},
                    {"passes", film.minPasses()},
                    {"passes_max", film.maxPasses()},
@@ -79,15 +80,15 @@ std::string volumeSideJson(const FilmSnapshot& film, const ExportOptions& opt, c
 }
 
 std::vector<std::string> exportVolumeNpy(const FilmSnapshot& film, const std::string& dir, const ExportOptions& opt,
-                                         const VolumeProvenance& render,
-                                         const std::function<void(int, int)>& progress,
+                                         const VolumeProvenance& render, const std::function<void(int, int)>& progress,
                                          const std::atomic<bool>* cancel) {
     ensureWritableDir(dir);
     const int W = film.width(), H = film.height(), B = film.bins();
     std::vector<std::string> written;
     double sums[3][3];
     {
-        const std::vector<float> images[3] = {steadyImage(film), beforeImage(film, opt.axis), afterImage(film, opt.axis)};
+        const std::vector<float> images[3] = {steadyImage(film), beforeImage(film, opt.axis),
+                                              afterImage(film, opt.axis)};
         const char* names[3] = {"steady.npy", "before.npy", "after.npy"};
         for (int i = 0; i < 3; ++i) {
             writeNpy(dir + "/" + names[i], {H, W, 3}, images[i]);

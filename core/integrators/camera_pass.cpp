@@ -14,7 +14,6 @@
 
 namespace tpb {
 
-
 CameraPassStats& CameraPassStats::operator+=(const CameraPassStats& o) {
     FilmTally::operator+=(o);
     cameraRays += o.cameraRays;
@@ -57,7 +56,8 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
         if (si.kind == SurfaceKind::Emitter) {  // visible emitter, seen at its arrival time
             if (si.front) {
                 const Light& l = scene.lights[si.shape->areaLight];
-                splatInstant(time, scratch.acc, stats, path.beta * l.areaRadiance(), path.oplCam + l.emitOpl, l.emitOpl);
+                splatInstant(time, scratch.acc, stats, path.beta * l.areaRadiance(), path.oplCam + l.emitOpl,
+                             l.emitOpl);
             }
             break;
         }
@@ -65,7 +65,8 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
         const Material& mat = *si.material;
         if (si.kind == SurfaceKind::Diffuse) {
             // The surface estimate (transient progressive photon mapping) ends the path.
-            if (est.surface) stats.photonEstimates += est.surface->gather({ray, *hit, ng, mat.albedo}, path, surfaceSink);
+            if (est.surface)
+                stats.photonEstimates += est.surface->gather({ray, *hit, ng, mat.albedo}, path, surfaceSink);
             break;
         }
         if (si.kind == SurfaceKind::Mirror) {
@@ -75,9 +76,15 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
         } else {
             // Dielectric or null boundary: follow reflection or refraction, chosen by Fresnel.
             const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
-            if (c.regionOverflow) { ++stats.regionOverflows; break; }
+            if (c.regionOverflow) {
+                ++stats.regionOverflows;
+                break;
+            }
             ray = c.ray;
-            if (c.nullCrossing && nullCrossings.free()) { --depth; continue; }
+            if (c.nullCrossing && nullCrossings.free()) {
+                --depth;
+                continue;
+            }
             path.beta *= c.tint;
         }
         // A specular chain that never loses weight (a closed box of perfect mirrors) still ends

@@ -34,10 +34,10 @@
 namespace tpb {
 
 struct PassContext {
-    uint64_t pass = 1;                      // 1-based; keys every random number of the pass
-    const TimeBins* time = nullptr;         // the film's time axis
-    int threads = 1;                        // worker threads of the Driver (thread ids 0..threads-1)
-    int tiles = 0;                          // tiles of the film (tile ids 0..tiles-1)
+    uint64_t pass = 1;                         // 1-based; keys every random number of the pass
+    const TimeBins* time = nullptr;            // the film's time axis
+    int threads = 1;                           // worker threads of the Driver (thread ids 0..threads-1)
+    int tiles = 0;                             // tiles of the film (tile ids 0..tiles-1)
     const std::atomic<bool>* abort = nullptr;  // set: stop as soon as possible (the pass is dropped)
 };
 
@@ -55,9 +55,9 @@ struct PassStats {
     // unbounded medium (missing from the steady image only: see photon_tracer.cpp, openBeamLength).
     Color emittedFlux{0.0}, cutFlux{0.0};
     int64_t regionOverflows = 0;  // photons ended by a full region stack (camera paths: camera.regionOverflows)
-    CameraPassStats camera;   // photon beams' camera pass: rays, estimates, film tallies
-    PathTracerStats paths;    // path tracer: paths, connections, film tallies
-    FilmTally film;           // what the pass added to the film's counters (rejected, outside, inside)
+    CameraPassStats camera;       // photon beams' camera pass: rays, estimates, film tallies
+    PathTracerStats paths;        // path tracer: paths, connections, film tallies
+    FilmTally film;               // what the pass added to the film's counters (rejected, outside, inside)
     // Wall-clock seconds of its steps (photon tracing, accelerator build, camera pass).
     double photonSec = 0.0, buildSec = 0.0, cameraSec = 0.0, passSec = 0.0;
     double elapsedSec = 0.0;  // since the Driver's start()
@@ -75,8 +75,8 @@ struct ProbeRequest {
     // scene has a diffuse surface, unless `surfacePhotons` is false.
     std::optional<VolumeEstimator::Needs> store;
     bool surfacePhotons = true;
-    uint64_t maxMapBytes = 0;  // bytes of photon map; 0 = the settings' limit
-    bool photonsOnly = false;  // the photon pass alone (probeMap()), no camera probe
+    uint64_t maxMapBytes = 0;                      // bytes of photon map; 0 = the settings' limit
+    bool photonsOnly = false;                      // the photon pass alone (probeMap()), no camera probe
     double beamRadius = 0.0, surfaceRadius = 0.0;  // m, the kernels the camera probe gathers with
 };
 

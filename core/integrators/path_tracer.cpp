@@ -59,7 +59,10 @@ bool traceShadow(const Scene& scene, Vec3 from, const Vec3& to, RegionStack stac
         const SurfaceInteraction si = interact(scene, ray, *hit);
         if (si.kind != SurfaceKind::Null) return false;  // every other surface blocks
         const SpecularContinuation c = crossNull(scene, ray, *hit, si, stack);
-        if (c.regionOverflow) { ++stats.regionOverflows; return false; }
+        if (c.regionOverflow) {
+            ++stats.regionOverflows;
+            return false;
+        }
         from = c.ray.o;
     }
     return false;
@@ -105,9 +108,7 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
             Li = light.areaRadiance() * (cosL * light.area / d2);
             break;
         }
-        case LightType::Laser:
-            ++ctx.stats.laserSamples;
-            return;
+        case LightType::Laser: ++ctx.stats.laserSamples; return;
     }
     if (isBlack(Li)) return;
     const Vec3 w = glm::normalize(y - x);
@@ -146,8 +147,8 @@ struct SegmentMis {
 // At a free-flight medium vertex (distance t along `mis->ray`) a delta light's connection carries
 // the free-flight technique's MIS weight.
 template <class Scatter>
-void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, const RegionStack& regions,
-               Color beta, double oplCam, double oplUnw, const SegmentMis* mis, double t, Scatter&& scatter) {
+void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, const RegionStack& regions, Color beta,
+               double oplCam, double oplUnw, const SegmentMis* mis, double t, Scatter&& scatter) {
     // Always draw the same count of numbers, so later decisions do not depend on the light type.
     const double uLight = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
     double pick = 0.0;
@@ -203,8 +204,8 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
     const Scene& scene = ctx.scene;
     Color beta(1.0);
     double oplCam = 0.0, oplUnw = 0.0;
-    bool nonSpecular = false;    // the path has reached its first non-specular vertex
-    bool emitterVisible = true;  // previous vertex is the sensor or specular: emitter hits count
+    bool nonSpecular = false;                   // the path has reached its first non-specular vertex
+    bool emitterVisible = true;                 // previous vertex is the sensor or specular: emitter hits count
     RegionStack regions = scene.cameraRegions;  // where the camera sits (usually the outside)
     int depth = 0;
     ++ctx.stats.cameraPaths;
@@ -222,7 +223,8 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                 // A scattering vertex on this segment would be at depth + 1 <= maxDepth.
                 const double sigmaBar = m.samplingSigma();
                 const SegmentMis mis{ray, s.equiangular ? std::min(dSurf, equiangularReach(m)) : 0.0, sigmaBar};
-                if (s.equiangular) equiangularSegment(ctx, rng, mis, region, regions, beta, oplCam, oplUnw, nonSpecular);
+                if (s.equiangular)
+                    equiangularSegment(ctx, rng, mis, region, regions, beta, oplCam, oplUnw, nonSpecular);
                 const FreeFlight ff = sampleFreeFlight(region, ray, dSurf, rng);
                 if (ff.scattered) {
                     // Medium scattering vertex.
@@ -231,13 +233,19 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                     oplCam += ff.opl;
                     if (nonSpecular) oplUnw += ff.opl;
                     nonSpecular = true;
-                    if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
+                    if (!isFinite(beta)) {
+                        ++ctx.stats.rejected;
+                        return;
+                    }
                     const Vec3 x = ray.at(d);
                     ++depth;
                     const Vec3 wi = ray.d;
                     nextEvent(ctx, rng, x, Vec3(0.0), regions, beta, oplCam, oplUnw, s.equiangular ? &mis : nullptr, d,
                               [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(wi, w))); });
-                    if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+                    if (depth >= s.maxDepth) {
+                        ++ctx.stats.depthLimited;
+                        return;
+                    }
                     if (!roulette(rng, beta, depth)) return;
                     const double v1 = rng.uniform(), v2 = rng.uniform();
                     ray = {x, m.phase.sample(wi, v1, v2)};
@@ -252,7 +260,10 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
         if (!hit) return;  // escaped
         oplCam += region.ior * hit->t;
         if (nonSpecular) oplUnw += region.ior * hit->t;
-        if (!isFinite(beta)) { ++ctx.stats.rejected; return; }
+        if (!isFinite(beta)) {
+            ++ctx.stats.rejected;
+            return;
+        }
         if (isBlack(beta)) return;
 
         const SurfaceInteraction si = interact(scene, ray, *hit);
@@ -272,7 +283,10 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
         if (si.kind == SurfaceKind::Null) {
             // Index-matched boundary (as in the beam core): no bending, no reflection, no depth.
             const SpecularContinuation c = crossNull(scene, ray, *hit, si, regions);
-            if (c.regionOverflow) { ++ctx.stats.regionOverflows; return; }
+            if (c.regionOverflow) {
+                ++ctx.stats.regionOverflows;
+                return;
+            }
             ray = c.ray;
             continue;
         }
@@ -282,11 +296,15 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
             nonSpecular = true;
             const Color fr = mat.albedo * kInvPi;
             const Vec3 origin = scene.bounceOrigin(ray, *hit, ng);
-            nextEvent(ctx, rng, hit->p, origin - hit->p, regions, beta, oplCam, oplUnw, nullptr, 0.0, [&](const Vec3& w) {
-                if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
-                return fr * std::max(0.0, glm::dot(w, ns));
-            });
-            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            nextEvent(ctx, rng, hit->p, origin - hit->p, regions, beta, oplCam, oplUnw, nullptr, 0.0,
+                      [&](const Vec3& w) {
+                          if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
+                          return fr * std::max(0.0, glm::dot(w, ns));
+                      });
+            if (depth >= s.maxDepth) {
+                ++ctx.stats.depthLimited;
+                return;
+            }
             const double v1 = rng.uniform(), v2 = rng.uniform();
             const Vec3 wo = glm::normalize(toWorld(sampleCosineHemisphere(v1, v2), ns));
             if (glm::dot(wo, ng) <= 0.0) return;
@@ -294,15 +312,24 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
             ray = {origin, wo};
             emitterVisible = false;
         } else if (si.kind == SurfaceKind::Mirror) {
-            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            if (depth >= s.maxDepth) {
+                ++ctx.stats.depthLimited;
+                return;
+            }
             const SpecularContinuation c = reflectMirror(scene, ray, *hit, si);
             beta *= c.tint;
             ray = c.ray;
             emitterVisible = true;
         } else {  // dielectric: reflection or refraction chosen by Fresnel
-            if (depth >= s.maxDepth) { ++ctx.stats.depthLimited; return; }
+            if (depth >= s.maxDepth) {
+                ++ctx.stats.depthLimited;
+                return;
+            }
             const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
-            if (c.regionOverflow) { ++ctx.stats.regionOverflows; return; }
+            if (c.regionOverflow) {
+                ++ctx.stats.regionOverflows;
+                return;
+            }
             ray = c.ray;
             beta *= c.tint;
             emitterVisible = true;
@@ -326,8 +353,8 @@ PathTracerStats& PathTracerStats::operator+=(const PathTracerStats& o) {
     return *this;
 }
 
-void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, const TimeBins& time, int x,
-                    int y, PixelAccumulator& acc, PathTracerStats& stats) {
+void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, const TimeBins& time, int x, int y,
+                    PixelAccumulator& acc, PathTracerStats& stats) {
     const int spp = std::max(1, s.samplesPerPixel);
     const uint64_t pixelIndex = static_cast<uint64_t>(y) * static_cast<uint64_t>(scene.camera.width) + x;
     Rng rng(s.seed, Stream::PathTracer, pass, pixelIndex);

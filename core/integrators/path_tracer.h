@@ -63,19 +63,19 @@ namespace tpb {
 
 struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or throughputs) dropped
     int64_t cameraPaths = 0;
-    int64_t contributions = 0;   // finite contributions added (NEE + emitter hits)
-    int64_t shadowRays = 0;      // NEE connections traced
-    int64_t laserSamples = 0;    // NEE picked a laser (cannot be connected; contributes nothing)
+    int64_t contributions = 0;       // finite contributions added (NEE + emitter hits)
+    int64_t shadowRays = 0;          // NEE connections traced
+    int64_t laserSamples = 0;        // NEE picked a laser (cannot be connected; contributes nothing)
     int64_t equiangularSamples = 0;  // equiangular points placed towards point/spot lights
-    int64_t depthLimited = 0;    // paths stopped by maxDepth (not by escape, absorption or RR)
-    int64_t regionOverflows = 0;  // paths (or shadow rays) ended because their region stack was full (RegionStack)
+    int64_t depthLimited = 0;        // paths stopped by maxDepth (not by escape, absorption or RR)
+    int64_t regionOverflows = 0;     // paths (or shadow rays) ended because their region stack was full (RegionStack)
     PathTracerStats& operator+=(const PathTracerStats& o);
 };
 
 // One pixel's estimate for this pass (mean of samplesPerPixel camera paths) added into `acc`
 // with the bins of `time`; the caller clears `acc` (no film access; for tests and tools).
-void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, const TimeBins& time, int x,
-                    int y, PixelAccumulator& acc, PathTracerStats& stats);
+void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, const TimeBins& time, int x, int y,
+                    PixelAccumulator& acc, PathTracerStats& stats);
 
 // Whole passes run through the Driver (render/driver.h) with Method::PathTracer: the integrator is
 // PathTracerIntegrator (integrators/path_tracer_integrator.h).

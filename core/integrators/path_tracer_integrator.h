@@ -21,8 +21,8 @@ public:
 private:
     const Scene& scene_;
     RenderSettings settings_;
-    std::vector<PixelAccumulator> accs_;       // per thread
-    std::vector<PathTracerStats> tileStats_;   // per tile, summed in tile order
+    std::vector<PixelAccumulator> accs_;      // per thread
+    std::vector<PathTracerStats> tileStats_;  // per tile, summed in tile order
 };
 
 }  // namespace tpb

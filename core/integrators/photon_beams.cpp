@@ -40,7 +40,9 @@ PhotonPassParams photonPassFor(const Scene& scene, const RenderSettings& s, cons
 }
 
 PhotonBeamsIntegrator::PhotonBeamsIntegrator(const Scene& scene, const RenderSettings& settings)
-    : scene_(scene), settings_(settings), volume_(makeVolumeEstimator(settings.volumeEstimator)),
+    : scene_(scene),
+      settings_(settings),
+      volume_(makeVolumeEstimator(settings.volumeEstimator)),
       surface_(makeSurfaceEstimator(settings.surfaceEstimator)) {
     if (!volume_) throw UserError("unknown volume estimator \"" + settings.volumeEstimator + "\"");
     if (!surface_) throw UserError("unknown surface estimator \"" + settings.surfaceEstimator + "\"");
@@ -48,7 +50,8 @@ PhotonBeamsIntegrator::PhotonBeamsIntegrator(const Scene& scene, const RenderSet
 
 // With the time kernel on, the schedule runs over space and time: D = dim() + 1 (progressive.h).
 double PhotonBeamsIntegrator::beamRadius(uint64_t pass) const {
-    return progressiveRadius(settings_.beamRadius0, settings_.alpha, pass, scheduleDimension(volume_->dim(), timeKernelOn()));
+    return progressiveRadius(settings_.beamRadius0, settings_.alpha, pass,
+                             scheduleDimension(volume_->dim(), timeKernelOn()));
 }
 
 double PhotonBeamsIntegrator::surfaceRadius(uint64_t pass) const {

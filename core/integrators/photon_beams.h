@@ -60,13 +60,13 @@ private:
     const Scene& scene_;
     RenderSettings settings_;
     PhotonMap map_;
-    PhotonTracer tracer_;  // its batch buffers kept from pass to pass
+    PhotonTracer tracer_;                        // its batch buffers kept from pass to pass
     std::unique_ptr<VolumeEstimator> volume_;    // settings.volumeEstimator, kept across passes
     std::unique_ptr<SurfaceEstimator> surface_;  // settings.surfaceEstimator
     CameraPassEstimators estimators_;            // this pass's (null: stage off or nothing to gather)
     CameraPassParams camera_;
-    std::vector<CameraPassScratch> scratch_;     // per thread
-    std::vector<CameraPassStats> tileStats_;     // per tile, summed in tile order
+    std::vector<CameraPassScratch> scratch_;  // per thread
+    std::vector<CameraPassStats> tileStats_;  // per tile, summed in tile order
 };
 
 }  // namespace tpb

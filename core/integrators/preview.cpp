@@ -18,10 +18,19 @@ std::vector<float> renderPreview(const Scene& scene, int threads) {
                 if (!hit) break;
                 const SurfaceInteraction si = interact(scene, ray, *hit);
                 const double cosv = std::abs(glm::dot(hit->ns, ray.d));
-                if (si.kind == SurfaceKind::Emitter) { c = beta; break; }
-                if (si.kind == SurfaceKind::Absorber) { c = beta * 0.5 * cosv; break; }
+                if (si.kind == SurfaceKind::Emitter) {
+                    c = beta;
+                    break;
+                }
+                if (si.kind == SurfaceKind::Absorber) {
+                    c = beta * 0.5 * cosv;
+                    break;
+                }
                 const Material& m = *si.material;
-                if (si.kind == SurfaceKind::Diffuse) { c = beta * m.albedo * cosv; break; }
+                if (si.kind == SurfaceKind::Diffuse) {
+                    c = beta * m.albedo * cosv;
+                    break;
+                }
                 // The shading normal as given, turned to the incoming side (not replaced by ng).
                 const Vec3 n = si.front ? hit->ns : -hit->ns;
                 if (si.kind == SurfaceKind::Mirror) {

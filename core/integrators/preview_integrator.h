@@ -20,8 +20,8 @@ public:
 private:
     const Scene& scene_;
     RenderSettings settings_;
-    std::vector<float> image_;                 // W*H*3, this pass
-    std::vector<PixelAccumulator> accs_;       // per thread
+    std::vector<float> image_;            // W*H*3, this pass
+    std::vector<PixelAccumulator> accs_;  // per thread
 };
 
 }  // namespace tpb

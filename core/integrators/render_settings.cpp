@@ -108,9 +108,7 @@ public:
     }
     std::string name(const Field& f) const { return f.overridden ? f.flag : f.key; }
     // Whether the value was given at all (a flag, or a key written in the file).
-    bool given(const Field& f) const {
-        return f.overridden || (src_.desc && src_.desc->locs.count("render." + f.key));
-    }
+    bool given(const Field& f) const { return f.overridden || (src_.desc && src_.desc->locs.count("render." + f.key)); }
     [[noreturn]] void fail(const Field& f, const std::string& message) const {
         if (f.overridden) throw UserError(message);
         const std::string key = "render." + f.key;
@@ -124,8 +122,10 @@ public:
         if (!ok) fail(f, name(f) + " " + rule + " (got " + got + ")");
     }
     void warn(const Field& f, const std::string& message) {
-        if (f.overridden || !src_.desc) warnings.push_back(f.overridden ? message : "render." + f.key + ": " + message);
-        else warnings.push_back(src_.desc->where("render." + f.key) + "render." + f.key + ": " + message);
+        if (f.overridden || !src_.desc)
+            warnings.push_back(f.overridden ? message : "render." + f.key + ": " + message);
+        else
+            warnings.push_back(src_.desc->where("render." + f.key) + "render." + f.key + ": " + message);
     }
 
     std::vector<std::string> warnings;
@@ -160,12 +160,14 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
         if (relative) {  // a fraction of the diagonal, known without the scene
             if (fileValue > kMaxRadiusFraction)
                 c.fail(f, f.key + " " + shortNumber(fileValue) + " is too large: allowed (0, " +
-                              shortNumber(kMaxRadiusFraction) + "] (a fraction of the scene's diagonal). A kernel "
+                              shortNumber(kMaxRadiusFraction) +
+                              "] (a fraction of the scene's diagonal). A kernel "
                               "that wide makes every camera ray gather every beam or photon, so a pass costs rays x "
                               "beams (minutes, with no better image); typical values are 0.001 to 0.02");
             if (fileValue > kSlowRadiusFraction)
                 c.warn(f, f.key + " " + shortNumber(fileValue) + " is large (above " +
-                              shortNumber(kSlowRadiusFraction) + " of the scene's diagonal): passes get much slower "
+                              shortNumber(kSlowRadiusFraction) +
+                              " of the scene's diagonal): passes get much slower "
                               "as the kernel grows; typical values are 0.001 to 0.02");
             if (fileValue < kTinyRadiusFraction)
                 c.warn(f, f.key + " " + shortNumber(fileValue) + " is tiny (below " + shortNumber(kTinyRadiusFraction) +
@@ -223,18 +225,22 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
     const Field warm = c.field("warmup", "--warmup", ov.warmup.has_value());
     if (passes > 0 && warmupPasses > 0 && warmupPasses >= passes && c.given(warm))
         c.warn(warm, c.name(warm) + " " + std::to_string(warmupPasses) + " is as long as the render (" +
-                         std::to_string(passes) + " passes): every pass is a warm-up pass with fewer photons (pass 1 "
-                         "traces 1/2^" + std::to_string(warmupPasses) + " of photons_per_pass); use fewer warm-up "
+                         std::to_string(passes) +
+                         " passes): every pass is a warm-up pass with fewer photons (pass 1 "
+                         "traces 1/2^" +
+                         std::to_string(warmupPasses) +
+                         " of photons_per_pass); use fewer warm-up "
                          "passes than passes, or 0");
-    c.check(samplesPerPixel >= 1, c.field("samples_per_pixel", "--spp", ov.samplesPerPixel.has_value()),
-            "must be >= 1", std::to_string(samplesPerPixel));
+    c.check(samplesPerPixel >= 1, c.field("samples_per_pixel", "--spp", ov.samplesPerPixel.has_value()), "must be >= 1",
+            std::to_string(samplesPerPixel));
     // ---- the estimators and the time kernel (photon beams only) ----
     const auto checkName = [&](const std::string& name, const std::vector<std::string>& known, const Field& f,
                                const char* what) {
         if (std::find(known.begin(), known.end(), name) != known.end()) return;
         std::string list;
         for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-        c.fail(f, c.name(f) + ": unknown " + what + " \"" + name + "\"; allowed: " + list + " (docs/user/estimators.md)");
+        c.fail(f,
+               c.name(f) + ": unknown " + what + " \"" + name + "\"; allowed: " + list + " (docs/user/estimators.md)");
     };
     const Field volEst = c.field("volume_estimator", "--estimator", ov.volumeEstimator.has_value());
     const Field surfEst = c.field("surface_estimator", "--surface-estimator", ov.surfaceEstimator.has_value());
@@ -250,17 +256,19 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
         for (const Field* f : {&volEst, &surfEst, &tk})
             if (f->overridden)
                 c.fail(*f, c.name(*f) + " applies to the photon-beams estimators only (--method beams); the " +
-                               std::string(methodName(method) == std::string("pt") ? "path tracer is unbiased and has no kernel"
-                                                                                   : "geometry preview has no light transport") +
+                               std::string(methodName(method) == std::string("pt")
+                                               ? "path tracer is unbiased and has no kernel"
+                                               : "geometry preview has no light transport") +
                                ": drop " + c.name(*f) + " or use --method beams");
     }
 
     const Field thr = c.field("threads", "--threads", ov.threads.has_value());
     c.check(threads >= 0, thr, "must be >= 0 (0 = all cores)", std::to_string(threads));
     if (threads > maxUsefulThreads()) {
-        c.warn(thr, c.name(thr) + " " + std::to_string(threads) + " is more than " + std::to_string(kThreadsPerCoreCap) +
-                        " x the " + std::to_string(maxUsefulThreads() / kThreadsPerCoreCap) +
-                        " cores of this machine: using " + std::to_string(maxUsefulThreads()) + " (0 = all cores)");
+        c.warn(thr, c.name(thr) + " " + std::to_string(threads) + " is more than " +
+                        std::to_string(kThreadsPerCoreCap) + " x the " +
+                        std::to_string(maxUsefulThreads() / kThreadsPerCoreCap) + " cores of this machine: using " +
+                        std::to_string(maxUsefulThreads()) + " (0 = all cores)");
         threads = maxUsefulThreads();
     }
     return c.warnings;
@@ -275,7 +283,8 @@ void RenderSettings::validateAgainstFilm(double filmRangeOpl, const SettingsSour
         c.fail(tk, c.name(tk) + ": the time kernel's width " + shortNumber(timeKernel.width) +
                        " m (of optical path) is wider than the film's whole time range " + shortNumber(filmRangeOpl) +
                        " m: every frame would show the same blur; give a width below the range (a few bin widths, "
-                       "e.g. " + shortNumber(4.0 * filmRangeOpl / 100.0) + " m), or \"box\" to let the renderer choose");
+                       "e.g. " +
+                       shortNumber(4.0 * filmRangeOpl / 100.0) + " m), or \"box\" to let the renderer choose");
 }
 
 Record settingsRecord(const RenderSettings& s) {

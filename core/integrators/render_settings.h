@@ -37,8 +37,9 @@ struct SettingsOverrides {
     std::optional<int> warmup;         // --warmup
     std::optional<double> timeBudget;  // s; given without passes it means "as many passes as fit"
     std::optional<double> radius;      // m, absolute: the volume kernel of pass 1 (--radius)
-    std::optional<double> surfaceRadius;  // m, absolute: the surface kernel of pass 1 (checkpoints, render/checkpoint.h)
-    bool autoRadius = false;           // --auto-radius: the radius from a pilot pass (auto_radius.h)
+    std::optional<double>
+        surfaceRadius;        // m, absolute: the surface kernel of pass 1 (checkpoints, render/checkpoint.h)
+    bool autoRadius = false;  // --auto-radius: the radius from a pilot pass (auto_radius.h)
     std::optional<double> alpha;
     std::optional<int> threads, maxDepth, samplesPerPixel;
     std::optional<uint64_t> seed;
@@ -108,7 +109,7 @@ struct RenderSettings {
     std::string volumeEstimator = "beam2d";  // along camera segments in media
     std::string surfaceEstimator = "ppm";    // at diffuse camera-path vertices
     TimeKernelSettings timeKernel;           // off by default
-    uint64_t maxPhotonMapBytes = 0;  // per pass; 0 = maxFilmBytes() (base/memory.h)
+    uint64_t maxPhotonMapBytes = 0;          // per pass; 0 = maxFilmBytes() (base/memory.h)
 
     // ---- path tracer ----
     int samplesPerPixel = 1;

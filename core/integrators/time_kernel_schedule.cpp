@@ -19,8 +19,8 @@ double maxIndexOfRefraction(const Scene& scene, bool scatteringMediaOnly) {
     return eta;
 }
 
-TimeKernelSchedule timeKernelSchedule(const Scene& scene, const RenderSettings& s, const TimeBins& time,
-                                      int volumeDim, int surfaceDim) {
+TimeKernelSchedule timeKernelSchedule(const Scene& scene, const RenderSettings& s, const TimeBins& time, int volumeDim,
+                                      int surfaceDim) {
     const bool on = s.timeKernel.kind != TimeKernelKind::None;
     const double range = time.endOpl() - time.startOpl;
     const auto plan = [&](int dim, double r1, double etaMax) {

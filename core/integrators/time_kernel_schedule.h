@@ -31,8 +31,8 @@ double maxIndexOfRefraction(const Scene& scene, bool scatteringMediaOnly);
 struct TimeKernelPlan {
     bool on = false;
     int spatialDim = 2;
-    double radius1 = 0.0;   // m, the spatial kernel of pass 1
-    double width1 = 0.0;    // m of OPL, full width of the time kernel at pass 1 (0 when off)
+    double radius1 = 0.0;         // m, the spatial kernel of pass 1
+    double width1 = 0.0;          // m of OPL, full width of the time kernel at pass 1 (0 when off)
     bool widthFromScene = false;  // width1 is defaultTimeKernelWidth (RenderSettings width 0)
     double alpha = 0.7;
     int dim() const { return scheduleDimension(spatialDim, on); }  // D of the schedule

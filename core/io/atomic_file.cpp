@@ -14,15 +14,15 @@ namespace {
 
 std::string fixFor(int err) {
     switch (err) {
-    case ENOSPC:
-    case EDQUOT: return "; free space on that disk or write somewhere else (tpb render -o DIR)";
-    case EFBIG: return "; the file is larger than this process may write (ulimit -f) or the file system allows";
-    case EACCES:
-    case EPERM:
-    case EROFS: return "; the folder is not writable: choose another one (tpb render -o DIR)";
-    case ENOENT:
-    case ENOTDIR: return "; the folder does not exist";
-    default: return "";
+        case ENOSPC:
+        case EDQUOT: return "; free space on that disk or write somewhere else (tpb render -o DIR)";
+        case EFBIG: return "; the file is larger than this process may write (ulimit -f) or the file system allows";
+        case EACCES:
+        case EPERM:
+        case EROFS: return "; the folder is not writable: choose another one (tpb render -o DIR)";
+        case ENOENT:
+        case ENOTDIR: return "; the folder does not exist";
+        default: return "";
     }
 }
 
@@ -53,7 +53,8 @@ void AtomicFile::discard() {
 void AtomicFile::fail(const std::string& what, int err) {
     discard();
     committed_ = true;  // nothing left to clean up
-    throw UserError(path_, 0, "", what + ": " + std::strerror(err) + fixFor(err) + " (nothing was written under this name)");
+    throw UserError(path_, 0, "",
+                    what + ": " + std::strerror(err) + fixFor(err) + " (nothing was written under this name)");
 }
 
 void AtomicFile::write(const void* data, size_t bytes) {

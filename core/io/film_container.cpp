@@ -65,7 +65,8 @@ FilmContainerReader::FilmContainerReader(const std::string& path, std::string_vi
 }
 
 void FilmContainerReader::read(void* data, size_t bytes, const char* what) {
-    if (!in_.read(static_cast<char*>(data), static_cast<std::streamsize>(bytes))) fail(std::string("truncated ") + what);
+    if (!in_.read(static_cast<char*>(data), static_cast<std::streamsize>(bytes)))
+        fail(std::string("truncated ") + what);
     hash_.add(data, bytes);
 }
 

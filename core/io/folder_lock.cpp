@@ -49,8 +49,9 @@ std::shared_ptr<FolderLock> FolderLock::acquire(const std::string& dir, const st
     const std::string lockPath = (std::filesystem::path(dir) / kFolderLockName).string();
     const int fd = ::open(lockPath.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0)
-        throw UserError(dir, 0, "", std::string("cannot create the lock file ") + kFolderLockName + ": " +
-                                        std::strerror(errno) + "; " + otherFolder);
+        throw UserError(dir, 0, "",
+                        std::string("cannot create the lock file ") + kFolderLockName + ": " + std::strerror(errno) +
+                            "; " + otherFolder);
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
         const int err = errno;
         if (err == EWOULDBLOCK) {
@@ -62,7 +63,8 @@ std::shared_ptr<FolderLock> FolderLock::acquire(const std::string& dir, const st
             throw UserError(dir, 0, "",
                             "another tpb run (" + (other.empty() ? std::string("unknown process") : other) +
                                 ") is writing into this folder; two runs in one folder would mix their files: wait "
-                                "for it to end, or " + otherFolder);
+                                "for it to end, or " +
+                                otherFolder);
         }
         // A file system without locks: go on, but say what is not detected.
         std::fprintf(stderr, "warning: %s: cannot lock the folder (%s): a second run into it would not be detected\n",

@@ -60,8 +60,9 @@ void ensureWritableDir(const std::string& dir) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir))
-        throw UserError(dir, 0, "", "cannot create the output folder: " + (ec ? ec.message() : "not a folder") +
-                                        "; choose another folder with -o");
+        throw UserError(dir, 0, "",
+                        "cannot create the output folder: " + (ec ? ec.message() : "not a folder") +
+                            "; choose another folder with -o");
     if (::access(dir.c_str(), W_OK) != 0)
         throw UserError(dir, 0, "", "the output folder is not writable; choose another folder with -o");
 }
@@ -72,8 +73,9 @@ int64_t writeExr(const std::string& path, int width, int height, const std::vect
     // and it is refused rather than written.
     for (size_t i = 0; i < rgb.size(); ++i)
         if (!std::isfinite(rgb[i]))
-            throw std::logic_error("internal error (bug): non-finite texel at pixel (" + std::to_string((i / 3) % width) +
-                                   ", " + std::to_string(i / 3 / width) + ") for " + path + "; nothing was written");
+            throw std::logic_error("internal error (bug): non-finite texel at pixel (" +
+                                   std::to_string((i / 3) % width) + ", " + std::to_string(i / 3 / width) + ") for " +
+                                   path + "; nothing was written");
     int64_t clamped = 0;
     MemoryOStream mem(path);
     try {
@@ -158,8 +160,6 @@ void writePngPreview(const std::string& path, int width, int height, const std::
     writePng8(path, width, height, px);
 }
 
-void writeTextFile(const std::string& path, const std::string& text) {
-    writeFileAtomic(path, text);
-}
+void writeTextFile(const std::string& path, const std::string& text) { writeFileAtomic(path, text); }
 
 }  // namespace tpb

@@ -15,12 +15,13 @@ enum class ExrPixel { Float, Half };
 // std::logic_error: the film never holds one, so it is a bug). Returns the number of values clamped
 // to half's range (|v| <= 65504) when type is Half, 0 for Float.
 int64_t writeExr(const std::string& path, int width, int height, const std::vector<float>& rgb,
-              ExrPixel type = ExrPixel::Float);
+                 ExrPixel type = ExrPixel::Float);
 // Reads an RGB(A) EXR into rgb (width*height*3). Throws UserError on failure.
 void readExr(const std::string& path, int& width, int& height, std::vector<float>& rgb);
 
 // sRGB PNG of linear rgb * 2^exposure, clamped.
-void writePngPreview(const std::string& path, int width, int height, const std::vector<float>& rgb, double exposureEv = 0.0);
+void writePngPreview(const std::string& path, int width, int height, const std::vector<float>& rgb,
+                     double exposureEv = 0.0);
 // Raw 8-bit RGB PNG (e.g. a screenshot).
 void writePng8(const std::string& path, int width, int height, const std::vector<unsigned char>& rgb);
 

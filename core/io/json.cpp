@@ -54,9 +54,7 @@ void appendBrief(const JsonValue& v, std::string& out, size_t maxChars) {
             }
             out += ']';
             break;
-        case JsonValue::Type::Object:
-            out += v.members.empty() ? "{}" : "{...}";
-            break;
+        case JsonValue::Type::Object: out += v.members.empty() ? "{}" : "{...}"; break;
     }
 }
 
@@ -69,9 +67,7 @@ std::string JsonValue::brief(size_t maxChars) const {
     return out;
 }
 
-bool isJsonCommentKey(std::string_view key) {
-    return (!key.empty() && key[0] == '_') || key == "comment";
-}
+bool isJsonCommentKey(std::string_view key) { return (!key.empty() && key[0] == '_') || key == "comment"; }
 
 // ---- Parser --------------------------------------------------------------------------------------
 
@@ -92,8 +88,7 @@ public:
         if (atEnd()) fail(line_, "the file is empty: expected a JSON value");
         JsonValue v = parseValue(0);
         skipWhitespace();
-        if (!atEnd())
-            fail(line_, "unexpected " + describeHere() + " after the end of the JSON value");
+        if (!atEnd()) fail(line_, "unexpected " + describeHere() + " after the end of the JSON value");
         return v;
     }
 
@@ -120,9 +115,7 @@ private:
         return nullptr;
     }
 
-    [[noreturn]] void fail(int line, const std::string& message) const {
-        throw UserError(file_, line, "", message);
-    }
+    [[noreturn]] void fail(int line, const std::string& message) const { throw UserError(file_, line, "", message); }
 
     bool atEnd() const { return pos_ >= s_.size(); }
     unsigned char peek() const { return atEnd() ? 0 : static_cast<unsigned char>(s_[pos_]); }
@@ -130,8 +123,10 @@ private:
     void skipWhitespace() {
         while (!atEnd()) {
             const char c = s_[pos_];
-            if (c == '\n') ++line_;
-            else if (c != ' ' && c != '\t' && c != '\r') return;
+            if (c == '\n')
+                ++line_;
+            else if (c != ' ' && c != '\t' && c != '\r')
+                return;
             ++pos_;
         }
     }
@@ -184,8 +179,8 @@ private:
         std::string w;
         for (size_t i = pos_; i < s_.size() && w.size() < 20; ++i) {
             const char c = s_[i];
-            const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                            c == '_' || c == '-' || c == '+' || c == '.';
+            const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+                            c == '-' || c == '+' || c == '.';
             if (!ok) break;
             w += c;
         }
@@ -226,8 +221,7 @@ private:
     // ---- containers ----
 
     void checkDepth(int depth) const {
-        if (depth > kJsonMaxDepth)
-            fail(line_, "nesting deeper than " + std::to_string(kJsonMaxDepth) + " levels");
+        if (depth > kJsonMaxDepth) fail(line_, "nesting deeper than " + std::to_string(kJsonMaxDepth) + " levels");
     }
 
     JsonValue parseObject(int depth) {
@@ -235,7 +229,7 @@ private:
         JsonValue obj;
         obj.type = JsonValue::Type::Object;
         obj.line = line_;
-        ++pos_;  // '{'
+        ++pos_;                                     // '{'
         std::unordered_map<std::string, int> seen;  // key -> line, for duplicates
         skipWhitespace();
         if (peek() == '}') {
@@ -246,8 +240,7 @@ private:
             skipWhitespace();
             if (atEnd()) unclosed("object", obj.line);
             if (peek() != '"') {
-                if (peek() == '}' && !obj.members.empty())
-                    fail(line_, "trailing comma before '}' is not allowed");
+                if (peek() == '}' && !obj.members.empty()) fail(line_, "trailing comma before '}' is not allowed");
                 if (peek() == '\'') fail(line_, "object keys must be in double quotes");
                 fail(line_, "unexpected " + describeHere() + ": expected a key in double quotes");
             }
@@ -257,8 +250,8 @@ private:
             if (!isJsonCommentKey(m.key)) {
                 auto [it, inserted] = seen.emplace(m.key, m.line);
                 if (!inserted)
-                    fail(m.line, "duplicate key \"" + m.key + "\" (first written at line " +
-                                     std::to_string(it->second) + ")");
+                    fail(m.line,
+                         "duplicate key \"" + m.key + "\" (first written at line " + std::to_string(it->second) + ")");
             }
             skipWhitespace();
             if (atEnd()) unclosed("object", obj.line);
@@ -375,7 +368,10 @@ private:
         long long intDigits = 0, leadPos = 0;
         bool found = false;
         for (; i < lit.size() && isDigit(lit[i]); ++i) {
-            if (!found && lit[i] != '0') { found = true; leadPos = intDigits; }
+            if (!found && lit[i] != '0') {
+                found = true;
+                leadPos = intDigits;
+            }
             ++intDigits;
         }
         long long lead = 0;
@@ -386,7 +382,10 @@ private:
             ++i;
             long long fracPos = 0;
             for (; i < lit.size() && isDigit(lit[i]); ++i, ++fracPos) {
-                if (!found && lit[i] != '0') { found = true; lead = -(fracPos + 1); }
+                if (!found && lit[i] != '0') {
+                    found = true;
+                    lead = -(fracPos + 1);
+                }
             }
         }
         if (!found) return 0;
@@ -444,20 +443,32 @@ private:
 
     // Length of the valid UTF-8 sequence starting at byte `i` (lead byte >= 0x80), or 0.
     size_t utf8SequenceLength(size_t i) const {
-        const auto byte = [&](size_t k) -> unsigned {
-            return k < s_.size() ? static_cast<unsigned char>(s_[k]) : 0u;
-        };
+        const auto byte = [&](size_t k) -> unsigned { return k < s_.size() ? static_cast<unsigned char>(s_[k]) : 0u; };
         const unsigned b0 = byte(i);
         size_t n = 0;
         unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
-        if (b0 >= 0xC2 && b0 <= 0xDF) n = 2;
-        else if (b0 == 0xE0) { n = 3; lo = 0xA0; }
-        else if (b0 == 0xED) { n = 3; hi = 0x9F; }  // no UTF-16 surrogates
-        else if (b0 >= 0xE1 && b0 <= 0xEF) n = 3;
-        else if (b0 == 0xF0) { n = 4; lo = 0x90; }
-        else if (b0 >= 0xF1 && b0 <= 0xF3) n = 4;
-        else if (b0 == 0xF4) { n = 4; hi = 0x8F; }  // <= U+10FFFF
-        else return 0;
+        if (b0 >= 0xC2 && b0 <= 0xDF)
+            n = 2;
+        else if (b0 == 0xE0) {
+            n = 3;
+            lo = 0xA0;
+        } else if (b0 == 0xED) {
+            n = 3;
+            hi = 0x9F;
+        }  // no UTF-16 surrogates
+        else if (b0 >= 0xE1 && b0 <= 0xEF)
+            n = 3;
+        else if (b0 == 0xF0) {
+            n = 4;
+            lo = 0x90;
+        } else if (b0 >= 0xF1 && b0 <= 0xF3)
+            n = 4;
+        else if (b0 == 0xF4) {
+            n = 4;
+            hi = 0x8F;
+        }  // <= U+10FFFF
+        else
+            return 0;
         const unsigned b1 = byte(i + 1);
         if (b1 < lo || b1 > hi) return 0;
         for (size_t k = 2; k < n; ++k) {
@@ -473,8 +484,9 @@ private:
         ++pos_;
         std::string out;
         for (;;) {
-            if (atEnd()) fail(line_, "unexpected end of input: the string opened at line " +
-                                         std::to_string(startLine) + " is not closed");
+            if (atEnd())
+                fail(line_, "unexpected end of input: the string opened at line " + std::to_string(startLine) +
+                                " is not closed");
             const unsigned char c = peek();
             if (c == '"') {
                 ++pos_;
@@ -521,12 +533,12 @@ private:
             case 'u': break;
             default: {
                 --pos_;
-                fail(line_, "invalid escape \\" + describeHere() + " in a string; allowed: \\\" \\\\ \\/ \\b \\f \\n \\r \\t \\uXXXX");
+                fail(line_, "invalid escape \\" + describeHere() +
+                                " in a string; allowed: \\\" \\\\ \\/ \\b \\f \\n \\r \\t \\uXXXX");
             }
         }
         unsigned cp = readHex4();
-        if (cp >= 0xDC00 && cp <= 0xDFFF)
-            fail(line_, "invalid \\u escape: unpaired low surrogate \\u" + hex4(cp));
+        if (cp >= 0xDC00 && cp <= 0xDFFF) fail(line_, "invalid \\u escape: unpaired low surrogate \\u" + hex4(cp));
         if (cp >= 0xD800 && cp <= 0xDBFF) {
             if (s_.compare(pos_, 2, "\\u") != 0)
                 fail(line_, "invalid \\u escape: high surrogate \\u" + hex4(cp) +
@@ -550,8 +562,6 @@ private:
 
 }  // namespace
 
-JsonValue parseJson(const std::string& text, const std::string& file) {
-    return Parser(text, file).parseDocument();
-}
+JsonValue parseJson(const std::string& text, const std::string& file) { return Parser(text, file).parseDocument(); }
 
 }  // namespace tpb

@@ -25,10 +25,10 @@ struct JsonValue {
     enum class Type { Null, Bool, Number, String, Array, Object };
 
     Type type = Type::Null;
-    int line = 0;            // 1-based line where the value starts
-    bool boolean = false;    // Bool
-    double number = 0.0;     // Number
-    std::string text;        // String: decoded UTF-8; Number: the literal as written (exact integers)
+    int line = 0;                     // 1-based line where the value starts
+    bool boolean = false;             // Bool
+    double number = 0.0;              // Number
+    std::string text;                 // String: decoded UTF-8; Number: the literal as written (exact integers)
     std::vector<JsonValue> items;     // Array
     std::vector<JsonMember> members;  // Object, in file order
 

@@ -23,11 +23,16 @@ Record recordFromJson(const Json& j) {
     if (!j.is_object()) return r;
     for (auto it = j.begin(); it != j.end(); ++it) {
         const Json& v = it.value();
-        if (v.is_boolean()) r.push_back({it.key(), v.template get<bool>()});
-        else if (v.is_number_unsigned()) r.push_back({it.key(), v.template get<uint64_t>()});
-        else if (v.is_number_integer()) r.push_back({it.key(), v.template get<int64_t>()});
-        else if (v.is_number_float()) r.push_back({it.key(), v.template get<double>()});
-        else if (v.is_string()) r.push_back({it.key(), v.template get<std::string>()});
+        if (v.is_boolean())
+            r.push_back({it.key(), v.template get<bool>()});
+        else if (v.is_number_unsigned())
+            r.push_back({it.key(), v.template get<uint64_t>()});
+        else if (v.is_number_integer())
+            r.push_back({it.key(), v.template get<int64_t>()});
+        else if (v.is_number_float())
+            r.push_back({it.key(), v.template get<double>()});
+        else if (v.is_string())
+            r.push_back({it.key(), v.template get<std::string>()});
     }
     return r;
 }

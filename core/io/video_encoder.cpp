@@ -163,14 +163,20 @@ std::string requireFfmpeg(const std::string& flag) {
 }
 
 VideoEncoder::VideoEncoder(const std::string& path, int width, int height, double fps, const std::string& flag)
-    : path_(path), tmp_(atomicTmpName(path)), width_(width), height_(height), w2_(width + (width & 1)),
+    : path_(path),
+      tmp_(atomicTmpName(path)),
+      width_(width),
+      height_(height),
+      w2_(width + (width & 1)),
       h2_(height + (height & 1)) {
     TPB_CHECK(width > 0 && height > 0 && fps > 0.0);
     const std::string exe = requireFfmpeg(flag);
     // ffmpeg's stderr: an unlinked temporary file (read back for the error message; no pipe to
     // drain while we write frames).
     FILE* log = std::tmpfile();
-    if (!log) throw UserError(path, 0, "", std::string("cannot create a temporary file for ffmpeg's messages: ") + std::strerror(errno));
+    if (!log)
+        throw UserError(path, 0, "",
+                        std::string("cannot create a temporary file for ffmpeg's messages: ") + std::strerror(errno));
     stderrFd_ = ::fcntl(::fileno(log), F_DUPFD_CLOEXEC, 0);
     std::fclose(log);
     int pipeFds[2];
@@ -179,9 +185,10 @@ VideoEncoder::VideoEncoder(const std::string& path, int width, int height, doubl
         throw UserError(path, 0, "", std::string("cannot create a pipe to ffmpeg: ") + std::strerror(errno));
     }
     const std::string size = std::to_string(w2_) + "x" + std::to_string(h2_);
-    std::vector<std::string> args = {exe, "-hide_banner", "-loglevel", "error", "-nostats", "-y",
-                                     "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", size, "-r", fmtNumber(fps),
-                                     "-i", "-", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-f", "mp4", tmp_};
+    std::vector<std::string> args = {exe,        "-hide_banner", "-loglevel", "error", "-nostats", "-y",
+                                     "-f",       "rawvideo",     "-pix_fmt",  "rgb24", "-s",       size,
+                                     "-r",       fmtNumber(fps), "-i",        "-",     "-c:v",     "libx264",
+                                     "-pix_fmt", "yuv420p",      "-f",        "mp4",   tmp_};
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -220,8 +227,7 @@ VideoEncoder::~VideoEncoder() {
 
 int VideoEncoder::waitChild() {
     int status = 0;
-    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
-    }
+    while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {}
     pid_ = -1;
     return status;
 }

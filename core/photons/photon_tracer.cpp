@@ -12,7 +12,6 @@ namespace tpb {
 
 namespace {
 
-
 // Length of a long beam that never reaches a surface (an unbounded medium). A contribution from
 // the point s along the beam arrives at OPL >= opl0 + eta s on both time axes (the unwarped time is
 // that of the scattering point, the real one adds the camera path), so a beam that reaches the
@@ -62,9 +61,12 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
     // The photon starts in the region where it leaves the light: a light inside a fog container
     // or a closed box emits into it (an area light may straddle a boundary: per point).
     const std::optional<RegionStack> startRegions = scene.emissionRegions(li, ray.o);
-    if (!startRegions) { ++out.regionOverflows; return true; }
+    if (!startRegions) {
+        ++out.regionOverflows;
+        return true;
+    }
     RegionStack regions = *startRegions;
-    double opl = light.emitOpl;  // eq. 11: the photon's clock starts at the pulse instant
+    double opl = light.emitOpl;        // eq. 11: the photon's clock starts at the pulse instant
     NullCrossingBudget nullCrossings;  // index-matched boundaries are not events: they do not use up depth
     const size_t beams0 = out.beams.size(), photons0 = out.photons.size(), points0 = out.points.size();
 
@@ -129,7 +131,10 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                 opl += ff.opl;
                 ray = {ray.at(ff.distance), m.phase.sample(ray.d, rng.uniform(), rng.uniform())};
             }
-            if (!isFinite(power)) { ++out.rejected; return true; }
+            if (!isFinite(power)) {
+                ++out.rejected;
+                return true;
+            }
             if (ff.scattered) {
                 // Russian roulette on the throughput relative to the emitted power.
                 if (!russianRoulette(rng, power, power0, depth + 1, s.rouletteDepth)) return true;
@@ -144,8 +149,10 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
             case SurfaceKind::Emitter:
             case SurfaceKind::Absorber: return true;  // emitters and unassigned shapes absorb
             case SurfaceKind::Diffuse: {
-                if (s.storeSurfacePhotons) out.photons.push_back({hit->p, ray.d, si.ng, power, opl, hit->t, region.ior});
-                const Vec3 newDir = glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), si.ns));
+                if (s.storeSurfacePhotons)
+                    out.photons.push_back({hit->p, ray.d, si.ng, power, opl, hit->t, region.ior});
+                const Vec3 newDir =
+                    glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), si.ns));
                 if (glm::dot(newDir, si.ng) <= 0.0) return true;
                 power *= si.material->albedo;
                 ray = {scene.bounceOrigin(ray, *hit, si.ng), newDir};
@@ -160,9 +167,15 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
             case SurfaceKind::Dielectric:
             case SurfaceKind::Null: {
                 const SpecularContinuation c = followInterface(scene, ray, *hit, si, regions, rng.uniform());
-                if (c.regionOverflow) { ++out.regionOverflows; return true; }
+                if (c.regionOverflow) {
+                    ++out.regionOverflows;
+                    return true;
+                }
                 ray = c.ray;
-                if (c.nullCrossing && nullCrossings.free()) { --depth; continue; }
+                if (c.nullCrossing && nullCrossings.free()) {
+                    --depth;
+                    continue;
+                }
                 power *= c.tint;
                 break;
             }
@@ -182,30 +195,37 @@ PhotonMap PhotonTracer::trace(const Scene& scene, const PhotonPassParams& s, con
     parts_.resize(static_cast<size_t>(batches));
     for (PhotonMap& p : parts_) p.clear();
     std::atomic<uint64_t> stored{0};  // bytes of all batches so far, for the memory guard
-    parallelFor(batches, s.threads, [&](int64_t b, int) {
-        PhotonMap& part = parts_[static_cast<size_t>(b)];
-        const int64_t end = std::min(s.photons, (b + 1) * kBatch);
-        uint64_t reported = 0;  // of this batch's bytes, those added to `stored`
-        int64_t i = b * kBatch;
-        for (; i < end; ++i) {
-            if (abort && abort->load(std::memory_order_relaxed)) break;
-            if (!tracePhoton(scene, s, i, part, abort)) break;
-            if (s.maxMapBytes > 0) {
-                const uint64_t mine = storedMapBytes(part);
-                uint64_t total = stored.load(std::memory_order_relaxed) + (mine - reported);
-                if ((i - b * kBatch) % kGuardEvery == kGuardEvery - 1 || i + 1 == end) {
-                    total = stored.fetch_add(mine - reported) + (mine - reported);
-                    reported = mine;
+    parallelFor(
+        batches, s.threads,
+        [&](int64_t b, int) {
+            PhotonMap& part = parts_[static_cast<size_t>(b)];
+            const int64_t end = std::min(s.photons, (b + 1) * kBatch);
+            uint64_t reported = 0;  // of this batch's bytes, those added to `stored`
+            int64_t i = b * kBatch;
+            for (; i < end; ++i) {
+                if (abort && abort->load(std::memory_order_relaxed)) break;
+                if (!tracePhoton(scene, s, i, part, abort)) break;
+                if (s.maxMapBytes > 0) {
+                    const uint64_t mine = storedMapBytes(part);
+                    uint64_t total = stored.load(std::memory_order_relaxed) + (mine - reported);
+                    if ((i - b * kBatch) % kGuardEvery == kGuardEvery - 1 || i + 1 == end) {
+                        total = stored.fetch_add(mine - reported) + (mine - reported);
+                        reported = mine;
+                    }
+                    if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
                 }
-                if (total > s.maxMapBytes) mapTooLarge(s, "the photons traced so far");
             }
-        }
-        part.emitted = i - b * kBatch;
-        part.aborted = i < end;
-    }, abort);
+            part.emitted = i - b * kBatch;
+            part.aborted = i < end;
+        },
+        abort);
     PhotonMap all;
     size_t nb = 0, np = 0, nv = 0;
-    for (const PhotonMap& p : parts_) { nb += p.beams.size(); np += p.photons.size(); nv += p.points.size(); }
+    for (const PhotonMap& p : parts_) {
+        nb += p.beams.size();
+        np += p.photons.size();
+        nv += p.points.size();
+    }
     all.beams.reserve(nb);
     all.photons.reserve(np);
     all.points.reserve(nv);

@@ -55,12 +55,12 @@ struct Beam {
 
 // A photon at a scattering event inside a scattering medium (see the header: weight and depth).
 struct VolumePhoton {
-    Vec3 position;   // m, the scattering point x(s)
-    Vec3 dirIn;      // unit, propagation direction of the segment that ends here (before scattering)
-    Color power;     // W m: Phi T(s) / (sigma_bar Tbar(s)), already divided by the photon count
-    double opl;      // OPL at the scattering point (m), emission time included
-    int region;      // region whose medium it scatters in
-    uint32_t depth;  // that of the segment (beam) it ends: scattering/reflection events before it
+    Vec3 position;        // m, the scattering point x(s)
+    Vec3 dirIn;           // unit, propagation direction of the segment that ends here (before scattering)
+    Color power;          // W m: Phi T(s) / (sigma_bar Tbar(s)), already divided by the photon count
+    double opl;           // OPL at the scattering point (m), emission time included
+    int region;           // region whose medium it scatters in
+    uint32_t depth;       // that of the segment (beam) it ends: scattering/reflection events before it
     double length = 0.0;  // m, from the segment's start (the event before, OPL opl - ior length) to here
 };
 
@@ -81,11 +81,11 @@ struct PhotonMap {
     std::vector<SurfacePhoton> photons;
     std::vector<VolumePhoton> points;  // only when PhotonPassParams::storePoints
     int64_t emitted = 0;
-    int64_t rejected = 0;      // non-finite photon weights discarded
-    Color emittedFlux{0.0};    // W: the flux the pass's photons started with (estimates the lights' power)
-    Color cutFlux{0.0};        // W: flux still carried at the end of long beams cut in an unbounded medium
-    int64_t regionOverflows = 0;   // photons ended because their region stack was full (RegionStack)
-    bool aborted = false;          // the abort flag stopped the pass: the map is partial, discard it
+    int64_t rejected = 0;         // non-finite photon weights discarded
+    Color emittedFlux{0.0};       // W: the flux the pass's photons started with (estimates the lights' power)
+    Color cutFlux{0.0};           // W: flux still carried at the end of long beams cut in an unbounded medium
+    int64_t regionOverflows = 0;  // photons ended because their region stack was full (RegionStack)
+    bool aborted = false;         // the abort flag stopped the pass: the map is partial, discard it
     // Empty, keeping the arrays' capacity (PhotonTracer reuses its batches' maps).
     void clear() {
         beams.clear();
@@ -140,8 +140,7 @@ private:
 };
 
 // One pass with buffers of its own (PhotonTracer::trace).
-PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s,
-                       const std::atomic<bool>* abort = nullptr);
+PhotonMap tracePhotons(const Scene& scene, const PhotonPassParams& s, const std::atomic<bool>* abort = nullptr);
 
 // Bytes the map's beams, surface photons and points take (what maxMapBytes limits).
 uint64_t storedMapBytes(const PhotonMap& m);

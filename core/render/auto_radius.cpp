@@ -135,13 +135,15 @@ RadiusPilot pilotRadius(const Scene& scene, const RenderSettings& settings, cons
         return out;
     }
     out.meanChord = 4.0 * out.boxVolume / out.boxArea;
-    out.radius = out.pointKernel ? std::sqrt(out.target * out.boxArea / (4.0 * kPi * static_cast<double>(out.points) * out.scale))
-                                 : out.target * out.boxArea / (2.0 * kPi * out.beamLength);
+    out.radius = out.pointKernel
+                     ? std::sqrt(out.target * out.boxArea / (4.0 * kPi * static_cast<double>(out.points) * out.scale))
+                     : out.target * out.boxArea / (2.0 * kPi * out.beamLength);
     out.measured = std::isfinite(out.radius) && out.radius > 0.0;
     char buf[256];
-    std::snprintf(buf, sizeof buf, "%lld %s in region %d over a %.3g m^3 box (mean chord %.3g m): %.3g m gathers ~%.0f per ray",
-                  static_cast<long long>(out.pointKernel ? out.points : out.beams), out.pointKernel ? "photon points" : "beams",
-                  out.region, out.boxVolume, out.meanChord, out.radius, out.target);
+    std::snprintf(
+        buf, sizeof buf, "%lld %s in region %d over a %.3g m^3 box (mean chord %.3g m): %.3g m gathers ~%.0f per ray",
+        static_cast<long long>(out.pointKernel ? out.points : out.beams), out.pointKernel ? "photon points" : "beams",
+        out.region, out.boxVolume, out.meanChord, out.radius, out.target);
     out.why = buf;
     return out;
 }

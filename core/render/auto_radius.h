@@ -32,27 +32,27 @@
 
 namespace tpb {
 
-inline constexpr double kAutoBeamsPerRay = 64.0;   // beams a camera chord through the medium gathers per pass
-inline constexpr double kAutoPointsPerRay = 2.0;   // photon points (point2d, point3d)
+inline constexpr double kAutoBeamsPerRay = 64.0;  // beams a camera chord through the medium gathers per pass
+inline constexpr double kAutoPointsPerRay = 2.0;  // photon points (point2d, point3d)
 // The pilot traces at most this many photons and scales what it measures to the render's photons
 // per pass (lengths and counts grow linearly with the photons): the pilot stays cheap.
 inline constexpr int64_t kAutoPilotPhotons = 4000;
 inline constexpr uint64_t kAutoPilotMaxMapBytes = 64ull << 20;
 
 struct RadiusPilot {
-    bool measured = false;      // false: no beams in a scattering medium (why says so)
-    std::string why;            // what was measured, or why nothing was
-    int region = -1;            // the medium region measured
-    int64_t photons = 0;        // traced by the pilot
-    double scale = 1.0;         // the render's photons per pass / the pilot's
+    bool measured = false;          // false: no beams in a scattering medium (why says so)
+    std::string why;                // what was measured, or why nothing was
+    int region = -1;                // the medium region measured
+    int64_t photons = 0;            // traced by the pilot
+    double scale = 1.0;             // the render's photons per pass / the pilot's
     int64_t beams = 0, points = 0;  // the pilot's, in that region
-    double beamLength = 0.0;    // m, total, in that region, scaled to the render's photons per pass
-    double boxVolume = 0.0;     // m^3 of the box bounding those beams
-    double boxArea = 0.0;       // m^2
-    double meanChord = 0.0;     // m, 4 V / A
-    bool pointKernel = false;   // the estimator gathers photon points
-    double target = 0.0;        // beams or points per camera chord
-    double radius = 0.0;        // m, the chosen initial volume radius
+    double beamLength = 0.0;        // m, total, in that region, scaled to the render's photons per pass
+    double boxVolume = 0.0;         // m^3 of the box bounding those beams
+    double boxArea = 0.0;           // m^2
+    double meanChord = 0.0;         // m, 4 V / A
+    bool pointKernel = false;       // the estimator gathers photon points
+    double target = 0.0;            // beams or points per camera chord
+    double radius = 0.0;            // m, the chosen initial volume radius
     // What the given radius would gather per chord (N as above), for `tpb info`.
     double gathered(double r) const;
 };

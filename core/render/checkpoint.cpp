@@ -255,7 +255,8 @@ CheckpointInfo infoFrom(const std::string& path, const json& h) {
         i.time.bins = h.at("time").at("bins").get<int>();
         i.time.startOpl = h.at("time").at("start_opl_m").get<double>();
         i.time.binWidth = h.at("time").at("bin_width_opl_m").get<double>();
-        for (const json& kv : h.at("fingerprint")) i.fingerprint.emplace_back(kv.at(0).get<std::string>(), kv.at(1).get<std::string>());
+        for (const json& kv : h.at("fingerprint"))
+            i.fingerprint.emplace_back(kv.at(0).get<std::string>(), kv.at(1).get<std::string>());
         i.overrides = overridesFrom(h.at("overrides"));
     } catch (const std::exception& e) {
         bad(path, std::string("header field missing or of the wrong type (") + e.what() + ")");
@@ -274,7 +275,8 @@ CheckpointInfo infoFrom(const std::string& path, const json& h) {
 void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const TransientFilm& film,
                      const std::vector<PassStats>& history) {
     const std::shared_ptr<const FilmSnapshot> snap = film.snapshot();
-    if (snap->minPasses() != static_cast<int64_t>(info.passes) || snap->maxPasses() != static_cast<int64_t>(info.passes))
+    if (snap->minPasses() != static_cast<int64_t>(info.passes) ||
+        snap->maxPasses() != static_cast<int64_t>(info.passes))
         throw UserError(path + ": no checkpoint written: the film's tiles hold " + std::to_string(snap->minPasses()) +
                         " to " + std::to_string(snap->maxPasses()) + " passes, not " + std::to_string(info.passes) +
                         " each (a pass was cut short); the last checkpoint, if any, is kept");
@@ -292,7 +294,8 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
     h["weight"] = film.tileCount() > 0 ? snap->block(0).sums.weight : static_cast<double>(info.passes);
     h["width"] = film.width();
     h["height"] = film.height();
-    h["time"] = {{"bins", film.time().bins}, {"start_opl_m", film.time().startOpl}, {"bin_width_opl_m", film.time().binWidth}};
+    h["time"] = {
+        {"bins", film.time().bins}, {"start_opl_m", film.time().startOpl}, {"bin_width_opl_m", film.time().binWidth}};
     h["tiles"] = film.tileCount();
     h["payload_bytes"] = payloadBytes(layout);
     json fp = json::array();
@@ -355,7 +358,8 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
     } catch (const std::exception&) {
         bad(path, "header field \"weight\" is not a number");
     }
-    if (!(weight >= 0.0) || weight > static_cast<double>(c.info.passes) * (1.0 + 1e-12) || (c.info.passes > 0 && !(weight > 0.0)))
+    if (!(weight >= 0.0) || weight > static_cast<double>(c.info.passes) * (1.0 + 1e-12) ||
+        (c.info.passes > 0 && !(weight > 0.0)))
         bad(path, "header weight " + std::to_string(weight) + " is out of range for " + std::to_string(c.info.passes) +
                       " passes");
     for (int t = 0; t < film.tileCount(); ++t) {
@@ -439,8 +443,10 @@ SettingsOverrides resumeOverrides(const SettingsOverrides& cp, const SettingsOve
     SettingsOverrides o = cp;
     // What a resume may change: how many passes, how long, on how many threads.
     if (given.passes) o.passes = given.passes;
-    if (given.timeBudget) o.timeBudget = given.timeBudget;
-    else o.timeBudget.reset();  // a budget counts from the start of a run: the earlier run's is spent
+    if (given.timeBudget)
+        o.timeBudget = given.timeBudget;
+    else
+        o.timeBudget.reset();  // a budget counts from the start of a run: the earlier run's is spent
     o.threads = given.threads;
     auto same = [&](const char* flag, const auto& mine, const auto& theirs, auto show) {
         if (!mine) return;
@@ -451,9 +457,12 @@ SettingsOverrides resumeOverrides(const SettingsOverrides& cp, const SettingsOve
                             " (the checkpoint's value is used) or render anew without --resume");
     };
     auto str = [](const auto& v) {
-        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::string>) return v;
-        else if constexpr (std::is_floating_point_v<std::decay_t<decltype(v)>>) return shortest(v);
-        else return std::to_string(v);
+        if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::string>)
+            return v;
+        else if constexpr (std::is_floating_point_v<std::decay_t<decltype(v)>>)
+            return shortest(v);
+        else
+            return std::to_string(v);
     };
     same("--photons", given.photons, cp.photons, str);
     same("--warmup", given.warmup, cp.warmup, str);
@@ -471,11 +480,13 @@ SettingsOverrides resumeOverrides(const SettingsOverrides& cp, const SettingsOve
     same("--profile", given.profile, cp.profile, [](TimeProfile p) { return std::string(profileName(p)); });
     same("--beam-length", given.beamLength, cp.beamLength, [](BeamLength b) { return std::string(lengthName(b)); });
     same("--accel", given.accel, cp.accel, [](AccelBackend a) { return std::string(accelName(a)); });
-    same("--time-kernel", given.timeKernel, cp.timeKernel, [](const TimeKernelSettings& k) { return timeKernelName(k); });
+    same("--time-kernel", given.timeKernel, cp.timeKernel,
+         [](const TimeKernelSettings& k) { return timeKernelName(k); });
     same("--pt-free-flight", given.equiangular, cp.equiangular, [](bool e) { return std::string(e ? "off" : "on"); });
     if (given.autoRadius && !cp.autoRadius)
-        throw UserError("--auto-radius: the checkpoint was rendered without it; a resumed render continues the same "
-                        "sequence: drop --auto-radius or render anew without --resume");
+        throw UserError(
+            "--auto-radius: the checkpoint was rendered without it; a resumed render continues the same "
+            "sequence: drop --auto-radius or render anew without --resume");
     return o;
 }
 

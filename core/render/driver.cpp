@@ -17,7 +17,8 @@ double nowSec() {
 
 Driver::Driver(const Scene& scene, const RenderSettings& settings, const TimeBins& time,
                std::unique_ptr<Integrator> integrator)
-    : scene_(scene), settings_(settings),
+    : scene_(scene),
+      settings_(settings),
       film_(std::make_unique<TransientFilm>(scene.camera.width, scene.camera.height, time)),
       integrator_(integrator ? std::move(integrator) : makeIntegrator(scene, settings)) {
     settings_.threads = resolveThreads(settings_.threads);
@@ -45,11 +46,14 @@ bool Driver::runPass(uint64_t pass) {
     // its tile's pixels and adds them to the film when the tile is done (in place, transient_film.h).
     if (staging_.size() < static_cast<size_t>(ctx.threads)) staging_.resize(static_cast<size_t>(ctx.threads));
     const double weight = settings_.passWeight(ctx.pass);  // < 1 for a warm-up pass of the photon beams
-    parallelFor(ctx.tiles, ctx.threads, [&](int64_t tile, int t) {
-        const int i = static_cast<int>(tile);
-        TransientFilm::TileWriter writer(*film_, i, &staging_[static_cast<size_t>(t)], weight);
-        integrator_->renderTile(ctx, i, film_->tileRect(i), writer, t);
-    }, &abort_);
+    parallelFor(
+        ctx.tiles, ctx.threads,
+        [&](int64_t tile, int t) {
+            const int i = static_cast<int>(tile);
+            TransientFilm::TileWriter writer(*film_, i, &staging_[static_cast<size_t>(t)], weight);
+            integrator_->renderTile(ctx, i, film_->tileRect(i), writer, t);
+        },
+        &abort_);
     integrator_->endPass(ctx, ps);
     ps.film.flushInto(film_->stats);
     if (abort_) return false;
@@ -185,22 +189,25 @@ ProbeResult runProbe(Integrator& integrator, const Scene& scene, const ProbeRequ
     const size_t bins = static_cast<size_t>(time.bins);
     std::vector<double> perRow(static_cast<size_t>(rows) * bins, 0.0);
     std::atomic<int> rowsDone{0};
-    parallelFor(rows, ctx.threads, [&](int64_t r, int thread) {
-        double* row = &perRow[static_cast<size_t>(r) * bins];
-        const int y = static_cast<int>(r) * stepY;
-        for (int x = 0; x < W; x += stepX) {
-            if (aborted()) return;  // (a row of a huge film is long too)
-            const PixelAccumulator* acc = integrator.probePixel(ctx, x, y, thread);
-            if (!acc) return;
-            for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
-                for (int k = acc->lo(a); k <= acc->hi(a); ++k) {
-                    const double* v = acc->bin(a, k);
-                    row[k] += std::max(0.0, luminance(Color(v[0], v[1], v[2])));
-                }
-        }
-        const int done = rowsDone.fetch_add(1) + 1;
-        if (thread == 0) report(kPhotonShare + (1.0 - kPhotonShare) * done / rows);
-    }, abort);
+    parallelFor(
+        rows, ctx.threads,
+        [&](int64_t r, int thread) {
+            double* row = &perRow[static_cast<size_t>(r) * bins];
+            const int y = static_cast<int>(r) * stepY;
+            for (int x = 0; x < W; x += stepX) {
+                if (aborted()) return;  // (a row of a huge film is long too)
+                const PixelAccumulator* acc = integrator.probePixel(ctx, x, y, thread);
+                if (!acc) return;
+                for (TimeAxis a : {TimeAxis::Real, TimeAxis::Unwarped})
+                    for (int k = acc->lo(a); k <= acc->hi(a); ++k) {
+                        const double* v = acc->bin(a, k);
+                        row[k] += std::max(0.0, luminance(Color(v[0], v[1], v[2])));
+                    }
+            }
+            const int done = rowsDone.fetch_add(1) + 1;
+            if (thread == 0) report(kPhotonShare + (1.0 - kPhotonShare) * done / rows);
+        },
+        abort);
     if (aborted()) {
         out.aborted = true;
         return out;

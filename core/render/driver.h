@@ -105,8 +105,8 @@ double nowSec();
 // summed; each row is summed on its own and the rows added in row order, so the result is the same
 // for any thread count. `progress` (0..1, on the calling thread) after the photon pass and the rows.
 struct ProbeResult {
-    bool ran = false;      // false: the integrator has no probe, or `abort` stopped it
-    bool aborted = false;  // `abort` stopped it
+    bool ran = false;               // false: the integrator has no probe, or `abort` stopped it
+    bool aborted = false;           // `abort` stopped it
     std::vector<double> luminance;  // time.bins values (empty for a photonsOnly probe)
 };
 ProbeResult runProbe(Integrator& integrator, const Scene& scene, const ProbeRequest& request, const TimeBins& time,

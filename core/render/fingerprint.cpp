@@ -37,7 +37,9 @@ std::string num(const Mat4& m) {
 struct Writer {
     Fingerprint fp;
     template <class T>
-    void operator()(const std::string& key, const T& v) { fp.emplace_back(key, num(v)); }
+    void operator()(const std::string& key, const T& v) {
+        fp.emplace_back(key, num(v));
+    }
     void text(const std::string& key, const std::string& v) { fp.emplace_back(key, v); }
 };
 
@@ -105,7 +107,9 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
         w(k + "area_light", s.areaLight);
         switch (s.type) {
             case ShapeType::Mesh:
-                w.text(k + "mesh", std::filesystem::path(s.meshPath).filename().string());  // not the folder: resumable from elsewhere
+                w.text(
+                    k + "mesh",
+                    std::filesystem::path(s.meshPath).filename().string());  // not the folder: resumable from elsewhere
                 w.text(k + "mesh_bytes_fnv1a64", fileFingerprint(s.meshPath));
                 w(k + "transform", s.transform);
                 break;
@@ -158,14 +162,19 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
 Fingerprint settingsFingerprint(const RenderSettings& s) {
     // The keys of settingsRecord that enter a pass (fingerprint.h: not the pass count, budget,
     // threads, accelerator or how the film is shown).
-    static const char* const kPassKeys[] = {"method", "seed", "max_depth", "photons_per_pass", "warmup", "radius",
-                                            "surface_radius", "alpha", "time_profile", "beam_length",
-                                            "volume_estimator", "surface_estimator", "time_kernel",
-                                            "samples_per_pixel", "equiangular"};
+    static const char* const kPassKeys[] = {"method",           "seed",
+                                            "max_depth",        "photons_per_pass",
+                                            "warmup",           "radius",
+                                            "surface_radius",   "alpha",
+                                            "time_profile",     "beam_length",
+                                            "volume_estimator", "surface_estimator",
+                                            "time_kernel",      "samples_per_pixel",
+                                            "equiangular"};
     const Record record = settingsRecord(s);
     Fingerprint fp;
     for (const char* key : kPassKeys)
-        if (const RecordValue* v = recordFind(record, key)) fp.emplace_back(std::string("render.") + key, recordText(*v));
+        if (const RecordValue* v = recordFind(record, key))
+            fp.emplace_back(std::string("render.") + key, recordText(*v));
     return fp;
 }
 
@@ -198,7 +207,8 @@ std::vector<std::string> fingerprintChanges(const Fingerprint& stored, const Fin
         if (k == "render.accel") continue;
         const auto it = b.find(k);
         // Compared as stored (%.17g: bit-exact), shown in the shortest form that reads back the same.
-        if (it == b.end()) out.push_back(k + ": only in the checkpoint (" + withShortestNumbers(v) + ")");
+        if (it == b.end())
+            out.push_back(k + ": only in the checkpoint (" + withShortestNumbers(v) + ")");
         else if (it->second != v)
             out.push_back(k + ": the checkpoint has " + withShortestNumbers(v) + ", this run has " +
                           withShortestNumbers(it->second));

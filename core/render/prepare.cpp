@@ -40,8 +40,9 @@ void applyFilmShape(SceneDesc& d, const SettingsOverrides& o) {
         throw UserError("the film would need " + humanBytes(need) + " but at most " + humanBytes(maxFilmBytes()) +
                         " is allowed; lower --width/--height/--bins");
     if (static_cast<int64_t>(d.camera.width) * d.camera.height > INT_MAX)
-        throw UserError("--width x --height is " + std::to_string(static_cast<int64_t>(d.camera.width) * d.camera.height) +
-                        " pixels, more than " + std::to_string(INT_MAX) + "; lower --width/--height");
+        throw UserError("--width x --height is " +
+                        std::to_string(static_cast<int64_t>(d.camera.width) * d.camera.height) + " pixels, more than " +
+                        std::to_string(INT_MAX) + "; lower --width/--height");
 }
 
 namespace {
@@ -60,7 +61,8 @@ struct SizeItem {
 std::vector<SizeItem> sizeItems(const Scene& scene) {
     std::vector<SizeItem> items;
     for (size_t i = 0; i < scene.shapes.size(); ++i)
-        if (scene.shapes[i].bounds.valid()) items.push_back({"shapes[" + std::to_string(i) + "]", scene.shapes[i].bounds});
+        if (scene.shapes[i].bounds.valid())
+            items.push_back({"shapes[" + std::to_string(i) + "]", scene.shapes[i].bounds});
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
         Bounds3 b;
@@ -92,9 +94,8 @@ void warnAboutScale(const Scene& scene, const SceneDesc& desc, const std::functi
         after[i].expand(items[i].box.lo), after[i].expand(items[i].box.hi);
     }
     const double whole = scene.bounds.diagonal();
-    const size_t shapes = static_cast<size_t>(std::count_if(items.begin(), items.end(), [](const SizeItem& it) {
-        return it.key.rfind("shapes[", 0) == 0;
-    }));
+    const size_t shapes = static_cast<size_t>(
+        std::count_if(items.begin(), items.end(), [](const SizeItem& it) { return it.key.rfind("shapes[", 0) == 0; }));
     for (size_t i = 0; i < n; ++i) {
         // The rest keeps a shape: a lone wall far from a co-located laser and camera is the scene.
         const bool isShape = items[i].key.rfind("shapes[", 0) == 0;
@@ -151,14 +152,16 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     // default ratio to it (2x). Without a measurement the radius stays the default fraction.
     if ((desc.render.radiusAuto && !overrides.radius) || overrides.autoRadius) {
         p.radiusPilot = pilotRadius(*p.scene, p.settings, options.pilot.control.abort);
-        const std::string where = overrides.autoRadius ? "--auto-radius: " : desc.where("render.radius") + "render.radius: auto: ";
+        const std::string where =
+            overrides.autoRadius ? "--auto-radius: " : desc.where("render.radius") + "render.radius: auto: ";
         // The implicit default (no radius written) stays quiet when there is nothing to measure.
         const bool asked = overrides.autoRadius || desc.locs.count("render.radius");
         if (p.radiusPilot.measured) {
             double r = p.radiusPilot.radius;
             if (r > kMaxRadiusFraction * diag) {
                 warn(where + "the photon density asks for " + shortNumber(r) + " m, capped at " +
-                     shortNumber(kMaxRadiusFraction * diag) + " m (a quarter of the scene's diagonal); use more photons");
+                     shortNumber(kMaxRadiusFraction * diag) +
+                     " m (a quarter of the scene's diagonal); use more photons");
                 r = kMaxRadiusFraction * diag;
             }
             const bool surfaceGiven = desc.locs.count("render.surface_radius") ||

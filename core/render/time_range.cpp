@@ -64,7 +64,10 @@ TimeRangeFit measureArrivalRange(const Scene& scene, const RenderSettings& setti
     for (int k = 0; k < wide.bins; ++k) {
         cum += hist[k];
         if (kLo < 0 && cum > 5e-4 * total) kLo = k;
-        if (cum >= 0.98 * total) { kHi = k; break; }
+        if (cum >= 0.98 * total) {
+            kHi = k;
+            break;
+        }
     }
     kLo = std::max(kLo, 0);
     const double lo = wide.startOpl + kLo * wide.binWidth, hi = wide.startOpl + (kHi + 1) * wide.binWidth;

@@ -31,8 +31,8 @@ struct TimeRangeFit {
 };
 
 struct PilotControl {
-    const std::atomic<bool>* abort = nullptr;          // stops the pilot at its next check
-    std::function<void(double fraction)> progress;     // 0..1, called on the calling thread only
+    const std::atomic<bool>* abort = nullptr;       // stops the pilot at its next check
+    std::function<void(double fraction)> progress;  // 0..1, called on the calling thread only
 };
 
 // A window of optical path lengths (m).

@@ -73,7 +73,8 @@ SharedDevice& shared() {
 EmbreeDeviceHandle embreeDevice() {
     SharedDevice& s = shared();
     if (!s.device)
-        throw EmbreeError(static_cast<int>(s.failureCode), "cannot create the Embree device: " + describe(s.failureCode, ""));
+        throw EmbreeError(static_cast<int>(s.failureCode),
+                          "cannot create the Embree device: " + describe(s.failureCode, ""));
     return s.device;
 }
 
@@ -82,7 +83,8 @@ void checkEmbree(const char* during) {
     if (code == RTC_ERROR_NONE) return;
     const std::string detail = tlsEmbreeMessage;
     tlsEmbreeMessage.clear();
-    throw EmbreeError(static_cast<int>(code), std::string("Embree error while ") + during + ": " + describe(code, detail));
+    throw EmbreeError(static_cast<int>(code),
+                      std::string("Embree error while ") + during + ": " + describe(code, detail));
 }
 
 }  // namespace tpb

@@ -74,8 +74,8 @@ bool sphereRoots(const Vec3& o, const Vec3& d, const Vec3& c, double r, double& 
     const Vec3 f = o - c;
     const double a = glm::dot(d, d);
     if (!(a > 0.0)) return false;
-    const double b = glm::dot(f, d);             // half the usual b
-    const Vec3 l = f - (b / a) * d;              // centre -> closest point of the line
+    const double b = glm::dot(f, d);  // half the usual b
+    const Vec3 l = f - (b / a) * d;   // centre -> closest point of the line
     const double dist = glm::length(l);
     const double disc = (r - dist) * (r + dist);  // r^2 - |l|^2
     if (!(disc >= 0.0)) return false;
@@ -85,7 +85,7 @@ bool sphereRoots(const Vec3& o, const Vec3& d, const Vec3& c, double r, double& 
         return true;
     }
     const double lenF = glm::length(f);
-    const double cc = (lenF - r) * (lenF + r);   // |f|^2 - r^2
+    const double cc = (lenF - r) * (lenF + r);  // |f|^2 - r^2
     t0 = cc / q;
     t1 = q / a;
     if (t0 > t1) std::swap(t0, t1);
@@ -93,12 +93,17 @@ bool sphereRoots(const Vec3& o, const Vec3& d, const Vec3& c, double r, double& 
 }
 
 // Nearest root in the open interval (tmin, tmax).
-bool sphereHit(const Vec3& o, const Vec3& d, const SphereData& s, double tmin, double tmax,
-               double& t) {
+bool sphereHit(const Vec3& o, const Vec3& d, const SphereData& s, double tmin, double tmax, double& t) {
     double t0, t1;
     if (!sphereRoots(o, d, s.center, s.radius, t0, t1)) return false;
-    if (t0 > tmin && t0 < tmax) { t = t0; return true; }
-    if (t1 > tmin && t1 < tmax) { t = t1; return true; }
+    if (t0 > tmin && t0 < tmax) {
+        t = t0;
+        return true;
+    }
+    if (t1 > tmin && t1 < tmax) {
+        t = t1;
+        return true;
+    }
     return false;
 }
 
@@ -165,8 +170,7 @@ void sphereOccluded(const RTCOccludedFunctionNArguments* args) {
     const auto* s = static_cast<const SphereData*>(args->geometryUserPtr);
     float& tfar = RTCRayN_tfar(args->ray, 1, 0);
     double t;
-    if (sphereHit(qc->o, qc->d, *s, qc->tmin, qc->tmax, t))
-        tfar = -std::numeric_limits<float>::infinity();
+    if (sphereHit(qc->o, qc->d, *s, qc->tmin, qc->tmax, t)) tfar = -std::numeric_limits<float>::infinity();
 }
 
 // Embree rejects origins/directions beyond ~1.8e18 (FLT_LARGE); stay well inside.
@@ -211,9 +215,9 @@ bool setupRay(const Ray& ray, QueryContext& qc, RTCRay& r) {
 struct Geometry::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
-    std::vector<GeomInfo> geoms;   // indexed by Embree geomID
-    std::vector<int> geomOfShape;  // shape id -> geomID; -1: none, -2: more than one
-    std::deque<MeshData> meshes;   // deque: stable addresses
+    std::vector<GeomInfo> geoms;     // indexed by Embree geomID
+    std::vector<int> geomOfShape;    // shape id -> geomID; -1: none, -2: more than one
+    std::deque<MeshData> meshes;     // deque: stable addresses
     std::deque<SphereData> spheres;  // user data pointers of the sphere geometries
     Bounds3 bounds;
     size_t triangles = 0;
@@ -283,16 +287,16 @@ void Geometry::addMesh(const TriangleMesh& mesh, int shapeId) {
 
     RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     checkEmbree("creating a triangle mesh");
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
-    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-        data.triangles.size()));
+    auto* vb = static_cast<float*>(
+        rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
+    auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(unsigned), data.triangles.size()));
     if (!vb || !ib) {
         rtcReleaseGeometry(geom);
         checkEmbree("allocating triangle mesh buffers");
-        throw EmbreeError(RTC_ERROR_OUT_OF_MEMORY, "Embree could not allocate triangle mesh buffers; reduce the "
-                                                   "scene's triangles or free memory");
+        throw EmbreeError(RTC_ERROR_OUT_OF_MEMORY,
+                          "Embree could not allocate triangle mesh buffers; reduce the "
+                          "scene's triangles or free memory");
     }
     for (size_t i = 0; i < nv; ++i) {
         vb[3 * i + 0] = static_cast<float>(data.positions[i].x);
@@ -308,8 +312,7 @@ void Geometry::addMesh(const TriangleMesh& mesh, int shapeId) {
 
     impl_->meshes.push_back(std::move(data));
     try {
-        impl_->attach(geom, GeomInfo{Kind::Mesh, shapeId, impl_->meshes.size() - 1},
-                      "adding a triangle mesh");
+        impl_->attach(geom, GeomInfo{Kind::Mesh, shapeId, impl_->meshes.size() - 1}, "adding a triangle mesh");
     } catch (...) {
         impl_->meshes.pop_back();
         throw;
@@ -334,8 +337,7 @@ void Geometry::addSphere(const Vec3& center, double radius, int shapeId) {
     rtcSetGeometryIntersectFunction(geom, sphereIntersect);
     rtcSetGeometryOccludedFunction(geom, sphereOccluded);
     try {
-        impl_->attach(geom, GeomInfo{Kind::Sphere, shapeId, impl_->spheres.size() - 1},
-                      "adding a sphere");
+        impl_->attach(geom, GeomInfo{Kind::Sphere, shapeId, impl_->spheres.size() - 1}, "adding a sphere");
     } catch (...) {
         impl_->spheres.pop_back();
         throw;
@@ -360,8 +362,7 @@ std::optional<SurfaceHit> Geometry::intersect(const Ray& ray) const {
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &qc.ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID >= impl_->geoms.size())
-        return std::nullopt;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID >= impl_->geoms.size()) return std::nullopt;
 
     const GeomInfo& info = impl_->geoms[rh.hit.geomID];
     SurfaceHit h;
@@ -391,7 +392,10 @@ std::optional<SurfaceHit> Geometry::intersect(const Ray& ray) const {
         // Needle triangle that Embree still hit: fall back to its normal (same orientation).
         n = Vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
         len = glm::length(n);
-        if (!(len > 0.0) || !std::isfinite(len)) { n = -ray.d; len = glm::length(n); }
+        if (!(len > 0.0) || !std::isfinite(len)) {
+            n = -ray.d;
+            len = glm::length(n);
+        }
     }
     h.ng = n / len;
 
@@ -401,9 +405,7 @@ std::optional<SurfaceHit> Geometry::intersect(const Ray& ray) const {
     const double tE = rh.ray.tfar;
     const double tRef = glm::dot(p0 - ray.o, h.ng) / glm::dot(ray.d, h.ng);
     const double tol = 1e-4 * (tE + maxAbs(ray.o) + maxAbs(p0));
-    h.t = (std::isfinite(tRef) && tRef > qc.tmin && tRef < qc.tmax && std::abs(tRef - tE) <= tol)
-              ? tRef
-              : tE;
+    h.t = (std::isfinite(tRef) && tRef > qc.tmin && tRef < qc.tmax && std::abs(tRef - tE) <= tol) ? tRef : tE;
     h.p = ray.o + h.t * ray.d;
 
     h.ns = h.ng;

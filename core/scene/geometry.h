@@ -55,8 +55,8 @@ public:
     void primitivesNear(const Vec3& p, double r, PrimitiveVisitor visit, void* user) const;
     template <class Fn>
     void forEachPrimitiveNear(const Vec3& p, double r, Fn&& fn) const {
-        primitivesNear(p, r, [](void* u, const Primitive& prim) { (*static_cast<std::remove_reference_t<Fn>*>(u))(prim); },
-                       &fn);
+        primitivesNear(
+            p, r, [](void* u, const Primitive& prim) { (*static_cast<std::remove_reference_t<Fn>*>(u))(prim); }, &fn);
     }
 
     // The float-rounded vertices of triangle `prim` of shape `shape` (a SurfaceHit's shape and prim),

@@ -88,8 +88,7 @@ void TriangleMesh::flip() {
 namespace {
 
 std::string trimmed(std::string s) {
-    while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ' || s.back() == '.'))
-        s.pop_back();
+    while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ' || s.back() == '.')) s.pop_back();
     // tinyobj separates messages with newlines; keep one line per message.
     std::replace(s.begin(), s.end(), '\n', ' ');
     return s;
@@ -97,8 +96,7 @@ std::string trimmed(std::string s) {
 
 // tinyobj reports "... line 12.)": recover the line number for the error position.
 int lineOf(const std::string& message) {
-    for (size_t at = message.find("line "); at != std::string::npos;
-         at = message.find("line ", at + 1)) {
+    for (size_t at = message.find("line "); at != std::string::npos; at = message.find("line ", at + 1)) {
         size_t i = at + 5;
         long value = 0;
         while (i < message.size() && message[i] >= '0' && message[i] <= '9' && value < 100000000)
@@ -113,8 +111,7 @@ int lineOf(const std::string& message) {
 bool isDegenerate(const Vec3& a, const Vec3& b, const Vec3& c) {
     const Vec3 e1 = b - a, e2 = c - a, e3 = c - b;
     const double area2 = glm::length(glm::cross(e1, e2));
-    const double longest2 =
-        std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
+    const double longest2 = std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
     return !(area2 > 1e-12 * longest2);
 }
 
@@ -139,14 +136,17 @@ void checkFaceLine(const std::string& path, int line, int verticesSoFar, const c
         const auto [end, ec] = std::from_chars(digits, token.data() + token.size(), index);
         const std::string where = "corrupt OBJ file: face (\"f\" line " + std::to_string(line) + ")";
         if (ec == std::errc::result_out_of_range || (ec == std::errc() && (index > INT_MAX || index < -INT_MAX)))
-            objError(path, line, where + ": index " + clipped(token) + " is beyond the largest OBJ index tpb reads (" +
-                                     std::to_string(INT_MAX) + "); the file has " + std::to_string(verticesSoFar) +
-                                     " vertices before this line");
+            objError(path, line,
+                     where + ": index " + clipped(token) + " is beyond the largest OBJ index tpb reads (" +
+                         std::to_string(INT_MAX) + "); the file has " + std::to_string(verticesSoFar) +
+                         " vertices before this line");
         if (ec != std::errc() || end != token.data() + token.size())
             objError(path, line, where + ": index \"" + clipped(token) + "\" is not an integer");
         if (index == 0)
-            objError(path, line, where + ": index 0; OBJ indices start at 1 (negative ones count back from the last "
-                                         "vertex)");
+            objError(path, line,
+                     where +
+                         ": index 0; OBJ indices start at 1 (negative ones count back from the last "
+                         "vertex)");
     }
 }
 
@@ -188,14 +188,16 @@ void checkVertexLines(const std::string& path, const std::string& text) {
             // strtod reads "nan" and "inf" literals, and 1e999 overflows to inf.
             if (!std::isfinite(v)) {
                 const bool literal = token.find_first_of("nNiI") != std::string::npos;
-                objError(path, line, where + " has a non-finite coordinate (" + token +
-                                         (literal ? "" : ", beyond the range of a double") +
-                                         "); coordinates must be finite and within +-1e9 m");
+                objError(path, line,
+                         where + " has a non-finite coordinate (" + token +
+                             (literal ? "" : ", beyond the range of a double") +
+                             "); coordinates must be finite and within +-1e9 m");
             }
             if (!(std::fabs(v) <= kMaxSceneCoordinateM))
                 objError(path, line,
-                         where + " coordinate " + token + " is beyond +-1e9 m, the limit of scene coordinates; "
-                                 "check the file's units, or scale the mesh with the shape's \"transform\"");
+                         where + " coordinate " + token +
+                             " is beyond +-1e9 m, the limit of scene coordinates; "
+                             "check the file's units, or scale the mesh with the shape's \"transform\"");
         }
     }
 }
@@ -208,9 +210,10 @@ TriangleMesh loadMeshFile(const std::string& path, size_t* droppedDegenerate) {
     if (ext == ".ply") return loadPly(path, droppedDegenerate);
     if (ext == ".obj") return loadObj(path, droppedDegenerate);
     // By its extension only: another format read as OBJ used to say "no triangles".
-    objError(path, 0, "unsupported mesh format " + (ext.empty() ? std::string("(no extension)") : ext) +
-                          "; supported: .obj (Wavefront OBJ), .ply (PLY, ASCII or binary); convert the mesh to one "
-                          "of them (e.g. with Blender or MeshLab) or rename a file of that format");
+    objError(path, 0,
+             "unsupported mesh format " + (ext.empty() ? std::string("(no extension)") : ext) +
+                 "; supported: .obj (Wavefront OBJ), .ply (PLY, ASCII or binary); convert the mesh to one "
+                 "of them (e.g. with Blender or MeshLab) or rename a file of that format");
 }
 
 TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
@@ -218,13 +221,10 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
     if (droppedDegenerate) *droppedDegenerate = 0;
 
     std::error_code ec;
-    if (!fs::exists(path, ec))
-        objError(path, 0, "OBJ file not found");
-    if (fs::is_directory(path, ec))
-        objError(path, 0, "is a folder, expected an OBJ file");
+    if (!fs::exists(path, ec)) objError(path, 0, "OBJ file not found");
+    if (fs::is_directory(path, ec)) objError(path, 0, "is a folder, expected an OBJ file");
     std::ifstream file(path, std::ios::binary);
-    if (!file)
-        objError(path, 0, std::string("cannot open OBJ file: ") + std::strerror(errno));
+    if (!file) objError(path, 0, std::string("cannot open OBJ file: ") + std::strerror(errno));
     std::ostringstream text;
     text << file.rdbuf();
     if (file.bad()) objError(path, 0, "read error while loading the OBJ file");
@@ -241,8 +241,7 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
     if (in.bad()) objError(path, 0, "read error while loading the OBJ file");
     if (!ok || !err.empty()) {
         const std::string msg = trimmed(err);
-        objError(path, lineOf(msg),
-                        "corrupt OBJ file: " + (msg.empty() ? std::string("parse error") : msg));
+        objError(path, lineOf(msg), "corrupt OBJ file: " + (msg.empty() ? std::string("parse error") : msg));
     }
     // tinyobj only warns about bad indices (and silently skips such quads): make them errors.
     if (warn.find("Vertex indices out of bounds") != std::string::npos ||
@@ -256,19 +255,18 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
     for (size_t i = 0; i < nv; ++i)
         for (int k = 0; k < 3; ++k)
             if (!std::isfinite(attrib.vertices[3 * i + k]))
-                objError(path, 0,
-                                "corrupt OBJ file: vertex " + std::to_string(i + 1) +
-                                    " has a non-finite coordinate");
+                objError(path, 0, "corrupt OBJ file: vertex " + std::to_string(i + 1) + " has a non-finite coordinate");
     auto vertex = [&](int i) {
-        return Vec3(attrib.vertices[3 * i + 0], attrib.vertices[3 * i + 1],
-                    attrib.vertices[3 * i + 2]);
+        return Vec3(attrib.vertices[3 * i + 0], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
     };
     auto normal = [&](int i) {
         return Vec3(attrib.normals[3 * i + 0], attrib.normals[3 * i + 1], attrib.normals[3 * i + 2]);
     };
 
     // Collect the triangles (tinyobj already triangulated every polygon).
-    struct Corner { int v, n; };
+    struct Corner {
+        int v, n;
+    };
     std::vector<std::array<Corner, 3>> tris;
     size_t faces = 0, dropped = 0;
     for (const tinyobj::shape_t& shape : shapes) {
@@ -284,16 +282,12 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
                     const tinyobj::index_t& idx = m.indices[offset + k];
                     if (idx.vertex_index < 0 || size_t(idx.vertex_index) >= nv)
                         objError(path, 0,
-                                        "corrupt OBJ file: vertex index " +
-                                            std::to_string(idx.vertex_index + 1) +
-                                            " out of range (the file has " + std::to_string(nv) +
-                                            " vertices)");
+                                 "corrupt OBJ file: vertex index " + std::to_string(idx.vertex_index + 1) +
+                                     " out of range (the file has " + std::to_string(nv) + " vertices)");
                     if (idx.normal_index < -1 || idx.normal_index >= int(nn))
                         objError(path, 0,
-                                        "corrupt OBJ file: normal index " +
-                                            std::to_string(idx.normal_index + 1) +
-                                            " out of range (the file has " + std::to_string(nn) +
-                                            " normals)");
+                                 "corrupt OBJ file: normal index " + std::to_string(idx.normal_index + 1) +
+                                     " out of range (the file has " + std::to_string(nn) + " normals)");
                     tri[k] = Corner{idx.vertex_index, idx.normal_index};
                 }
                 if (isDegenerate(vertex(tri[0].v), vertex(tri[1].v), vertex(tri[2].v)))
@@ -307,9 +301,7 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
     if (droppedDegenerate) *droppedDegenerate = dropped;
     if (tris.empty()) {
         if (faces == 0) objError(path, 0, "the OBJ file contains no triangles");
-        objError(path, 0,
-                        "all " + std::to_string(faces) +
-                            " triangles of the OBJ file are degenerate (zero area)");
+        objError(path, 0, "all " + std::to_string(faces) + " triangles of the OBJ file are degenerate (zero area)");
     }
 
     // Vertex normals are used only when every corner has one, they are finite and non-zero, and
@@ -324,7 +316,10 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
     };
     for (const auto& tri : tris) {
         for (const Corner& c : tri) {
-            if (c.n < 0 || unitNormal(c.n) == Vec3(0.0)) { useNormals = false; break; }
+            if (c.n < 0 || unitNormal(c.n) == Vec3(0.0)) {
+                useNormals = false;
+                break;
+            }
             int& assigned = normalOf[c.v];
             if (assigned < 0)
                 assigned = c.n;
@@ -348,8 +343,7 @@ TriangleMesh loadObj(const std::string& path, size_t* droppedDegenerate) {
         if (useNormals) mesh.normals.push_back(unitNormal(normalOf[i]));
     }
     mesh.triangles.reserve(tris.size());
-    for (const auto& tri : tris)
-        mesh.triangles.emplace_back(remap[tri[0].v], remap[tri[1].v], remap[tri[2].v]);
+    for (const auto& tri : tris) mesh.triangles.emplace_back(remap[tri[0].v], remap[tri[1].v], remap[tri[2].v]);
     return mesh;
 }
 
@@ -366,7 +360,9 @@ OpenEdges openEdges(const TriangleMesh& m) {
     const size_t n = m.positions.size();
     std::vector<uint32_t> order(n), id(n);
     for (size_t i = 0; i < n; ++i) order[i] = static_cast<uint32_t>(i);
-    const auto key = [&](uint32_t i) { return std::array<double, 3>{m.positions[i].x, m.positions[i].y, m.positions[i].z}; };
+    const auto key = [&](uint32_t i) {
+        return std::array<double, 3>{m.positions[i].x, m.positions[i].y, m.positions[i].z};
+    };
     std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
     uint32_t next = 0;
     for (size_t k = 0; k < n; ++k) {

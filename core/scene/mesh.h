@@ -10,13 +10,13 @@ namespace tpb {
 
 struct TriangleMesh {
     std::vector<Vec3> positions;
-    std::vector<Vec3> normals;             // per vertex, may be empty (then flat shading)
-    std::vector<glm::uvec3> triangles;     // vertex indices
+    std::vector<Vec3> normals;          // per vertex, may be empty (then flat shading)
+    std::vector<glm::uvec3> triangles;  // vertex indices
     Bounds3 bounds() const;
     // Positions and normals (inverse transpose). Throws UserError (no file:line: the caller adds
     // the shape's) when a vertex lands beyond +-kMaxSceneCoordinateM (scene_desc.h).
     void transform(const Mat4& objectToWorld);
-    void flip();                                // reverse winding and normals
+    void flip();  // reverse winding and normals
 };
 
 // Loads a Wavefront OBJ file (triangulating polygons). Throws UserError naming the file on a

@@ -47,16 +47,19 @@ namespace fs = std::filesystem;
 bool mitsubaNamedIor(const std::string& name, double& ior) {
     // Mitsuba's table of named indices of refraction (src/core/... "ior.h" in Mitsuba 3).
     static const std::pair<const char*, double> kIors[] = {
-        {"vacuum", 1.0},         {"helium", 1.00004},        {"hydrogen", 1.00013},
-        {"air", 1.00028},        {"carbon dioxide", 1.00045}, {"water", 1.3330},
-        {"acetone", 1.36},       {"ethanol", 1.361},          {"carbon tetrachloride", 1.461},
-        {"glycerol", 1.4729},    {"benzene", 1.501},          {"silicone oil", 1.52045},
-        {"bromine", 1.661},      {"water ice", 1.31},         {"fused quartz", 1.458},
-        {"pyrex", 1.470},        {"acrylic glass", 1.49},     {"polypropylene", 1.49},
-        {"bk7", 1.5046},         {"sodium chloride", 1.544},  {"amber", 1.55},
-        {"pet", 1.5750},         {"diamond", 2.419}};
+        {"vacuum", 1.0},      {"helium", 1.00004},         {"hydrogen", 1.00013},
+        {"air", 1.00028},     {"carbon dioxide", 1.00045}, {"water", 1.3330},
+        {"acetone", 1.36},    {"ethanol", 1.361},          {"carbon tetrachloride", 1.461},
+        {"glycerol", 1.4729}, {"benzene", 1.501},          {"silicone oil", 1.52045},
+        {"bromine", 1.661},   {"water ice", 1.31},         {"fused quartz", 1.458},
+        {"pyrex", 1.470},     {"acrylic glass", 1.49},     {"polypropylene", 1.49},
+        {"bk7", 1.5046},      {"sodium chloride", 1.544},  {"amber", 1.55},
+        {"pet", 1.5750},      {"diamond", 2.419}};
     for (const auto& [n, v] : kIors)
-        if (name == n) { ior = v; return true; }
+        if (name == n) {
+            ior = v;
+            return true;
+        }
     return false;
 }
 
@@ -72,7 +75,8 @@ struct XmlFile {
     pugi::xml_document doc;
     int lineOf(ptrdiff_t offset) const {
         if (offset < 0) return 0;
-        return static_cast<int>(std::upper_bound(lineStarts.begin(), lineStarts.end(), size_t(offset)) - lineStarts.begin());
+        return static_cast<int>(std::upper_bound(lineStarts.begin(), lineStarts.end(), size_t(offset)) -
+                                lineStarts.begin());
     }
 };
 
@@ -88,7 +92,8 @@ std::string label(const Elem& e) {
     std::string s = "<";
     s.append(e.node.name());
     for (const char* a : {"type", "name", "id"})
-        if (const pugi::xml_attribute at = e.node.attribute(a)) s.append(" ").append(a).append("=\"").append(at.value()).append("\"");
+        if (const pugi::xml_attribute at = e.node.attribute(a))
+            s.append(" ").append(a).append("=\"").append(at.value()).append("\"");
     return s.append(">");
 }
 
@@ -102,10 +107,10 @@ std::string lower(std::string s) {
     return s;
 }
 
-const std::set<std::string> kPropertyTags = {"float", "integer", "boolean", "string", "rgb", "spectrum",
-                                             "point", "vector", "transform", "texture"};
-const std::set<std::string> kObjectTags = {"bsdf", "medium", "phase", "emitter", "film", "sampler",
-                                           "rfilter", "shape", "sensor", "integrator", "ref"};
+const std::set<std::string> kPropertyTags = {"float",    "integer", "boolean", "string",    "rgb",
+                                             "spectrum", "point",   "vector",  "transform", "texture"};
+const std::set<std::string> kObjectTags = {"bsdf",    "medium", "phase",  "emitter",    "film", "sampler",
+                                           "rfilter", "shape",  "sensor", "integrator", "ref"};
 
 class Importer;
 
@@ -191,7 +196,8 @@ private:
     int mediumParam(Props& p, const std::string& name);
     void checkPoint(const Elem& e, const Vec3& p, const char* what) const {
         if (!(std::max({std::fabs(p.x), std::fabs(p.y), std::fabs(p.z)}) <= kMaxSceneCoordinateM))
-            fail(e, std::string(what) + " lies beyond +-1e9 m (the limit of scene coordinates); check the units and the exponent");
+            fail(e, std::string(what) +
+                        " lies beyond +-1e9 m (the limit of scene coordinates); check the units and the exponent");
     }
 
     SceneDesc& d_;
@@ -216,11 +222,16 @@ Props::Props(Importer& im, const Elem& owner) : im_(im), owner_(owner) {
             if (!name) im.fail(ce, "a parameter needs a name=\"...\" attribute");
             if (!byName_.emplace(*name, ce).second) im.fail(ce, "the parameter \"" + *name + "\" is given twice");
         } else if (kObjectTags.count(tag)) {
-            if (name && tag != "medium" && tag != "bsdf" && tag != "emitter") im.fail(ce, "unexpected name=\"" + *name + "\"");
-            if (name && tag == "medium") byName_.emplace(*name, ce);
-            else objects_.push_back(ce);
+            if (name && tag != "medium" && tag != "bsdf" && tag != "emitter")
+                im.fail(ce, "unexpected name=\"" + *name + "\"");
+            if (name && tag == "medium")
+                byName_.emplace(*name, ce);
+            else
+                objects_.push_back(ce);
         } else {
-            im.fail(ce, "unknown element <" + tag + ">; parameters are <float>, <integer>, <boolean>, <string>, <rgb>, "
+            im.fail(ce,
+                    "unknown element <" + tag +
+                        ">; parameters are <float>, <integer>, <boolean>, <string>, <rgb>, "
                         "<spectrum>, <point>, <vector>, <transform>, <ref>, nested plugins <bsdf>, <medium>, <phase>, "
                         "<emitter>, <film>, <sampler>, <rfilter>");
         }
@@ -245,8 +256,7 @@ std::optional<int64_t> Props::integer(const std::string& name) {
     const std::string v = trim(im_.required(*e, "value"));
     int64_t n = 0;
     const auto [ptr, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-    if (ec != std::errc() || ptr != v.data() + v.size() || v.empty())
-        im_.fail(*e, "\"" + v + "\" is not an integer");
+    if (ec != std::errc() || ptr != v.data() + v.size() || v.empty()) im_.fail(*e, "\"" + v + "\" is not an integer");
     return n;
 }
 
@@ -292,8 +302,10 @@ std::optional<Color> Props::color(const std::string& name) {
         if (v.size() < 2 || v.size() % 2) im_.fail(*e, "a spectrum is \"wavelength:value, ...\" pairs");
         for (size_t i = 3; i < v.size(); i += 2)
             if (v[i] != v[1])
-                im_.fail(*e, "a wavelength-dependent spectrum cannot be represented (tpb renders RGB); give "
-                             "<rgb name=\"" + name + "\" value=\"r, g, b\"/>");
+                im_.fail(*e,
+                         "a wavelength-dependent spectrum cannot be represented (tpb renders RGB); give "
+                         "<rgb name=\"" +
+                             name + "\" value=\"r, g, b\"/>");
         return Color(v[1]);
     }
     im_.fail(*e, "\"" + name + "\" must be a colour: <rgb>, <spectrum value=...> or <float>");
@@ -354,9 +366,12 @@ std::optional<Mat4> Props::transform(const std::string& name) {
             Vec3 s(1.0);
             if (const std::optional<std::string> v = im_.attr(e, "value")) {
                 const std::vector<double> xs = im_.numbers(e, *v, "value");
-                if (xs.size() == 1) s = Vec3(xs[0]);
-                else if (xs.size() == 3) s = Vec3(xs[0], xs[1], xs[2]);
-                else im_.fail(e, "a scale's value is 1 or 3 numbers");
+                if (xs.size() == 1)
+                    s = Vec3(xs[0]);
+                else if (xs.size() == 3)
+                    s = Vec3(xs[0], xs[1], xs[2]);
+                else
+                    im_.fail(e, "a scale's value is 1 or 3 numbers");
             } else {
                 s = xyz(e, 1.0);
             }
@@ -420,8 +435,9 @@ const XmlFile& Importer::parse(const std::string& text, const std::string& path)
     const pugi::xml_parse_result r =
         f.doc.load_buffer(f.text.data(), f.text.size(), pugi::parse_default, pugi::encoding_utf8);
     if (!r)
-        throw UserError(path, f.lineOf(r.offset), "", std::string("XML parse error: ") + r.description() +
-                                                          "; check the markup on this line and the one before it");
+        throw UserError(path, f.lineOf(r.offset), "",
+                        std::string("XML parse error: ") + r.description() +
+                            "; check the markup on this line and the one before it");
     checkNesting(f);
     return f;
 }
@@ -436,7 +452,8 @@ void Importer::checkNesting(const XmlFile& f) const {
         if (depth >= kXmlMaxDepth)
             throw UserError(f.path, f.lineOf(n.offset_debug()), "",
                             "elements nested deeper than " + std::to_string(kXmlMaxDepth) + " levels (<" +
-                                std::string(n.name()) + "> here); a Mitsuba scene nests a few levels: check for "
+                                std::string(n.name()) +
+                                "> here); a Mitsuba scene nests a few levels: check for "
                                 "unclosed or runaway elements");
         if (pugi::xml_node c = n.first_child(); c) {  // down
             n = c;
@@ -458,7 +475,10 @@ std::optional<std::string> Importer::attr(const Elem& e, const char* name) const
     const std::string raw = a.value();
     std::string out;
     for (size_t i = 0; i < raw.size(); ++i) {
-        if (raw[i] != '$') { out += raw[i]; continue; }
+        if (raw[i] != '$') {
+            out += raw[i];
+            continue;
+        }
         size_t j = i + 1;
         while (j < raw.size() && (std::isalnum(static_cast<unsigned char>(raw[j])) || raw[j] == '_')) ++j;
         const std::string key = raw.substr(i + 1, j - i - 1);
@@ -515,7 +535,8 @@ void Importer::collect(const Elem& scene, std::vector<Elem>& out, std::vector<st
             const XmlFile& f = parse(text, path);
             const pugi::xml_node root = f.doc.document_element();
             if (std::string(root.name()) != "scene")
-                fail(Elem{root, &f}, "an included file must hold a <scene> element, got <" + std::string(root.name()) + ">");
+                fail(Elem{root, &f},
+                     "an included file must hold a <scene> element, got <" + std::string(root.name()) + ">");
             stack.push_back(path);
             collect(Elem{root, &f}, out, stack);
             stack.pop_back();
@@ -543,13 +564,17 @@ const Elem& Importer::lookup(const Elem& ref, const std::string& id) const {
     int n = 0;
     for (const auto& [name, e] : ids_)
         if (n++ < 20) defined += (defined.empty() ? "\"" : ", \"") + name + "\"";
-    fail(ref, "no object has the id \"" + id + "\"" + (defined.empty() ? "; no ids are defined" : "; defined ids: " + defined));
+    fail(ref, "no object has the id \"" + id + "\"" +
+                  (defined.empty() ? "; no ids are defined" : "; defined ids: " + defined));
 }
 
 // ---- sensor, film, integrator --------------------------------------------------------------------
 
 void Importer::readSensor(const Elem& e) {
-    if (haveSensor_) { warn(e, "a second sensor: tpb renders the first one only; ignored"); return; }
+    if (haveSensor_) {
+        warn(e, "a second sensor: tpb renders the first one only; ignored");
+        return;
+    }
     haveSensor_ = true;
     Props p(*this, e);
     const std::string type = p.type();
@@ -559,7 +584,10 @@ void Importer::readSensor(const Elem& e) {
     loc("camera", e);
     CameraDesc& cam = d_.camera;
     for (Elem& o : p.objects()) {
-        if (o.tag() == "film") { p.took(o); readFilm(o); }
+        if (o.tag() == "film") {
+            p.took(o);
+            readFilm(o);
+        }
     }
     if (!d_.locs.count("camera.resolution")) {  // no film: Mitsuba's default hdrfilm
         cam.width = 768;
@@ -571,8 +599,9 @@ void Importer::readSensor(const Elem& e) {
     if (!(glm::length(dir) > 0.0) || !(glm::length(glm::cross(dir, up)) > 0.0))
         fail(*p.find("to_world"), "the sensor's to_world is singular");
     if (glm::dot(left, glm::cross(up, dir)) < 0.0)
-        fail(*p.find("to_world"), "the sensor's to_world mirrors the image (a negative scale); tpb's camera cannot "
-                                  "mirror: remove the mirroring scale");
+        fail(*p.find("to_world"),
+             "the sensor's to_world mirrors the image (a negative scale); tpb's camera cannot "
+             "mirror: remove the mirroring scale");
     checkPoint(e, pos, "the sensor");
     cam.position = pos;
     cam.lookAt = pos + glm::normalize(dir);
@@ -599,10 +628,14 @@ void Importer::readSensor(const Elem& e) {
     double ty = 0.0;
     if (axis == "smaller") axis = w < h ? "x" : "y";
     if (axis == "larger") axis = w > h ? "x" : "y";
-    if (axis == "x") ty = t / aspect;
-    else if (axis == "y") ty = t;
-    else if (axis == "diagonal") ty = t / std::sqrt(aspect * aspect + 1.0);
-    else fail(*p.find("fov_axis"), "unknown fov_axis \"" + axis + "\"; allowed: x, y, diagonal, smaller, larger");
+    if (axis == "x")
+        ty = t / aspect;
+    else if (axis == "y")
+        ty = t;
+    else if (axis == "diagonal")
+        ty = t / std::sqrt(aspect * aspect + 1.0);
+    else
+        fail(*p.find("fov_axis"), "unknown fov_axis \"" + axis + "\"; allowed: x, y, diagonal, smaller, larger");
     cam.fovYDeg = 2.0 * std::atan(ty) * 180.0 / kPi;
     if (at) loc("camera.fov", *at);
 
@@ -618,8 +651,9 @@ void Importer::readSensor(const Elem& e) {
             p.took(o);
             Props s(*this, o);
             if (const Elem* c = s.find("sample_count"))
-                warn(*c, "sample_count has no tpb equivalent (tpb renders progressive passes: set tpb_passes on the "
-                         "<integrator>, or --passes); ignored");
+                warn(*c,
+                     "sample_count has no tpb equivalent (tpb renders progressive passes: set tpb_passes on the "
+                     "<integrator>, or --passes); ignored");
             if (const std::optional<int64_t> seed = s.integer("seed")) {
                 if (*seed < 0) fail(*s.find("seed"), "seed must be >= 0");
                 d_.render.seed = static_cast<uint64_t>(*seed);
@@ -645,7 +679,8 @@ void Importer::readFilm(const Elem& e) {
     Props p(*this, e);
     const std::string type = p.type();
     if (type != "hdrfilm" && type != "transient_hdr_film")
-        fail(e, "unsupported film type \"" + type + "\"; tpb imports \"transient_hdr_film\" (mitransient) and \"hdrfilm\"");
+        fail(e, "unsupported film type \"" + type +
+                    "\"; tpb imports \"transient_hdr_film\" (mitransient) and \"hdrfilm\"");
     const auto size = [&](const char* key, int def) {
         const std::optional<int64_t> v = p.integer(key);
         if (v && (*v < 1 || *v > INT_MAX)) fail(*p.find(key), std::string(key) + " must be an integer >= 1");
@@ -685,7 +720,8 @@ void Importer::readFilm(const Elem& e) {
         if (o.tag() == "rfilter") {
             p.took(o);
             const std::string f = attr(o, "type").value_or("");
-            if (f != "box") warn(o, "tpb's film has no reconstruction filter (each pixel is a box); \"" + f + "\" ignored");
+            if (f != "box")
+                warn(o, "tpb's film has no reconstruction filter (each pixel is a box); \"" + f + "\" ignored");
         }
     p.finish();
     const uint64_t need = filmBytes(d_.camera.width, d_.camera.height, film.bins), limit = maxFilmBytes();
@@ -696,16 +732,28 @@ void Importer::readFilm(const Elem& e) {
 }
 
 void Importer::readIntegrator(const Elem& e) {
-    if (haveIntegrator_) { warn(e, "a second integrator: ignored"); return; }
+    if (haveIntegrator_) {
+        warn(e, "a second integrator: ignored");
+        return;
+    }
     haveIntegrator_ = true;
     Props p(*this, e);
     const std::string type = p.type();
-    static const std::set<std::string> kKnown = {"path", "volpath", "volpathmis", "prbvolpath", "prb", "direct",
-                                                 "transient_path", "transient_volpath", "transient_prbvolpath",
-                                                 "transientpath", "transient_nlos_path"};
+    static const std::set<std::string> kKnown = {"path",
+                                                 "volpath",
+                                                 "volpathmis",
+                                                 "prbvolpath",
+                                                 "prb",
+                                                 "direct",
+                                                 "transient_path",
+                                                 "transient_volpath",
+                                                 "transient_prbvolpath",
+                                                 "transientpath",
+                                                 "transient_nlos_path"};
     if (!kKnown.count(type))
-        warn(e, "unknown integrator \"" + type + "\": tpb renders with transient photon beams whatever the integrator; "
-                "its max_depth is read");
+        warn(e, "unknown integrator \"" + type +
+                    "\": tpb renders with transient photon beams whatever the integrator; "
+                    "its max_depth is read");
     RenderDesc& r = d_.render;
     if (const std::optional<int64_t> depth = p.integer("max_depth")) {
         const Elem& de = *p.find("max_depth");
@@ -714,8 +762,9 @@ void Importer::readIntegrator(const Elem& e) {
                          " (tpb's default) is used: give a bound");
         } else {
             if (*depth < 2 || *depth > INT_MAX)
-                fail(de, "max_depth must be >= 2 or -1 (tpb renders scattered light: max_depth 2 is single scattering; "
-                         "tpb's render.max_depth = max_depth - 1)");
+                fail(de,
+                     "max_depth must be >= 2 or -1 (tpb renders scattered light: max_depth 2 is single scattering; "
+                     "tpb's render.max_depth = max_depth - 1)");
             r.maxDepth = static_cast<int>(*depth - 1);
             loc("render.max_depth", de);
         }
@@ -753,9 +802,13 @@ void Importer::readIntegrator(const Elem& e) {
     const std::optional<double> abs = num("radius"), rel = num("radius_relative"), sAbs = num("surface_radius"),
                                 sRel = num("surface_radius_relative");
     if ((abs && rel) || (sAbs && sRel) || ((abs || sAbs) && (rel || sRel)))
-        fail(e, "the radii must all be absolute (tpb_radius, tpb_surface_radius) or all relative (tpb_radius_relative, "
-                "tpb_surface_radius_relative)");
-    if (abs || rel) { r.radiusAuto = false; r.radius = abs ? *abs : *rel; }
+        fail(e,
+             "the radii must all be absolute (tpb_radius, tpb_surface_radius) or all relative (tpb_radius_relative, "
+             "tpb_surface_radius_relative)");
+    if (abs || rel) {
+        r.radiusAuto = false;
+        r.radius = abs ? *abs : *rel;
+    }
     if (sAbs || sRel) r.surfaceRadius = sAbs ? *sAbs : *sRel;
     if (abs || sAbs) r.radiusRelative = false;
     if (rel || sRel) r.radiusRelative = true;
@@ -768,15 +821,18 @@ void Importer::readIntegrator(const Elem& e) {
         for (const std::string& a : allowed) list += (list.empty() ? "" : ", ") + a;
         fail(*p.find(std::string("tpb_") + k), "unknown value \"" + *v + "\"; allowed: " + list);
     };
-    if (auto i = choose("emission", {"delta", "continuous"})) r.emission = *i ? EmissionMode::Continuous : EmissionMode::Delta;
-    if (auto i = choose("time_profile", {"exact", "uniform"})) r.timeProfile = *i ? TimeProfile::Uniform : TimeProfile::Exact;
+    if (auto i = choose("emission", {"delta", "continuous"}))
+        r.emission = *i ? EmissionMode::Continuous : EmissionMode::Delta;
+    if (auto i = choose("time_profile", {"exact", "uniform"}))
+        r.timeProfile = *i ? TimeProfile::Uniform : TimeProfile::Exact;
     if (auto i = choose("beam_length", {"short", "long"})) r.beamLength = *i ? BeamLength::Long : BeamLength::Short;
     if (key("unwarp")) r.unwarp = *p.boolean("tpb_unwarp");
     if (auto v = str("volume_estimator")) r.volumeEstimator = *v;
     if (auto v = str("surface_estimator")) r.surfaceEstimator = *v;
     if (auto v = str("time_kernel")) {
         const std::optional<TimeKernelSettings> k = parseTimeKernel(*v);
-        if (!k) fail(*p.find("tpb_time_kernel"), "unknown time kernel \"" + *v + "\"; allowed: none, box, box:WIDTH (m)");
+        if (!k)
+            fail(*p.find("tpb_time_kernel"), "unknown time kernel \"" + *v + "\"; allowed: none, box, box:WIDTH (m)");
         r.timeKernel = *k;
     }
     p.finish();
@@ -812,8 +868,10 @@ MaterialDesc Importer::readBsdf(const Elem& e, bool wrapped) {
             const std::string name = lower(trim(*p.string(key)));
             double v = 0.0;
             if (!mitsubaNamedIor(name, v))
-                fail(*x, "unknown named IOR \"" + name + "\"; give a number or one of vacuum, air, water, "
-                         "ethanol, glycerol, fused quartz, pyrex, acrylic glass, bk7, sodium chloride, pet, diamond, ...");
+                fail(*x, "unknown named IOR \"" + name +
+                             "\"; give a number or one of vacuum, air, water, "
+                             "ethanol, glycerol, fused quartz, pyrex, acrylic glass, bk7, sodium chloride, pet, "
+                             "diamond, ...");
             return v;
         }
         return *p.number(key);
@@ -821,9 +879,12 @@ MaterialDesc Importer::readBsdf(const Elem& e, bool wrapped) {
     if (type == "twosided") {
         std::vector<Elem> inner;
         for (Elem& o : p.objects()) {
-            if (o.tag() == "bsdf") inner.push_back(o);
-            else if (o.tag() == "ref") inner.push_back(lookup(o, required(o, "id")));
-            else continue;
+            if (o.tag() == "bsdf")
+                inner.push_back(o);
+            else if (o.tag() == "ref")
+                inner.push_back(lookup(o, required(o, "id")));
+            else
+                continue;
             p.took(o);
         }
         if (inner.size() != 1)
@@ -839,26 +900,32 @@ MaterialDesc Importer::readBsdf(const Elem& e, bool wrapped) {
         for (const char* k : {"material", "eta", "k", "alpha", "alpha_u", "alpha_v", "distribution", "sample_visible"})
             p.find(k);
         warn(e, std::string("imported as a perfect mirror of reflectance specular_reflectance (") +
-                    std::to_string(maxComponent(m.specular)) + "): tpb has no conductor Fresnel (material/eta/k are "
-                    "ignored)" + (type == "roughconductor" ? " and no roughness (alpha is ignored)" : ""));
+                    std::to_string(maxComponent(m.specular)) +
+                    "): tpb has no conductor Fresnel (material/eta/k are "
+                    "ignored)" +
+                    (type == "roughconductor" ? " and no roughness (alpha is ignored)" : ""));
     } else if (type == "dielectric" || type == "roughdielectric" || type == "thindielectric") {
         const double intIor = ior("int_ior", 1.5046), extIor = ior("ext_ior", 1.000277);
         if (!(intIor >= 1.0)) fail(p.find("int_ior") ? *p.find("int_ior") : e, "int_ior must be >= 1 in tpb");
         if (std::fabs(extIor - 1.0) > kAirTolerance)
             warn(p.find("ext_ior") ? *p.find("ext_ior") : e,
-                 "ext_ior " + std::to_string(extIor) + " is ignored: tpb takes the index outside a dielectric from "
-                 "the region around it (the global medium's, 1 in vacuum)");
+                 "ext_ior " + std::to_string(extIor) +
+                     " is ignored: tpb takes the index outside a dielectric from "
+                     "the region around it (the global medium's, 1 in vacuum)");
         const std::optional<Color> refl = p.color("specular_reflectance"), trans = p.color("specular_transmittance");
-        m.specular = unit(trans ? "specular_transmittance" : "specular_reflectance", trans ? *trans : refl.value_or(Color(1.0)));
+        m.specular =
+            unit(trans ? "specular_transmittance" : "specular_reflectance", trans ? *trans : refl.value_or(Color(1.0)));
         if (refl && trans && *refl != *trans)
-            warn(*p.find("specular_reflectance"), "tpb's dielectric has one tint for reflection and transmission: "
-                                                  "specular_transmittance is used");
+            warn(*p.find("specular_reflectance"),
+                 "tpb's dielectric has one tint for reflection and transmission: "
+                 "specular_transmittance is used");
         if (type == "thindielectric") {
             m.type = MaterialType::Null;
             const double f = (intIor - 1.0) / (intIor + 1.0);
-            warn(e, "tpb has no thin dielectric: imported as a null surface (light passes straight through, as "
-                    "through a thin sheet, undelayed); its Fresnel reflection (" + std::to_string(2 * f * f / (1 + f * f)) +
-                    " at normal incidence) is lost");
+            warn(e,
+                 "tpb has no thin dielectric: imported as a null surface (light passes straight through, as "
+                 "through a thin sheet, undelayed); its Fresnel reflection (" +
+                     std::to_string(2 * f * f / (1 + f * f)) + " at normal incidence) is lost");
         } else {
             m.type = MaterialType::Dielectric;
             m.ior = intIor;
@@ -870,8 +937,9 @@ MaterialDesc Importer::readBsdf(const Elem& e, bool wrapped) {
     } else if (type == "null") {
         m.type = MaterialType::Null;
     } else {
-        fail(e, "unsupported bsdf type \"" + type + "\"; tpb imports diffuse, conductor, roughconductor (as mirrors), "
-                "dielectric, roughdielectric, thindielectric, twosided, null");
+        fail(e, "unsupported bsdf type \"" + type +
+                    "\"; tpb imports diffuse, conductor, roughconductor (as mirrors), "
+                    "dielectric, roughdielectric, thindielectric, twosided, null");
     }
     (void)wrapped;
     p.finish();
@@ -976,16 +1044,17 @@ void Importer::readShape(const Elem& e) {
     if (toWorld && !(std::fabs(det) > 0.0)) fail(*p.find("to_world"), "to_world is singular");
 
     if (emitter) {
-        if (type != "rectangle")
-            fail(*emitter, "an area emitter must sit on a rectangle: tpb's area lights are quads");
-        if (bsdf) warn(*bsdf, "the bsdf of an area emitter's shape is ignored: tpb's area lights absorb what reaches them");
+        if (type != "rectangle") fail(*emitter, "an area emitter must sit on a rectangle: tpb's area lights are quads");
+        if (bsdf)
+            warn(*bsdf, "the bsdf of an area emitter's shape is ignored: tpb's area lights absorb what reaches them");
         if (interior >= 0) fail(*p.find("interior"), "an area emitter's rectangle cannot have an interior medium");
         readEmitter(*emitter, &e, &M, flip);
         p.finish();
         return;
     }
 
-    if (bsdf) s.material = material(*bsdf);
+    if (bsdf)
+        s.material = material(*bsdf);
     else if (interior >= 0 || exterior >= 0) {  // Mitsuba: a medium boundary without a bsdf is null
         if (defaultNull_ < 0) {
             defaultNull_ = static_cast<int>(d_.materials.size());
@@ -1043,8 +1112,9 @@ void Importer::readShape(const Elem& e) {
         const double tol = 1e-6 * std::max({la, lb, ld});
         if (std::fabs(la - lb) > tol || std::fabs(la - ld) > tol || std::fabs(glm::dot(a, b)) > tol * la ||
             std::fabs(glm::dot(a, d)) > tol * la || std::fabs(glm::dot(b, d)) > tol * lb)
-            fail(*p.find("to_world"), "a sphere's to_world must be a rotation, a uniform scale and a translation "
-                                      "(tpb's spheres are round; use a mesh for an ellipsoid)");
+            fail(*p.find("to_world"),
+                 "a sphere's to_world must be a rotation, a uniform scale and a translation "
+                 "(tpb's spheres are round; use a mesh for an ellipsoid)");
         s.center = Vec3(M * glm::dvec4(c, 1.0));
         s.radius = r * la;
         checkPoint(e, s.center, "the sphere's center");
@@ -1130,7 +1200,8 @@ void Importer::readEmitter(const Elem& e, const Elem* shape, const Mat4* shapeTo
         if (!(glm::length(dir) > 0.0)) fail(e, "the spot's to_world is singular");
         l.direction = glm::normalize(dir);
         l.spotCutoffDeg = p.number("cutoff_angle").value_or(20.0);
-        if (!(l.spotCutoffDeg > 0.0 && l.spotCutoffDeg <= 180.0)) fail(*p.find("cutoff_angle"), "cutoff_angle must be in (0, 180]");
+        if (!(l.spotCutoffDeg > 0.0 && l.spotCutoffDeg <= 180.0))
+            fail(*p.find("cutoff_angle"), "cutoff_angle must be in (0, 180]");
         l.spotFalloffDeg = p.number("beam_width").value_or(0.75 * l.spotCutoffDeg);
         if (!(l.spotFalloffDeg >= 0.0 && l.spotFalloffDeg <= l.spotCutoffDeg))
             fail(*p.find("beam_width"), "beam_width must be in [0, cutoff_angle]");
@@ -1141,19 +1212,22 @@ void Importer::readEmitter(const Elem& e, const Elem* shape, const Mat4* shapeTo
         unit.power = Color(1.0);
         l.power = colorOf("intensity", 1.0) * Light::fromDesc(unit).spotIntegral;
         if (l.spotFalloffDeg < l.spotCutoffDeg)
-            warn(e, "between beam_width and cutoff_angle tpb's spot falls off as a smoothstep in cos(angle), Mitsuba's "
-                    "linearly in the angle; the on-axis intensity and the cone are the same");
+            warn(e,
+                 "between beam_width and cutoff_angle tpb's spot falls off as a smoothstep in cos(angle), Mitsuba's "
+                 "linearly in the angle; the on-axis intensity and the cone are the same");
         loc(key, e);
     } else if (type == "directional") {
-        fail(e, "directional emitters are not supported: tpb has no light at infinity (in a medium it would carry "
-                "infinite flux); use a spot, a large area light, or a tpb laser (JSON scenes)");
+        fail(e,
+             "directional emitters are not supported: tpb has no light at infinity (in a medium it would carry "
+             "infinite flux); use a spot, a large area light, or a tpb laser (JSON scenes)");
     } else if (type == "area") {
         fail(e, "an area emitter must be nested in the <shape type=\"rectangle\"> it lights");
     } else {
         fail(e, "unsupported emitter type \"" + type + "\"; tpb imports point, spot and area (on a rectangle)");
     }
     checkPoint(e, l.position, "the light");
-    if (maxComponent(l.power) > 1e20) fail(e, "the light's flux is above 1e20 W (the film's float images could overflow)");
+    if (maxComponent(l.power) > 1e20)
+        fail(e, "the light's flux is above 1e20 W (the film's float images could overflow)");
     // A medium on the emitter: tpb finds the region of a light itself.
     for (Elem& o : p.objects())
         if (o.tag() == "ref" || o.tag() == "medium") {
@@ -1180,7 +1254,8 @@ void Importer::run(const std::string& text, const std::string& path) {
     if (const pugi::xml_attribute v = root.attribute("version"); !v)
         warn(rootE, "no version attribute; read as Mitsuba 3 (write <scene version=\"3.0.0\">)");
     else if (std::string(v.value()).rfind("3.", 0) != 0)
-        warn(rootE, "written for Mitsuba " + std::string(v.value()) + "; read as Mitsuba 3 (parameter names may differ)");
+        warn(rootE,
+             "written for Mitsuba " + std::string(v.value()) + "; read as Mitsuba 3 (parameter names may differ)");
     loc("version", rootE);
 
     std::vector<Elem> top;
@@ -1189,16 +1264,24 @@ void Importer::run(const std::string& text, const std::string& path) {
     for (const Elem& e : top) registerIds(e);
     for (const Elem& e : top) {
         const std::string tag = e.tag();
-        if (tag == "sensor") readSensor(e);
-        else if (tag == "integrator") readIntegrator(e);
-        else if (tag == "shape") readShape(e);
-        else if (tag == "emitter") readEmitter(e, nullptr, nullptr, false);
-        else if (tag == "bsdf") material(e);
-        else if (tag == "medium") medium(e);
-        else if (tag == "texture") fail(e, "textures are not supported (tpb's materials are uniform colours)");
+        if (tag == "sensor")
+            readSensor(e);
+        else if (tag == "integrator")
+            readIntegrator(e);
+        else if (tag == "shape")
+            readShape(e);
+        else if (tag == "emitter")
+            readEmitter(e, nullptr, nullptr, false);
+        else if (tag == "bsdf")
+            material(e);
+        else if (tag == "medium")
+            medium(e);
+        else if (tag == "texture")
+            fail(e, "textures are not supported (tpb's materials are uniform colours)");
         else
-            fail(e, "unknown or unsupported element <" + tag + "> in a scene; tpb imports sensor, integrator, shape, "
-                    "emitter, bsdf, medium, default, include");
+            fail(e, "unknown or unsupported element <" + tag +
+                        "> in a scene; tpb imports sensor, integrator, shape, "
+                        "emitter, bsdf, medium, default, include");
     }
     if (!haveSensor_) d_.warnings.push_back(path + ": the scene has no sensor: tpb's default camera is used");
     if (d_.lights.empty()) d_.warnings.push_back(path + ": the scene has no emitters: the image will be black");

@@ -22,20 +22,29 @@ enum class Scalar { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 
 
 bool scalarOf(const std::string& name, Scalar& s) {
     static const std::pair<const char*, Scalar> kNames[] = {
-        {"char", Scalar::Int8},     {"int8", Scalar::Int8},       {"uchar", Scalar::UInt8},   {"uint8", Scalar::UInt8},
-        {"short", Scalar::Int16},   {"int16", Scalar::Int16},     {"ushort", Scalar::UInt16}, {"uint16", Scalar::UInt16},
-        {"int", Scalar::Int32},     {"int32", Scalar::Int32},     {"uint", Scalar::UInt32},   {"uint32", Scalar::UInt32},
-        {"float", Scalar::Float32}, {"float32", Scalar::Float32}, {"double", Scalar::Float64}, {"float64", Scalar::Float64}};
+        {"char", Scalar::Int8},      {"int8", Scalar::Int8},       {"uchar", Scalar::UInt8},
+        {"uint8", Scalar::UInt8},    {"short", Scalar::Int16},     {"int16", Scalar::Int16},
+        {"ushort", Scalar::UInt16},  {"uint16", Scalar::UInt16},   {"int", Scalar::Int32},
+        {"int32", Scalar::Int32},    {"uint", Scalar::UInt32},     {"uint32", Scalar::UInt32},
+        {"float", Scalar::Float32},  {"float32", Scalar::Float32}, {"double", Scalar::Float64},
+        {"float64", Scalar::Float64}};
     for (const auto& [n, v] : kNames)
-        if (name == n) { s = v; return true; }
+        if (name == n) {
+            s = v;
+            return true;
+        }
     return false;
 }
 
 size_t sizeOf(Scalar s) {
     switch (s) {
-        case Scalar::Int8: case Scalar::UInt8: return 1;
-        case Scalar::Int16: case Scalar::UInt16: return 2;
-        case Scalar::Int32: case Scalar::UInt32: case Scalar::Float32: return 4;
+        case Scalar::Int8:
+        case Scalar::UInt8: return 1;
+        case Scalar::Int16:
+        case Scalar::UInt16: return 2;
+        case Scalar::Int32:
+        case Scalar::UInt32:
+        case Scalar::Float32: return 4;
         case Scalar::Float64: return 8;
     }
     return 1;
@@ -69,14 +78,42 @@ public:
         std::memcpy(raw, b_.data() + pos_, n);  // little-endian host (x86-64, aarch64)
         pos_ += n;
         switch (t) {
-            case Scalar::Int8: { int8_t v; std::memcpy(&v, raw, 1); return v; }
+            case Scalar::Int8: {
+                int8_t v;
+                std::memcpy(&v, raw, 1);
+                return v;
+            }
             case Scalar::UInt8: return raw[0];
-            case Scalar::Int16: { int16_t v; std::memcpy(&v, raw, 2); return v; }
-            case Scalar::UInt16: { uint16_t v; std::memcpy(&v, raw, 2); return v; }
-            case Scalar::Int32: { int32_t v; std::memcpy(&v, raw, 4); return v; }
-            case Scalar::UInt32: { uint32_t v; std::memcpy(&v, raw, 4); return v; }
-            case Scalar::Float32: { float v; std::memcpy(&v, raw, 4); return v; }
-            case Scalar::Float64: { double v; std::memcpy(&v, raw, 8); return v; }
+            case Scalar::Int16: {
+                int16_t v;
+                std::memcpy(&v, raw, 2);
+                return v;
+            }
+            case Scalar::UInt16: {
+                uint16_t v;
+                std::memcpy(&v, raw, 2);
+                return v;
+            }
+            case Scalar::Int32: {
+                int32_t v;
+                std::memcpy(&v, raw, 4);
+                return v;
+            }
+            case Scalar::UInt32: {
+                uint32_t v;
+                std::memcpy(&v, raw, 4);
+                return v;
+            }
+            case Scalar::Float32: {
+                float v;
+                std::memcpy(&v, raw, 4);
+                return v;
+            }
+            case Scalar::Float64: {
+                double v;
+                std::memcpy(&v, raw, 8);
+                return v;
+            }
         }
         return 0.0;
     }
@@ -135,10 +172,12 @@ TriangleMesh parsePly(const std::string& bytes, const std::string& path, size_t*
         if (word == "format") {
             std::string f, version;
             ss >> f >> version;
-            if (f == "ascii") ascii = true;
+            if (f == "ascii")
+                ascii = true;
             else if (f == "binary_big_endian")
                 fail(line, "binary_big_endian PLY is not supported; convert it to binary_little_endian or ascii");
-            else if (f != "binary_little_endian") fail(line, "unknown PLY format \"" + f + "\"");
+            else if (f != "binary_little_endian")
+                fail(line, "unknown PLY format \"" + f + "\"");
             sawFormat = true;
         } else if (word == "element") {
             Element e;
@@ -218,7 +257,8 @@ TriangleMesh parsePly(const std::string& bytes, const std::string& path, size_t*
                     if (int(k) == ii) polygons.push_back(std::move(idx));
                 } else {
                     const double v = rd.value(p.type);
-                    if (isVertex && (int(k) == ix || int(k) == iy || int(k) == iz)) xyz[int(k) == ix ? 0 : int(k) == iy ? 1 : 2] = v;
+                    if (isVertex && (int(k) == ix || int(k) == iy || int(k) == iz))
+                        xyz[int(k) == ix ? 0 : int(k) == iy ? 1 : 2] = v;
                 }
             }
             if (isVertex) {
@@ -236,12 +276,16 @@ TriangleMesh parsePly(const std::string& bytes, const std::string& path, size_t*
         const std::vector<uint32_t>& p = polygons[f];
         for (uint32_t i : p)
             if (i >= nv)
-                fail(0, "face " + std::to_string(f) + " refers to vertex " + std::to_string(i) + " of " + std::to_string(nv));
+                fail(0, "face " + std::to_string(f) + " refers to vertex " + std::to_string(i) + " of " +
+                            std::to_string(nv));
         for (size_t j = 1; j + 1 < p.size(); ++j) {
             const Vec3 a = mesh.positions[p[0]], b = mesh.positions[p[j]], c = mesh.positions[p[j + 1]];
             const Vec3 e1 = b - a, e2 = c - a, e3 = c - b;
             const double longest2 = std::max({glm::dot(e1, e1), glm::dot(e2, e2), glm::dot(e3, e3)});
-            if (!(glm::length(glm::cross(e1, e2)) > 1e-12 * longest2)) { ++dropped; continue; }
+            if (!(glm::length(glm::cross(e1, e2)) > 1e-12 * longest2)) {
+                ++dropped;
+                continue;
+            }
             mesh.triangles.emplace_back(p[0], p[j], p[j + 1]);
         }
     }

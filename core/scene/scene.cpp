@@ -26,7 +26,9 @@ void checkClosedContainer(const SceneDesc& d, const std::string& key, const Shap
                 " edges shared by triangles facing opposite ways (or by more than two)";
     const std::string mesh = "the mesh \"" + name + "\"" + (sd.meshPath.empty() ? "" : " (" + sd.meshPath + ")");
     throw UserError(d.where(mediumKey) + mediumKey + ": " + mesh + " holds a medium but is not closed: " + what +
-                    (droppedDegenerate > 0 ? " (" + std::to_string(droppedDegenerate) + " zero-area triangles were dropped on loading)" : "") +
+                    (droppedDegenerate > 0
+                         ? " (" + std::to_string(droppedDegenerate) + " zero-area triangles were dropped on loading)"
+                         : "") +
                     "; the medium would leak out through them. Close the mesh and orient its faces consistently "
                     "(e.g. Blender: Select > All by Trait > Non Manifold, then Face > Fill; Mesh > Normals > "
                     "Recalculate Outside), or remove the interior medium");
@@ -67,7 +69,8 @@ void checkNesting(const Scene& s, const SceneDesc& desc, const std::vector<Surfa
         throw UserError(desc.where(key) + key + ": \"" + s.shapes[pr.shape].name + "\" is the innermost of " +
                         std::to_string(around.size()) + " nested dielectric/null shapes (outermost first: " + chain +
                         "); at most " + std::to_string(RegionStack::kCapacity - 1) +
-                        " can nest (the region stack holds the outside and " + std::to_string(RegionStack::kCapacity - 1) +
+                        " can nest (the region stack holds the outside and " +
+                        std::to_string(RegionStack::kCapacity - 1) +
                         " shapes); take shapes out of the nesting or merge nested shells into one shape");
     }
 }
@@ -165,11 +168,13 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d, StageAnalysis anal
                 if (sd.meshPath.empty()) {
                     m.positions = sd.inlinePositions;
                     m.triangles = sd.inlineTriangles;
-                } else try {
-                    m = loadMeshFile(sd.meshPath, &dropped);
-                } catch (const UserError& e) {  // name the scene's key too: "scene.json:8: shapes[0].file: x.obj:4: ..."
-                    throw UserError(d.where(key + ".file") + key + ".file: " + e.what());
-                }
+                } else
+                    try {
+                        m = loadMeshFile(sd.meshPath, &dropped);
+                    } catch (
+                        const UserError& e) {  // name the scene's key too: "scene.json:8: shapes[0].file: x.obj:4: ..."
+                        throw UserError(d.where(key + ".file") + key + ".file: " + e.what());
+                    }
                 try {
                     m.transform(sd.transform);
                 } catch (const UserError& e) {  // a vertex beyond the coordinate limit
@@ -289,9 +294,12 @@ std::vector<int> Scene::shapesAround(const Vec3& p) const {
         const bool exiting = glm::dot(ray.d, hit->ng) > 0.0;
         if (sh.interiorRegion > 0) {
             int& n = entered[hit->shape];
-            if (!exiting) ++n;
-            else if (n > 0) --n;                          // left a shape entered on the way
-            else leaving.push_back(hit->shape);           // left a shape that holds p
+            if (!exiting)
+                ++n;
+            else if (n > 0)
+                --n;  // left a shape entered on the way
+            else
+                leaving.push_back(hit->shape);  // left a shape that holds p
         }
         ray = {hit->p + ray.d * rayEps * 4.0, ray.d};
     }
@@ -316,8 +324,10 @@ bool Scene::walkRegions(RegionStack& stack, const Vec3& from, const Vec3& to) co
         if (!hit) break;
         const ShapeInfo& sh = shapes[hit->shape];
         if (sh.interiorRegion > 0) {
-            if (glm::dot(ray.d, hit->ng) > 0.0) stack.pop();
-            else if (!stack.push(sh.interiorRegion)) return false;
+            if (glm::dot(ray.d, hit->ng) > 0.0)
+                stack.pop();
+            else if (!stack.push(sh.interiorRegion))
+                return false;
         }
         ray.tmin = hit->t + 4.0 * rayEps;
     }
@@ -333,7 +343,10 @@ std::optional<RegionStack> Scene::emissionRegions(int li, const Vec3& start) con
 }
 
 int Scene::pickLight(double u, double& pdf) const {
-    if (lights.empty() || lightCdf.back() <= 0.0) { pdf = 0.0; return -1; }
+    if (lights.empty() || lightCdf.back() <= 0.0) {
+        pdf = 0.0;
+        return -1;
+    }
     const auto it = std::upper_bound(lightCdf.begin(), lightCdf.end(), u);
     const int i = std::min<int>(static_cast<int>(it - lightCdf.begin()), static_cast<int>(lights.size()) - 1);
     pdf = lightCdf[i] - (i > 0 ? lightCdf[i - 1] : 0.0);

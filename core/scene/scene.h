@@ -66,15 +66,17 @@ struct RegionStack {
         ids[size++] = r;
         return true;
     }
-    void pop() { if (size > 1) --size; }
+    void pop() {
+        if (size > 1) --size;
+    }
 };
 
 // Where a light's photons start (Scene::emissionRegions): the region stack at an anchor point of
 // the light, and whether that stack holds for every point the light emits from.
 struct LightPlacement {
-    Vec3 anchor{0.0};      // point light / spot / laser: its position; area light: a point rayEps in front
-    RegionStack regions;   // region stack at the anchor
-    bool uniform = true;   // no dielectric/null surface comes near the light's emitting points
+    Vec3 anchor{0.0};     // point light / spot / laser: its position; area light: a point rayEps in front
+    RegionStack regions;  // region stack at the anchor
+    bool uniform = true;  // no dielectric/null surface comes near the light's emitting points
 };
 
 class Scene;
@@ -93,7 +95,7 @@ public:
     std::vector<Light> lights;
     std::vector<double> lightCdf;  // light selection proportional to luminance of power
     Camera camera;
-    Bounds3 bounds;        // of geometry, lights and camera
+    Bounds3 bounds;  // of geometry, lights and camera
     // Offset along the normal for rays leaving a surface: float triangles need ~1e-5 of the scene
     // size to never re-hit the surface they start on (measured in tests/scene/test_geometry.cpp).
     // The size is the larger of the geometry's diagonal and its farthest coordinate (scene.cpp).
@@ -137,7 +139,7 @@ public:
     // True when a camera ray (pixel centres, through mirrors and both ways through glass) reaches a
     // diffuse surface: only then is a surface photon map needed. (The path continuation itself,
     // interface crossings included, lives in core/transport/interaction.h.)
-    RegionStack cameraRegions;                  // where the camera sits
+    RegionStack cameraRegions;                   // where the camera sits
     std::vector<LightPlacement> lightPlacement;  // where each light's photons start
 };
 

@@ -98,23 +98,23 @@ enum class LightType { Point, Spot, AreaQuad, Laser };
 struct LightDesc {
     std::string name;
     LightType type = LightType::Point;
-    Color power{1.0};       // radiant flux, W (RGB)
-    double emitOpl = 0.0;   // pulse instant as OPL, m
-    Vec3 position{0.0};     // point, spot, laser origin
-    Vec3 direction{0.0, -1.0, 0.0};  // spot axis, laser direction (unit)
-    double spotCutoffDeg = 30.0;     // spot: half-angle of the cone
-    double spotFalloffDeg = 25.0;    // spot: half-angle where the smooth falloff starts
+    Color power{1.0};                                              // radiant flux, W (RGB)
+    double emitOpl = 0.0;                                          // pulse instant as OPL, m
+    Vec3 position{0.0};                                            // point, spot, laser origin
+    Vec3 direction{0.0, -1.0, 0.0};                                // spot axis, laser direction (unit)
+    double spotCutoffDeg = 30.0;                                   // spot: half-angle of the cone
+    double spotFalloffDeg = 25.0;                                  // spot: half-angle where the smooth falloff starts
     Vec3 corner{0.0}, edgeU{1.0, 0.0, 0.0}, edgeV{0.0, 0.0, 1.0};  // area quad; emits along cross(edgeU, edgeV)
-    double laserRadius = 0.0;  // laser: beam radius, m (0 = infinitely thin)
+    double laserRadius = 0.0;                                      // laser: beam radius, m (0 = infinitely thin)
 };
 
 enum class BeamLength { Short, Long };
 
 struct RenderDesc {
     int64_t photonsPerPass = 20000;
-    int warmup = 0;               // warm-up passes with fewer photons (RenderSettings::warmupPasses)
-    double radius = 0.01;         // initial kernel radius
-    bool radiusRelative = true;   // radius is a fraction of the scene's bounding diagonal
+    int warmup = 0;              // warm-up passes with fewer photons (RenderSettings::warmupPasses)
+    double radius = 0.01;        // initial kernel radius
+    bool radiusRelative = true;  // radius is a fraction of the scene's bounding diagonal
     // "radius": "auto", also the default when no volume radius is written: chosen by prepareRender
     // from a pilot pass (render/auto_radius.h); `radius` is then the fallback without a medium.
     bool radiusAuto = true;

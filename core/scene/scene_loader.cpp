@@ -98,7 +98,6 @@
 #include "scene/scene_loader.h"
 #include "scene/mitsuba_loader.h"
 
-
 #include "base/error.h"
 #include "base/text.h"
 #include "io/json.h"
@@ -134,9 +133,7 @@ std::string join(const std::vector<std::string>& words) {
     return s;
 }
 
-bool isPlainInteger(const std::string& lit) {
-    return !lit.empty() && lit.find_first_of(".eE") == std::string::npos;
-}
+bool isPlainInteger(const std::string& lit) { return !lit.empty() && lit.find_first_of(".eE") == std::string::npos; }
 
 // ---- the property bag ----------------------------------------------------------------------------
 
@@ -294,8 +291,7 @@ public:
         return static_cast<int>(toInteger(v, key, name, lo, INT_MAX));
     }
 
-    int64_t toInteger(const JsonValue& v, std::string_view key, const std::string& name, int64_t lo,
-                      int64_t hi) const {
+    int64_t toInteger(const JsonValue& v, std::string_view key, const std::string& name, int64_t lo, int64_t hi) const {
         if (!v.isNumber()) wrongType(key, "an integer");
         bool tooLow = false, tooHigh = false;
         int64_t n = 0;
@@ -305,14 +301,16 @@ public:
         } else {
             const double d = v.number;
             if (d != std::floor(d)) fail(key, name + " must be an integer (got " + v.text + ")");
-            if (d < -9223372036854775808.0) tooLow = true;
-            else if (d >= 9223372036854775808.0) tooHigh = true;
-            else n = static_cast<int64_t>(d);
+            if (d < -9223372036854775808.0)
+                tooLow = true;
+            else if (d >= 9223372036854775808.0)
+                tooHigh = true;
+            else
+                n = static_cast<int64_t>(d);
         }
         if (tooLow || (!tooHigh && n < lo))
             fail(key, name + " must be >= " + std::to_string(lo) + " (got " + v.text + ")");
-        if (tooHigh || n > hi)
-            fail(key, name + " must be <= " + std::to_string(hi) + " (got " + v.text + ")");
+        if (tooHigh || n > hi) fail(key, name + " must be <= " + std::to_string(hi) + " (got " + v.text + ")");
         return n;
     }
 
@@ -329,7 +327,8 @@ public:
         }
         std::vector<std::string> plain;
         for (const auto& o : options) plain.push_back(o.first);
-        fail(key, "unknown " + what + " \"" + clipped(*s) + "\"" + suggestion(*s, plain) + "; allowed: " + join(names) + hint);
+        fail(key, "unknown " + what + " \"" + clipped(*s) + "\"" + suggestion(*s, plain) + "; allowed: " + join(names) +
+                      hint);
     }
 
     // A time given as "<base>_m" or "<base>_ns", returned as OPL in meters.
@@ -479,9 +478,7 @@ void readMaterial(Bag& b, MaterialDesc& mat) {
             if (auto t = b.color("tint")) mat.specular = *t;
             b.check(inUnit(mat.specular), "tint", "must be in [0, 1]");
             break;
-        case MaterialType::Null:
-            b.setWhat("a null material");
-            break;
+        case MaterialType::Null: b.setWhat("a null material"); break;
     }
 }
 
@@ -499,8 +496,9 @@ int readReference(Bag& b, std::string_view key, const std::map<std::string, int>
         if (quoted.size() < 20) quoted.push_back("\"" + name + "\"");
     }
     if (defined.size() > quoted.size()) quoted.push_back("...");
-    b.fail(key, "undefined " + what + " \"" + clipped(v->text) + "\"" + suggestion(v->text, defined) +
-                    (defined.empty() ? "; no " + plural + " are defined" : "; defined " + plural + ": " + join(quoted)));
+    b.fail(key,
+           "undefined " + what + " \"" + clipped(v->text) + "\"" + suggestion(v->text, defined) +
+               (defined.empty() ? "; no " + plural + " are defined" : "; defined " + plural + ": " + join(quoted)));
 }
 
 // T * R * S, or a row-major matrix.
@@ -554,8 +552,10 @@ Mat4 readTransform(Context& ctx, const JsonValue& obj, const std::string& path) 
             b.fail("matrix", "matrix must be affine: its last row must be 0, 0, 0, 1");
         const double det = glm::determinant(glm::dmat3(M));
         if (!(det > 0.0) || !std::isfinite(det))
-            b.fail("matrix", "matrix must be invertible and must not mirror (the determinant of its 3x3 part "
-                             "must be > 0; got " + std::to_string(det) + ")");
+            b.fail("matrix",
+                   "matrix must be invertible and must not mirror (the determinant of its 3x3 part "
+                   "must be > 0; got " +
+                       std::to_string(det) + ")");
         return M;
     }
     const Mat4 T = glm::translate(Mat4(1.0), translate.value_or(Vec3(0.0)));
@@ -730,8 +730,10 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
                                  v->text + "\"");
         autoWritten = r.radiusAuto = true;
     }
-    const std::optional<double> abs = autoWritten ? std::nullopt : b.number("radius"), rel = b.number("radius_relative");
-    if (autoWritten && rel) b.fail("radius_relative", "give either radius (m or \"auto\") or radius_relative, not both");
+    const std::optional<double> abs = autoWritten ? std::nullopt : b.number("radius"),
+                                rel = b.number("radius_relative");
+    if (autoWritten && rel)
+        b.fail("radius_relative", "give either radius (m or \"auto\") or radius_relative, not both");
     const std::optional<double> sAbs = b.number("surface_radius"), sRel = b.number("surface_radius_relative");
     if (abs && rel) b.fail("radius_relative", "give either radius (m) or radius_relative, not both");
     if (sAbs && sRel)
@@ -767,16 +769,18 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
         r.seed = seed;
     }
     r.threads = static_cast<int>(b.integer("threads", INT_MIN, INT_MAX).value_or(r.threads));
-    r.emission = b.choice<EmissionMode>("emission", {{"delta", EmissionMode::Delta}, {"continuous", EmissionMode::Continuous}},
-                                        "emission")
-                     .value_or(r.emission);
+    r.emission =
+        b.choice<EmissionMode>("emission", {{"delta", EmissionMode::Delta}, {"continuous", EmissionMode::Continuous}},
+                               "emission")
+            .value_or(r.emission);
     r.unwarp = b.boolean("unwarp").value_or(r.unwarp);
-    r.timeProfile = b.choice<TimeProfile>("time_profile", {{"exact", TimeProfile::Exact}, {"uniform", TimeProfile::Uniform}},
-                                          "time_profile")
-                        .value_or(r.timeProfile);
-    r.beamLength = b.choice<BeamLength>("beam_length", {{"short", BeamLength::Short}, {"long", BeamLength::Long}},
-                                        "beam_length")
-                       .value_or(r.beamLength);
+    r.timeProfile =
+        b.choice<TimeProfile>("time_profile", {{"exact", TimeProfile::Exact}, {"uniform", TimeProfile::Uniform}},
+                              "time_profile")
+            .value_or(r.timeProfile);
+    r.beamLength =
+        b.choice<BeamLength>("beam_length", {{"short", BeamLength::Short}, {"long", BeamLength::Long}}, "beam_length")
+            .value_or(r.beamLength);
     // The estimators: names checked by validate() (the allowed values in its message).
     r.volumeEstimator = b.string("volume_estimator").value_or(r.volumeEstimator);
     r.surfaceEstimator = b.string("surface_estimator").value_or(r.surfaceEstimator);
@@ -795,8 +799,9 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
             const std::string type = k.string("type").value_or("box");
             r.timeKernel.kind = kind(type, [&](const std::string& m) { k.fail("type", m); });
             if (const std::optional<double> w = k.number("width")) {
-                k.check(*w > 0.0 && std::isfinite(*w), "width", "must be > 0 (m of optical path; leave it out to "
-                                                                "let the renderer choose it from the scene)");
+                k.check(*w > 0.0 && std::isfinite(*w), "width",
+                        "must be > 0 (m of optical path; leave it out to "
+                        "let the renderer choose it from the scene)");
                 k.checkCoordinates("width", {*w});
                 r.timeKernel.width = *w;
             }
@@ -840,8 +845,8 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
 
     const JsonValue root = parseJson(text, virtualPath);
     if (!root.isObject())
-        throw UserError(virtualPath, root.line, "", "a scene must be a JSON object { ... }, got " +
-                                                        std::string(root.typeName()));
+        throw UserError(virtualPath, root.line, "",
+                        "a scene must be a JSON object { ... }, got " + std::string(root.typeName()));
     Bag b(ctx, root, "", "the scene");
 
     // Version.
@@ -859,8 +864,9 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
     // The film must fit in memory.
     const uint64_t need = filmBytes(desc.camera.width, desc.camera.height, desc.film.bins), limit = maxFilmBytes();
     if (need > limit) {
-        const std::string key = desc.locs.count("film.bins") ? "film.bins"
-                                : desc.locs.count("camera.resolution") ? "camera.resolution" : "";
+        const std::string key = desc.locs.count("film.bins")           ? "film.bins"
+                                : desc.locs.count("camera.resolution") ? "camera.resolution"
+                                                                       : "";
         const SourceLoc loc = key.empty() ? SourceLoc{virtualPath, 0} : desc.locs[key];
         throw UserError(loc.file, loc.line, key,
                         "the film needs " + std::to_string(need) + " bytes (" + humanBytes(need) + ") for " +
@@ -897,9 +903,8 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
         ShapeDesc s;
         readShape(ctx, e, path, names, s);
         desc.shapes.push_back(s);
-        if (s.interiorMedium >= 0 &&
-            (s.material < 0 || (desc.materials[s.material].type != MaterialType::Dielectric &&
-                                desc.materials[s.material].type != MaterialType::Null)))
+        if (s.interiorMedium >= 0 && (s.material < 0 || (desc.materials[s.material].type != MaterialType::Dielectric &&
+                                                         desc.materials[s.material].type != MaterialType::Null)))
             warn(desc, path + ".interior_medium",
                  "interior_medium has no effect: the shape's material is not \"dielectric\" or \"null\"");
     });
@@ -913,7 +918,8 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
 
     if (desc.lights.empty()) warn(desc, "lights", "the scene has no lights: the image will be black");
     if (desc.render.passes == 0 && desc.render.timeBudgetSec == 0.0)
-        warn(desc, "render.passes", "render.passes is 0 and render.time_budget_s is 0: the render only stops when interrupted");
+        warn(desc, "render.passes",
+             "render.passes is 0 and render.time_budget_s is 0: the render only stops when interrupted");
     return desc;
 }
 
@@ -923,27 +929,30 @@ std::string readSceneFile(const std::string& path, const std::string& what) {
     const fs::file_status st = fs::status(path, ec);  // follows symlinks: a link to a file is fine
     if (fs::is_directory(st)) throw UserError(path, 0, "", "cannot open " + what + " (it is a directory)");
     if (fs::exists(st) && !fs::is_regular_file(st))
-        throw UserError(path, 0, "", "cannot read " + what + ": it is not a regular file but a " +
-                                         (fs::is_character_file(st) || fs::is_block_file(st) ? "device"
-                                          : fs::is_fifo(st)                                   ? "FIFO (pipe)"
-                                          : fs::is_socket(st)                                 ? "socket"
-                                                                                              : "special file") +
-                                         ", which could be read forever; save the scene to a file and give its path");
+        throw UserError(path, 0, "",
+                        "cannot read " + what + ": it is not a regular file but a " +
+                            (fs::is_character_file(st) || fs::is_block_file(st) ? "device"
+                             : fs::is_fifo(st)                                  ? "FIFO (pipe)"
+                             : fs::is_socket(st)                                ? "socket"
+                                                                                : "special file") +
+                            ", which could be read forever; save the scene to a file and give its path");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw UserError(path, 0, "", "cannot open " + what + " (" + std::strerror(errno) + ")");
     const uint64_t bytes = fs::file_size(path, ec);
     if (ec) throw UserError(path, 0, "", "cannot read " + what + " (" + ec.message() + ")");
     if (bytes > kMaxSceneFileBytes)
-        throw UserError(path, 0, "", what + " is " + humanBytes(bytes) + " (" + std::to_string(bytes) +
-                                         " bytes), more than the " + humanBytes(kMaxSceneFileBytes) +
-                                         " a scene file may take; is it the right file? Large meshes belong in "
-                                         "OBJ/PLY files the scene names");
+        throw UserError(path, 0, "",
+                        what + " is " + humanBytes(bytes) + " (" + std::to_string(bytes) + " bytes), more than the " +
+                            humanBytes(kMaxSceneFileBytes) +
+                            " a scene file may take; is it the right file? Large meshes belong in "
+                            "OBJ/PLY files the scene names");
     // Exactly the size it had when asked: a file that grows while being read is not followed.
     std::string text(static_cast<size_t>(bytes), '\0');
     in.read(text.data(), static_cast<std::streamsize>(bytes));
     if (in.bad() || static_cast<uint64_t>(in.gcount()) != bytes)
-        throw UserError(path, 0, "", "cannot read " + what + " (read " + std::to_string(in.gcount()) + " of " +
-                                         std::to_string(bytes) + " bytes: did it change while being read?)");
+        throw UserError(path, 0, "",
+                        "cannot read " + what + " (read " + std::to_string(in.gcount()) + " of " +
+                            std::to_string(bytes) + " bytes: did it change while being read?)");
     return text;
 }
 

@@ -86,8 +86,8 @@ SpecularContinuation followInterface(const Scene& scene, const Ray& ray, const S
     return c;
 }
 
-SpecularContinuation crossNull(const Scene& scene, const Ray& ray, const SurfaceHit& hit,
-                               const SurfaceInteraction& si, RegionStack& regions) {
+SpecularContinuation crossNull(const Scene& scene, const Ray& ray, const SurfaceHit& hit, const SurfaceInteraction& si,
+                               RegionStack& regions) {
     SpecularContinuation c;
     c.nullCrossing = true;
     c.ray = {hit.p - scene.rayEps * si.ng, ray.d};

@@ -39,11 +39,11 @@ SurfaceInteraction interact(const Scene& scene, const Ray& ray, const SurfaceHit
 
 // A path continued through a specular surface.
 struct SpecularContinuation {
-    Ray ray;                     // the continued ray (undefined when regionOverflow)
-    Color tint{1.0};             // multiplies the path weight: mirror/dielectric specular, 1 across null
-    bool regionOverflow = false; // the crossing needed a push onto a full region stack: end the path
-    bool nullCrossing = false;   // the surface was a null boundary
-    bool transmitted = false;    // crossed the surface (the region stack was pushed or popped)
+    Ray ray;                      // the continued ray (undefined when regionOverflow)
+    Color tint{1.0};              // multiplies the path weight: mirror/dielectric specular, 1 across null
+    bool regionOverflow = false;  // the crossing needed a push onto a full region stack: end the path
+    bool nullCrossing = false;    // the surface was a null boundary
+    bool transmitted = false;     // crossed the surface (the region stack was pushed or popped)
 };
 
 // Indices of refraction on both sides of a dielectric/null surface crossed `entering` (against
@@ -67,8 +67,8 @@ SpecularContinuation followInterface(const Scene& scene, const Ray& ray, const S
 
 // A null boundary crossed straight on without a random number (path tracer, shadow rays): the ray
 // goes on rayEps behind the surface, the region stack pushed (entering) or popped (leaving).
-SpecularContinuation crossNull(const Scene& scene, const Ray& ray, const SurfaceHit& hit,
-                               const SurfaceInteraction& si, RegionStack& regions);
+SpecularContinuation crossNull(const Scene& scene, const Ray& ray, const SurfaceHit& hit, const SurfaceInteraction& si,
+                               RegionStack& regions);
 
 // Rays for previews and the stage analysis (no Fresnel, no region stack): the reflection of `ray`
 // about the unit normal n (facing the ray) from rayEps in front of the surface, and `ray` going on

@@ -59,11 +59,12 @@ Stages analyzeStages(const Scene& s) {
     st.reasons.push_back(st.beams ? "photon beams: a region holds a scattering medium"
                                   : "no photon beams: no scattering medium");
     st.reasons.push_back(st.surfacePhotons ? "surface photon map: the camera sees diffuse surfaces"
-                         : anyDiffuse ? "no surface photon map: no diffuse surface is visible to the camera"
-                                      : "no surface photon map: no diffuse surface");
+                         : anyDiffuse      ? "no surface photon map: no diffuse surface is visible to the camera"
+                                           : "no surface photon map: no diffuse surface");
     st.reasons.push_back(st.specularChains ? "specular chains: mirrors or dielectrics present"
                                            : "no specular chains: no mirror or dielectric");
-    st.reasons.push_back(st.visibleEmitters ? "visible emitters: area lights" : "no visible emitters (delta lights only)");
+    st.reasons.push_back(st.visibleEmitters ? "visible emitters: area lights"
+                                            : "no visible emitters (delta lights only)");
     return st;
 }
 

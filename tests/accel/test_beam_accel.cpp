@@ -85,7 +85,7 @@ Segment randomSegment(Rng& rng, const std::vector<Beam>& beams, double radius) {
     const Beam& b = beams[static_cast<size_t>(rng.uniform() * beams.size())];
     Segment s;
     s.region = rng.uniform() < 0.8 ? b.region : static_cast<int>(rng.uniform() * kRegions);
-    const double sb = rng.uniform() * b.length;                     // a point of the beam's axis
+    const double sb = rng.uniform() * b.length;  // a point of the beam's axis
     const Vec3 side = perpendicular(b.dir, rng);
     const int kind = static_cast<int>(rng.uniform() * 6);
     switch (kind) {
@@ -93,7 +93,7 @@ Segment randomSegment(Rng& rng, const std::vector<Beam>& beams, double radius) {
             s.o = randomPoint(rng, 3.0);
             s.d = randomDir(rng);
             break;
-        case 1:    // parallel or anti-parallel, inside the cylinder or just outside it
+        case 1:  // parallel or anti-parallel, inside the cylinder or just outside it
         case 2: {
             const double dist = radius * (rng.uniform() < 0.5 ? rng.uniform() : 1.0 + (rng.uniform() - 0.5) * 1e-6);
             s.d = kind == 1 ? b.dir : -b.dir;
@@ -145,8 +145,10 @@ void expectSortedUniqueOfRegion(const std::vector<BeamPiece>& c, const std::vect
         ASSERT_LT(c[i].beam, beams.size()) << backend;
         EXPECT_EQ(beams[c[i].beam].region, region) << backend;
         if (i > 0) {
-            const bool increasing = c[i - 1].beam < c[i].beam || (c[i - 1].beam == c[i].beam && c[i - 1].piece < c[i].piece);
-            EXPECT_TRUE(increasing) << backend << ": candidates " << i - 1 << ", " << i << " out of (beam, piece) order";
+            const bool increasing =
+                c[i - 1].beam < c[i].beam || (c[i - 1].beam == c[i].beam && c[i - 1].piece < c[i].piece);
+            EXPECT_TRUE(increasing) << backend << ": candidates " << i - 1 << ", " << i
+                                    << " out of (beam, piece) order";
         }
     }
 }
@@ -197,8 +199,8 @@ Counts compareBackends(AccelBackend indexed, uint64_t seed, size_t beamCount, do
         size_t j = 0;
         for (const BeamPiece& p : ce) {
             while (j < cb.size() && key(cb[j]) < key(p)) ++j;
-            EXPECT_TRUE(j < cb.size() && key(cb[j]) == key(p)) << "Embree piece (" << p.beam << ", " << p.piece
-                                                               << ") is not a brute-force piece";
+            EXPECT_TRUE(j < cb.size() && key(cb[j]) == key(p))
+                << "Embree piece (" << p.beam << ", " << p.piece << ") is not a brute-force piece";
         }
         // (a) + (c): every overlapping piece is an Embree candidate; after the test the sets agree.
         const std::vector<Key> ob = overlapping(cb, beams, s, radius), oe = overlapping(ce, beams, s, radius);
@@ -321,7 +323,8 @@ TEST(BeamAccel, PieceCountBoundsAndPiecesTileTheBeam) {
     auto brute = BeamAccel::create(AccelBackend::BruteForce);
     brute->build(beams, radius, 1);
     std::vector<BeamPiece> all;
-    for (int region = 0; region < kRegions; ++region) brute->candidates(Vec3(0.0), Vec3(1.0, 0.0, 0.0), kInf, region, all);
+    for (int region = 0; region < kRegions; ++region)
+        brute->candidates(Vec3(0.0), Vec3(1.0, 0.0, 0.0), kInf, region, all);
     size_t expectedPieces = 0;
     for (const Beam& b : beams) expectedPieces += beamPieceCount(b.length, radius);
     ASSERT_EQ(all.size(), expectedPieces);
@@ -358,56 +361,58 @@ TEST(BeamAccel, PointCandidatesContainEveryPointNearTheSegmentAndMatchBruteForce
     for (const Beam& b : beams)
         for (int k = 0; k < 4; ++k) {
             VolumePhoton v{};
-            v.position = b.origin + rng.uniform() * b.length * b.dir + 2.0 * radius * (rng.uniform() - 0.5) * randomDir(rng);
+            v.position =
+                b.origin + rng.uniform() * b.length * b.dir + 2.0 * radius * (rng.uniform() - 0.5) * randomDir(rng);
             v.dirIn = b.dir;
             v.power = Color(1.0);
             v.region = b.region;
             points.push_back(v);
         }
     for (AccelBackend indexed : {AccelBackend::Embree, AccelBackend::Bvh})
-    for (int round = 0; round < 2; ++round) {
-        auto brute = BeamAccel::create(AccelBackend::BruteForce);
-        auto embree = BeamAccel::create(indexed);  // round 1: rebuilt over beams in between
-        if (round == 1) {
-            brute->build(beams, radius, 1);
-            embree->build(beams, radius, 1);
-        }
-        brute->build(points, radius, 1);
-        embree->build(points, radius, 1);
-        ASSERT_EQ(brute->pieceCount(), points.size());
-        ASSERT_EQ(embree->pieceCount(), points.size());
-        size_t overlaps = 0, candidatesEmbree = 0, candidatesBrute = 0;
-        std::vector<BeamPiece> cb, ce;
-        Rng qrng(3100 + round, Stream::Test, 0, 0);  // the same queries for both backends
-        for (int q = 0; q < 3000; ++q) {
-            const Segment s = randomSegment(qrng, beams, radius);
-            cb.clear();
-            ce.clear();
-            brute->candidates(s.o, s.d, s.sMax, s.region, cb);
-            embree->candidates(s.o, s.d, s.sMax, s.region, ce);
-            const auto near = [&](const std::vector<BeamPiece>& c) {
-                std::vector<uint32_t> out;
-                for (size_t i = 0; i < c.size(); ++i) {
-                    EXPECT_EQ(c[i].piece, 0u);
-                    EXPECT_EQ(c[i].sbLo, 0.0);
-                    EXPECT_EQ(c[i].sbHi, 0.0);
-                    EXPECT_EQ(points[c[i].beam].region, s.region);
-                    if (i > 0) {
-                        EXPECT_LT(c[i - 1].beam, c[i].beam);
+        for (int round = 0; round < 2; ++round) {
+            auto brute = BeamAccel::create(AccelBackend::BruteForce);
+            auto embree = BeamAccel::create(indexed);  // round 1: rebuilt over beams in between
+            if (round == 1) {
+                brute->build(beams, radius, 1);
+                embree->build(beams, radius, 1);
+            }
+            brute->build(points, radius, 1);
+            embree->build(points, radius, 1);
+            ASSERT_EQ(brute->pieceCount(), points.size());
+            ASSERT_EQ(embree->pieceCount(), points.size());
+            size_t overlaps = 0, candidatesEmbree = 0, candidatesBrute = 0;
+            std::vector<BeamPiece> cb, ce;
+            Rng qrng(3100 + round, Stream::Test, 0, 0);  // the same queries for both backends
+            for (int q = 0; q < 3000; ++q) {
+                const Segment s = randomSegment(qrng, beams, radius);
+                cb.clear();
+                ce.clear();
+                brute->candidates(s.o, s.d, s.sMax, s.region, cb);
+                embree->candidates(s.o, s.d, s.sMax, s.region, ce);
+                const auto near = [&](const std::vector<BeamPiece>& c) {
+                    std::vector<uint32_t> out;
+                    for (size_t i = 0; i < c.size(); ++i) {
+                        EXPECT_EQ(c[i].piece, 0u);
+                        EXPECT_EQ(c[i].sbLo, 0.0);
+                        EXPECT_EQ(c[i].sbHi, 0.0);
+                        EXPECT_EQ(points[c[i].beam].region, s.region);
+                        if (i > 0) {
+                            EXPECT_LT(c[i - 1].beam, c[i].beam);
+                        }
+                        if (rayPointChord(s.o, s.d, s.sMax, points[c[i].beam].position, radius))
+                            out.push_back(c[i].beam);
                     }
-                    if (rayPointChord(s.o, s.d, s.sMax, points[c[i].beam].position, radius)) out.push_back(c[i].beam);
-                }
-                return out;
-            };
-            const std::vector<uint32_t> nb = near(cb), ne = near(ce);
-            ASSERT_EQ(nb, ne) << "query " << q;
-            overlaps += nb.size();
-            candidatesEmbree += ce.size();
-            candidatesBrute += cb.size();
+                    return out;
+                };
+                const std::vector<uint32_t> nb = near(cb), ne = near(ce);
+                ASSERT_EQ(nb, ne) << "query " << q;
+                overlaps += nb.size();
+                candidatesEmbree += ce.size();
+                candidatesBrute += cb.size();
+            }
+            EXPECT_GT(overlaps, 1500u);
+            EXPECT_LT(candidatesEmbree, candidatesBrute / 10);
         }
-        EXPECT_GT(overlaps, 1500u);
-        EXPECT_LT(candidatesEmbree, candidatesBrute / 10);
-    }
 }
 
 TEST(EmbreeDevice, OneDeviceAndErrorsThrowWithTheirCode) {
@@ -425,9 +430,9 @@ TEST(EmbreeDevice, OneDeviceAndErrorsThrowWithTheirCode) {
         EXPECT_EQ(e.code(), static_cast<int>(RTC_ERROR_UNKNOWN));
         const std::string what = e.what();
         EXPECT_NE(what.find("setting an invalid build quality"), std::string::npos) << what;
-        EXPECT_NE(what.find("RTC_ERROR_UNKNOWN"), std::string::npos) << what;  // the code
+        EXPECT_NE(what.find("RTC_ERROR_UNKNOWN"), std::string::npos) << what;      // the code
         EXPECT_NE(what.find("invalid build quality"), std::string::npos) << what;  // Embree's message
-        EXPECT_NE(what.find("report it"), std::string::npos) << what;  // the hint
+        EXPECT_NE(what.find("report it"), std::string::npos) << what;              // the hint
     }
     EXPECT_NO_THROW(checkEmbree("after the error was reported"));
     rtcReleaseScene(scene);

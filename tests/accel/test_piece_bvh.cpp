@@ -59,7 +59,7 @@ Stats check(const std::vector<PieceBvh::Box>& boxes, Rng& rng, int queries, Piec
         Vec3 o(4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0, 4.0 * rng.uniform() - 2.0);
         Vec3 d = randomUnit(rng);
         if (q % 5 == 0) d = Vec3(q % 3 == 0, q % 3 == 1, q % 3 == 2);  // axis-parallel
-        if (q % 7 == 0 && !boxes.empty()) {  // starting on a face of some box
+        if (q % 7 == 0 && !boxes.empty()) {                            // starting on a face of some box
             const PieceBvh::Box& b = boxes[rng.uniform() * boxes.size()];
             o = Vec3(b.lo[0], 0.5 * (b.lo[1] + b.hi[1]), 0.5 * (b.lo[2] + b.hi[2]));
         }
@@ -119,7 +119,7 @@ TEST(PieceBvh, ReportsEveryBoxTheSegmentMeetsOnceAndNoneFarFromIt) {
     }
     const Stats st = check(boxes, rng, 400);
     EXPECT_EQ(st.queries, 400u);
-    EXPECT_GT(st.exact, 2000u);  // not vacuous
+    EXPECT_GT(st.exact, 2000u);                        // not vacuous
     EXPECT_LT(st.reported, st.exact + st.exact / 20);  // and not much more than the exact set
 }
 

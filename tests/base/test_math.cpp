@@ -46,10 +46,18 @@ TEST(OneMinusExpNeg, OutsideThePolynomialItIsExpm1AndContinuousAtTheSwitch) {
 // nextFloat (by the bits) is std::nextafter towards +-inf: on zeros, denormals, the largest float,
 // infinities, NaN, and a sweep of magnitudes of both signs.
 TEST(Math, NextFloatIsNextafterTowardsInfinity) {
-    std::vector<float> values = {0.0f, -0.0f, std::numeric_limits<float>::denorm_min(),
-                                 -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min(),
-                                 -std::numeric_limits<float>::min(), std::numeric_limits<float>::max(),
-                                 -std::numeric_limits<float>::max(), INFINITY, -INFINITY, 1.0f, -1.0f};
+    std::vector<float> values = {0.0f,
+                                 -0.0f,
+                                 std::numeric_limits<float>::denorm_min(),
+                                 -std::numeric_limits<float>::denorm_min(),
+                                 std::numeric_limits<float>::min(),
+                                 -std::numeric_limits<float>::min(),
+                                 std::numeric_limits<float>::max(),
+                                 -std::numeric_limits<float>::max(),
+                                 INFINITY,
+                                 -INFINITY,
+                                 1.0f,
+                                 -1.0f};
     for (double x = 1e-40; x < 1e38; x *= 1.37) {
         values.push_back(static_cast<float>(x));
         values.push_back(static_cast<float>(-x));

@@ -44,7 +44,8 @@ const std::vector<CameraSegment>& cameraSegments() {
         Rng rng(18, Stream::Test, 0, 0);
         std::vector<CameraSegment> out;
         const int n = 32;
-        const double cellX = static_cast<double>(scene.camera.width) / n, cellY = static_cast<double>(scene.camera.height) / n;
+        const double cellX = static_cast<double>(scene.camera.width) / n,
+                     cellY = static_cast<double>(scene.camera.height) / n;
         for (int y = 0; y < n; ++y)
             for (int x = 0; x < n; ++x) {
                 CameraSegment seg;
@@ -63,7 +64,8 @@ const std::vector<CameraSegment>& cameraSegments() {
 void perRay(benchmark::State& state, size_t rays) {
     const double n = static_cast<double>(state.iterations()) * static_cast<double>(rays);
     state.SetItemsProcessed(static_cast<int64_t>(n));
-    state.counters["ns_per_ray"] = benchmark::Counter(n * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.counters["ns_per_ray"] =
+        benchmark::Counter(n * 1e-9, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 const char* estimatorName(int64_t arg) { return arg == 0 ? "beam2d" : "point3d"; }
@@ -151,7 +153,10 @@ void BM_BeamAccelCandidates(benchmark::State& state) {
         static_cast<double>(found) / (static_cast<double>(state.iterations()) * static_cast<double>(segs.size()));
     state.SetLabel(std::string(withTest ? "cylinder test, " : "boxes only, ") + accel->name());
 }
-BENCHMARK(BM_BeamAccelCandidates)->ArgsProduct({{0, 1}, {0, 2}})->ArgNames({"test", "backend"})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_BeamAccelCandidates)
+    ->ArgsProduct({{0, 1}, {0, 2}})
+    ->ArgNames({"test", "backend"})
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_EstimatorGather(benchmark::State& state) {
     const PreparedRender& p = bench::defaultScene();

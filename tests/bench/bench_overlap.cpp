@@ -80,7 +80,8 @@ void BM_RayBeamOverlapBatch(benchmark::State& state) {
         const OverlapCase& r = cases[s];
         for (size_t i = 0; i < kPieces; ++i) {
             const Vec3 wb = randomDir(rng);
-            const Vec3 near = r.xr + (0.1 + 2.0 * rng.uniform()) * r.wr + 2.0 * r.radius * rng.uniform() * randomDir(rng);
+            const Vec3 near =
+                r.xr + (0.1 + 2.0 * rng.uniform()) * r.wr + 2.0 * r.radius * rng.uniform() * randomDir(rng);
             lists[s].push(near - 0.5 * rng.uniform() * wb, wb, 0.0, 0.2 + 0.6 * rng.uniform());
         }
     }

@@ -36,7 +36,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-
 namespace fs = std::filesystem;
 
 namespace {
@@ -72,13 +71,16 @@ protected:
         return p;
     }
     // `tpb render <scene>` into dir_/out with the given extra flags.
-    Proc render(const fs::path& scene, const std::vector<std::string>& flags = {}, const std::vector<std::string>& env = {}) {
-        std::vector<std::string> args{"render", scene.string(), "-o", (dir_ / "out").string(), "--no-frames", "--strip", "0"};
+    Proc render(const fs::path& scene, const std::vector<std::string>& flags = {},
+                const std::vector<std::string>& env = {}) {
+        std::vector<std::string> args{"render",      scene.string(), "-o", (dir_ / "out").string(),
+                                      "--no-frames", "--strip",      "0"};
         args.insert(args.end(), flags.begin(), flags.end());
         return runTpb(args, dir_, env);
     }
     // A user error: exit code 2, no signal, one "error: " line naming file:line and key.
-    void expectUserError(const Proc& p, const std::string& where, const std::string& key, const std::string& text = "") {
+    void expectUserError(const Proc& p, const std::string& where, const std::string& key,
+                         const std::string& text = "") {
         EXPECT_FALSE(p.timedOut) << where;
         EXPECT_EQ(p.signal, 0) << where << "\n" << p.err;
         EXPECT_EQ(p.code, 2) << where << "\n" << p.err;
@@ -119,18 +121,18 @@ protected:
 // A valid scene, one key per line, so that each test can break line N and expect "scene.json:N".
 // The camera sits inside the closed box with the light (from outside the box would be black).
 const char* kLines[] = {
-    "{",                                                                                        // 1
-    "  \"version\": 1,",                                                                        // 2
+    "{",                                                                                                 // 1
+    "  \"version\": 1,",                                                                                 // 2
     "  \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"resolution\": [16, 16]},",  // 3
-    "  \"film\": {\"bins\": 8},",                                                               // 4
-    "  \"media\": {\"fog\": {\"sigma_s\": 0.5, \"sigma_a\": 0.05}},",                           // 5
-    "  \"global_medium\": \"fog\",",                                                            // 6
-    "  \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},",                  // 7
+    "  \"film\": {\"bins\": 8},",                                                                        // 4
+    "  \"media\": {\"fog\": {\"sigma_s\": 0.5, \"sigma_a\": 0.05}},",                                    // 5
+    "  \"global_medium\": \"fog\",",                                                                     // 6
+    "  \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},",                           // 7
     "  \"shapes\": [{\"type\": \"box\", \"min\": [-1, 0, -1], \"max\": [1, 1, 1], \"material\": \"white\", "
-    "\"flip_normals\": true}],",                                                                // 8
-    "  \"lights\": [{\"type\": \"point\", \"position\": [0, 0.8, 0], \"power\": 5}],",           // 9
-    "  \"render\": {\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}",                   // 10
-    "}",                                                                                        // 11
+    "\"flip_normals\": true}],",                                                        // 8
+    "  \"lights\": [{\"type\": \"point\", \"position\": [0, 0.8, 0], \"power\": 5}],",  // 9
+    "  \"render\": {\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}",           // 10
+    "}",                                                                                // 11
 };
 
 std::string sceneWith(int line, const std::string& replacement) {
@@ -178,7 +180,11 @@ TEST_F(CliErrors, TruncatedAndMalformedJson) {
 
 TEST_F(CliErrors, WrongTypes) {
     const fs::path f = dir_ / "scene.json";
-    const struct { int line; const char* text; const char* key; } cases[] = {
+    const struct {
+        int line;
+        const char* text;
+        const char* key;
+    } cases[] = {
         {4, "  \"film\": {\"bins\": \"many\"},", "film.bins"},
         {3, "  \"camera\": {\"position\": [0, 0.5, 3], \"look_at\": [0, 0.5, 0], \"resolution\": [16, \"16\"]},",
          "camera.resolution"},
@@ -205,10 +211,14 @@ TEST_F(CliErrors, WrongTypes) {
 
 TEST_F(CliErrors, HugeNumbersAndNotANumber) {
     const fs::path f = dir_ / "scene.json";
-    const struct { int line; const char* text; const char* key; } cases[] = {
-        {5, "  \"media\": {\"fog\": {\"sigma_s\": 1e999}},", ""},    // JSON: does not fit a double
+    const struct {
+        int line;
+        const char* text;
+        const char* key;
+    } cases[] = {
+        {5, "  \"media\": {\"fog\": {\"sigma_s\": 1e999}},", ""},  // JSON: does not fit a double
         {5, "  \"media\": {\"fog\": {\"sigma_s\": -1e999}},", ""},
-        {5, "  \"media\": {\"fog\": {\"sigma_s\": NaN}},", ""},      // JSON has no NaN literal
+        {5, "  \"media\": {\"fog\": {\"sigma_s\": NaN}},", ""},  // JSON has no NaN literal
         {5, "  \"media\": {\"fog\": {\"sigma_s\": Infinity}},", ""},
         {5, "  \"media\": {\"fog\": {\"sigma_s\": \"NaN\"}},", "media.fog.sigma_s"},
         {9, "  \"lights\": [{\"type\": \"point\", \"power\": \"inf\"}],", "lights[0].power"},
@@ -231,10 +241,17 @@ TEST_F(CliErrors, HugeNumbersAndNotANumber) {
     }
     // Absurd counts on the command line too.
     const fs::path ok = write("ok.json", sceneWith(0, ""));
-    for (const std::vector<std::string>& flags :
-         {std::vector<std::string>{"--photons", "1000000000000000000"}, {"--photons", "0"}, {"--passes", "x"},
-          {"--alpha", "2"}, {"--radius", "0"}, {"--radius", "nan"}, {"--width", "0"}, {"--bins", "-5"},
-          {"--threads", "99999999999"}, {"--max-depth", "0"}, {"--time", "-1"}}) {
+    for (const std::vector<std::string>& flags : {std::vector<std::string>{"--photons", "1000000000000000000"},
+                                                  {"--photons", "0"},
+                                                  {"--passes", "x"},
+                                                  {"--alpha", "2"},
+                                                  {"--radius", "0"},
+                                                  {"--radius", "nan"},
+                                                  {"--width", "0"},
+                                                  {"--bins", "-5"},
+                                                  {"--threads", "99999999999"},
+                                                  {"--max-depth", "0"},
+                                                  {"--time", "-1"}}) {
         const Proc p = render(ok, flags);
         EXPECT_EQ(p.code, 2) << flags[0] << " " << flags[1] << "\n" << p.err;
         EXPECT_EQ(p.signal, 0);
@@ -245,7 +262,8 @@ TEST_F(CliErrors, HugeNumbersAndNotANumber) {
 // The film's memory is checked before it is allocated: the error names the bytes needed.
 TEST_F(CliErrors, FilmTooLargeIsRefusedBeforeAllocation) {
     const fs::path f = write("scene.json", sceneWith(4, "  \"film\": {\"bins\": 256},"));
-    std::string big = sceneWith(3, "  \"camera\": {\"position\": [0, 0.5, 3], \"look_at\": [0, 0.5, 0], \"resolution\": [256, 256]},");
+    std::string big = sceneWith(
+        3, "  \"camera\": {\"position\": [0, 0.5, 3], \"look_at\": [0, 0.5, 0], \"resolution\": [256, 256]},");
     write("scene.json", big.replace(big.find("\"bins\": 8"), 9, "\"bins\": 256"));
     tpb::CameraDesc cam;
     cam.width = cam.height = 256;
@@ -255,7 +273,8 @@ TEST_F(CliErrors, FilmTooLargeIsRefusedBeforeAllocation) {
     EXPECT_NE(p.err.find("1000000 bytes"), std::string::npos) << p.err;  // and the limit
     // Without an override: resolution and bins far beyond any machine (exabytes; no overflow).
     write("scene.json", sceneWith(4, "  \"film\": {\"bins\": 2147483647},"));
-    big = sceneWith(3, "  \"camera\": {\"position\": [0, 0.5, 3], \"look_at\": [0, 0.5, 0], \"resolution\": [46000, 46000]},");
+    big = sceneWith(
+        3, "  \"camera\": {\"position\": [0, 0.5, 3], \"look_at\": [0, 0.5, 0], \"resolution\": [46000, 46000]},");
     write("scene.json", big.replace(big.find("\"bins\": 8"), 9, "\"bins\": 2147483647"));
     const Proc q = render(f);
     expectUserError(q, f.string() + ":4", "film.bins", "bytes");
@@ -268,12 +287,15 @@ TEST_F(CliErrors, FilmTooLargeIsRefusedBeforeAllocation) {
     EXPECT_LT(r.seconds, 10.0);
 }
 
-const char kBinaryObj[] = "\x7f" "ELF\x02\x01\x01\0\0\0\xff\xfe\x00\x13garbage\nf 9 9 9\n";
+const char kBinaryObj[] =
+    "\x7f"
+    "ELF\x02\x01\x01\0\0\0\xff\xfe\x00\x13garbage\nf 9 9 9\n";
 
 TEST_F(CliErrors, MissingAndCorruptMeshes) {
     const fs::path f = dir_ / "scene.json";
     const auto meshScene = [&](const std::string& file) {
-        return sceneWith(8, "  \"shapes\": [{\"type\": \"mesh\", \"file\": \"" + file + "\", \"material\": \"white\"}],");
+        return sceneWith(8,
+                         "  \"shapes\": [{\"type\": \"mesh\", \"file\": \"" + file + "\", \"material\": \"white\"}],");
     };
     write("scene.json", meshScene("nowhere.obj"));
     expectUserError(render(f), f.string() + ":8", "shapes[0].file", "not found");
@@ -282,7 +304,10 @@ TEST_F(CliErrors, MissingAndCorruptMeshes) {
     expectUserError(render(f), f.string() + ":8", "shapes[0].file", "is a folder, not a file");
     // Corrupt files: the error names the scene's file:line and key, then the OBJ (and its line when
     // tinyobj reports one).
-    const struct { const char* name; std::string text; } corrupt[] = {
+    const struct {
+        const char* name;
+        std::string text;
+    } corrupt[] = {
         {"empty.obj", ""},
         {"no_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"},
         {"bad_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n"},
@@ -326,7 +351,7 @@ TEST_F(CliErrors, MissingSceneFileAndUnwritableOutput) {
         EXPECT_EQ(q.code, 2) << q.err;
         EXPECT_EQ(q.signal, 0);
         EXPECT_EQ(fromErrorLine(q.err).rfind("error: " + out + ": ", 0), 0u) << q.err;  // names the folder first
-        EXPECT_NE(q.err.find("-o"), std::string::npos) << q.err;         // and says how to fix it
+        EXPECT_NE(q.err.find("-o"), std::string::npos) << q.err;                        // and says how to fix it
         EXPECT_EQ(q.err.find("internal error"), std::string::npos) << q.err;
     }
     EXPECT_EQ(slurp(dir_ / "file.txt"), "not a folder");
@@ -336,7 +361,8 @@ TEST_F(CliErrors, MissingSceneFileAndUnwritableOutput) {
 // steady.exr, the frames and summary.json (all through tmp + rename: no *.tmp-* file is left) and
 // exits 0. A second Ctrl-C quits at once with 130.
 TEST_F(CliErrors, CtrlCFinishesThePassAndWritesTheResults) {
-    const fs::path scene = write("scene.json", sceneWith(10, "  \"render\": {\"photons_per_pass\": 60000, \"passes\": 100000}"));
+    const fs::path scene =
+        write("scene.json", sceneWith(10, "  \"render\": {\"photons_per_pass\": 60000, \"passes\": 100000}"));
     const fs::path out = dir_ / "out";
     const double t0 = now();
     const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2"}, dir_, {});
@@ -425,8 +451,9 @@ namespace {
 // Can this process mount a tmpfs in a private mount namespace (unshare -m, the user mapped to root),
 // which vanishes with the namespace? Root in a normal container can; some sandboxes cannot.
 bool canMountPrivateTmpfs() {
-    return std::system("unshare -m -r sh -c 'd=$(mktemp -d) && mount -t tmpfs -o size=64k tmpfs \"$d\" && "
-                       "umount \"$d\" && rmdir \"$d\"' >/dev/null 2>&1") == 0;
+    return std::system(
+               "unshare -m -r sh -c 'd=$(mktemp -d) && mount -t tmpfs -o size=64k tmpfs \"$d\" && "
+               "umount \"$d\" && rmdir \"$d\"' >/dev/null 2>&1") == 0;
 }
 
 }  // namespace
@@ -444,9 +471,9 @@ TEST_F(CliErrors, DiskFullDuringExportKeepsCompleteFiles) {
         "set -u; m=\"$1\"; mkdir -p \"$m\" && mount -t tmpfs -o size=96k tmpfs \"$m\" || exit 99; "
         "\"$2\" render \"$3\" -o \"$m/out\" --width 24 --height 24; echo $? > \"$4/code.txt\"; "
         "cp -r \"$m/out\" \"$4/copy\"; df -k \"$m\" | tail -1 > \"$4/df.txt\"";
-    const std::string cmd = "unshare -m -r sh -c '" + script + "' sh '" + (dir_ / "mnt").string() + "' '" + tpbBinary() +
-                            "' '" + scene.string() + "' '" + dir_.string() + "' >'" + (dir_ / "stdout.txt").string() +
-                            "' 2>'" + (dir_ / "stderr.txt").string() + "'";
+    const std::string cmd = "unshare -m -r sh -c '" + script + "' sh '" + (dir_ / "mnt").string() + "' '" +
+                            tpbBinary() + "' '" + scene.string() + "' '" + dir_.string() + "' >'" +
+                            (dir_ / "stdout.txt").string() + "' 2>'" + (dir_ / "stderr.txt").string() + "'";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir_ / "stderr.txt");
     const std::string err = slurp(dir_ / "stderr.txt");
     const int code = std::stoi(slurp(dir_ / "code.txt"));
@@ -526,17 +553,21 @@ TEST_F(CliErrors, PassThatOutgrowsMemoryStopsTheRenderCleanly) {
 namespace {
 
 // The camera inside the lit box (the energy that reaches it does not depend on light leaking out).
-std::string insideScene(const std::string& film = "{\"bins\": 8}", const std::string& render =
-                            "{\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}") {
+std::string insideScene(const std::string& film = "{\"bins\": 8}",
+                        const std::string& render = "{\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}") {
     return "{\"version\": 1,\n"
-           " \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"fov\": 60, \"resolution\": [16, 16]},\n"
-           " \"film\": " + film + ",\n"
+           " \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"fov\": 60, \"resolution\": [16, "
+           "16]},\n"
+           " \"film\": " +
+           film +
+           ",\n"
            " \"media\": {\"fog\": {\"sigma_s\": 0.5, \"sigma_a\": 0.05}}, \"global_medium\": \"fog\",\n"
            " \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},\n"
            " \"shapes\": [{\"type\": \"box\", \"min\": [-1, 0, -1], \"max\": [1, 1, 1], \"material\": \"white\", "
            "\"flip_normals\": true}],\n"
            " \"lights\": [{\"type\": \"point\", \"position\": [0, 0.8, 0], \"power\": 5}],\n"
-           " \"render\": " + render + "}\n";
+           " \"render\": " +
+           render + "}\n";
 }
 
 // Polls `file` until it contains `text` (true) or the process has ended or `timeoutSec` passed.
@@ -591,7 +622,10 @@ TEST_F(CliErrors, PassesAndTimeFlagsAreCheckedForRangeAndFiniteness) {
 // preview.exr/png behind. Everything is checked before the first file is written.
 TEST_F(CliErrors, FlagErrorsLeaveNoFileBehind) {
     const fs::path scene = write("scene.json", insideScene());
-    const struct { std::vector<std::string> flags; const char* text; } cases[] = {
+    const struct {
+        std::vector<std::string> flags;
+        const char* text;
+    } cases[] = {
         {{"--alpha", "0"}, "error: --alpha: must be a number in (0, 1] (1 = no shrinking); got 0"},
         {{"--photons", "0"}, "error: --photons: must be an integer >= 1 (photons per pass); got 0"},
         {{"--time", "-1"}, "error: --time: must be a finite number >= 0"},
@@ -615,9 +649,14 @@ TEST_F(CliErrors, FlagErrorsLeaveNoFileBehind) {
 TEST_F(CliErrors, TimeResponseWiderThanTheKernelLimitIsRefusedBeforeAnyPass) {
     const fs::path scene = write("scene.json", insideScene());
     const std::string out = (dir_ / "out").string();
-    const struct { std::vector<std::string> args; const char* text; } cases[] = {
-        {{"render", scene.string(), "-o", out, "--passes", "1", "--pulse", "square:1e9"}, "error: --pulse square:1e9 spans "},
-        {{"render", scene.string(), "-o", out, "--passes", "1", "--sensor", "exp:1e9"}, "error: --sensor exp:1e9 spans "},
+    const struct {
+        std::vector<std::string> args;
+        const char* text;
+    } cases[] = {
+        {{"render", scene.string(), "-o", out, "--passes", "1", "--pulse", "square:1e9"},
+         "error: --pulse square:1e9 spans "},
+        {{"render", scene.string(), "-o", out, "--passes", "1", "--sensor", "exp:1e9"},
+         "error: --sensor exp:1e9 spans "},
         {{"render", scene.string(), "-o", out, "--method", "pt", "--passes", "1", "--sensor", "exp:1e9"},
          "error: --sensor exp:1e9 spans "},
     };
@@ -633,8 +672,8 @@ TEST_F(CliErrors, TimeResponseWiderThanTheKernelLimitIsRefusedBeforeAnyPass) {
         EXPECT_FALSE(fs::exists(dir_ / "out")) << "nothing may be written, not even preview.exr";
     }
     if (runTpb({"view", "--help"}, dir_).code == 0) {  // built with the viewer (a screenshot run ends by itself)
-        const Proc v = runTpb({"view", scene.string(), "--pulse", "square:1e9", "--screenshot", (dir_ / "shot.png").string(),
-                               "--after-passes", "1"},
+        const Proc v = runTpb({"view", scene.string(), "--pulse", "square:1e9", "--screenshot",
+                               (dir_ / "shot.png").string(), "--after-passes", "1"},
                               dir_, {}, 60.0);
         EXPECT_EQ(v.code, 2) << v.err;
         EXPECT_EQ(fromErrorLine(v.err).rfind("error: --pulse square:1e9 spans ", 0), 0u) << v.err;
@@ -663,7 +702,9 @@ TEST_F(CliErrors, NegativeSeedIsRefusedNotWrapped) {
     const fs::path scene = write("scene.json", insideScene());
     const Proc p = render(scene, {"--seed", "-1"});
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --seed: must be an integer in [0, 18446744073709551615] (2^64 - 1); got -1", 0), 0u)
+    EXPECT_EQ(fromErrorLine(p.err).rfind(
+                  "error: --seed: must be an integer in [0, 18446744073709551615] (2^64 - 1); got -1", 0),
+              0u)
         << p.err;
     const Proc q = render(scene, {"-q", "--seed", "18446744073709551615"});  // the largest seed is fine
     ASSERT_EQ(q.code, 0) << q.err;
@@ -676,10 +717,14 @@ TEST_F(CliErrors, ContradictoryFlagsAreRefused) {
     const fs::path scene = write("scene.json", insideScene());
     Proc p = render(scene, {"--unwarp", "--real-time"});
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --unwarp and --real-time contradict each other: give one of them", 0), 0u) << p.err;
+    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --unwarp and --real-time contradict each other: give one of them", 0),
+              0u)
+        << p.err;
     p = render(scene, {"--continuous", "--delta"});
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --continuous and --delta contradict each other: give one of them", 0), 0u) << p.err;
+    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --continuous and --delta contradict each other: give one of them", 0),
+              0u)
+        << p.err;
     EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
@@ -688,15 +733,24 @@ TEST_F(CliErrors, VideoFlagsWithoutTheirOutputAreRefused) {
     const fs::path scene = write("scene.json", insideScene());
     Proc p = render(scene, {"--fps", "60"});
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --fps sets the frame rate of transient.mp4, which only --mp4 writes: add --mp4, or "
-                          "drop --fps", 0), 0u) << p.err;
+    EXPECT_EQ(fromErrorLine(p.err).rfind(
+                  "error: --fps sets the frame rate of transient.mp4, which only --mp4 writes: add --mp4, or "
+                  "drop --fps",
+                  0),
+              0u)
+        << p.err;
     for (const std::vector<std::string>& flag :
          {std::vector<std::string>{"--video-ev", "1"}, {"--false-colour"}, {"--no-srgb"}}) {
         std::vector<std::string> args = flag;
         p = render(scene, args);
         EXPECT_EQ(p.code, 2) << flag[0] << ": " << p.err;
-        EXPECT_EQ(fromErrorLine(p.err).rfind("error: " + flag[0] + " shapes transient.mp4 and contact_sheet.png, and neither is "
-                              "written: add --mp4 or --contact-sheet N, or drop " + flag[0], 0), 0u) << p.err;
+        EXPECT_EQ(fromErrorLine(p.err).rfind("error: " + flag[0] +
+                                                 " shapes transient.mp4 and contact_sheet.png, and neither is "
+                                                 "written: add --mp4 or --contact-sheet N, or drop " +
+                                                 flag[0],
+                                             0),
+                  0u)
+            << p.err;
     }
     EXPECT_FALSE(fs::exists(dir_ / "out"));
     // With the output they shape, they are taken.
@@ -718,7 +772,9 @@ TEST_F(CliErrors, ThreadsFarAboveTheCoresAreCapped) {
     EXPECT_EQ(summary["settings"]["threads"].get<int>(), cap);
     const Proc q = render(scene, {"--threads", "-2"});
     EXPECT_EQ(q.code, 2) << q.err;
-    EXPECT_EQ(fromErrorLine(q.err).rfind("error: --threads: must be an integer in [0, 2147483647] (0 = all cores", 0), 0u) << q.err;
+    EXPECT_EQ(fromErrorLine(q.err).rfind("error: --threads: must be an integer in [0, 2147483647] (0 = all cores", 0),
+              0u)
+        << q.err;
 }
 
 // Item 12: `bench --bins-list 0` blamed --bins; `bench --bench-passes 0` exited 0 with a table of zeros.
@@ -726,9 +782,10 @@ TEST_F(CliErrors, BenchBinsListZeroNamesBinsList) {
     const fs::path scene = write("scene.json", insideScene());
     const Proc p = runTpb({"bench", scene.string(), "--bins-list", "8,0"}, dir_);
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --bins-list: must be an integer in [1, 2147483647] (each a number of time bins, "
-                          "e.g. 1,256,1024); got 0",
-                          0),
+    EXPECT_EQ(fromErrorLine(p.err).rfind(
+                  "error: --bins-list: must be an integer in [1, 2147483647] (each a number of time bins, "
+                  "e.g. 1,256,1024); got 0",
+                  0),
               0u)
         << p.err;
     EXPECT_EQ(p.out.find("ratio"), std::string::npos) << p.out;  // nothing was measured
@@ -738,9 +795,10 @@ TEST_F(CliErrors, BenchPassesZeroIsRefused) {
     const fs::path scene = write("scene.json", insideScene());
     const Proc p = runTpb({"bench", scene.string(), "--bins-list", "8", "--bench-passes", "0"}, dir_);
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --bench-passes: must be an integer in [1, 100000] (passes measured per bin count); "
-                          "got 0",
-                          0),
+    EXPECT_EQ(fromErrorLine(p.err).rfind(
+                  "error: --bench-passes: must be an integer in [1, 100000] (passes measured per bin count); "
+                  "got 0",
+                  0),
               0u)
         << p.err;
     EXPECT_EQ(p.out.find("ratio"), std::string::npos) << p.out;
@@ -753,7 +811,8 @@ TEST_F(CliErrors, BenchJsonRecordsTheCommandAndThePerUnitCosts) {
     const fs::path scene = write("scene.json", insideScene());
     const std::string json = (dir_ / "bench.json").string();
     const Proc p = runTpb({"bench", scene.string(), "--bins-list", "1,16", "--bench-passes", "2", "--width", "16",
-                           "--height", "16", "--json", json}, dir_);
+                           "--height", "16", "--json", json},
+                          dir_);
     ASSERT_EQ(p.code, 0) << p.err;
     std::ifstream in(json);
     ASSERT_TRUE(in) << json;
@@ -783,8 +842,9 @@ TEST_F(CliErrors, BenchJsonRecordsTheCommandAndThePerUnitCosts) {
 TEST_F(CliErrors, BenchThreadsListMeasuresEachThreadCountAndReportsTheSpeedUp) {
     const fs::path scene = write("scene.json", insideScene());
     const std::string json = (dir_ / "bench.json").string();
-    const Proc p = runTpb({"bench", scene.string(), "--bins-list", "1,8", "--threads-list", "1,2", "--bench-passes", "1",
-                           "--width", "8", "--height", "8", "--json", json}, dir_);
+    const Proc p = runTpb({"bench", scene.string(), "--bins-list", "1,8", "--threads-list", "1,2", "--bench-passes",
+                           "1", "--width", "8", "--height", "8", "--json", json},
+                          dir_);
     ASSERT_EQ(p.code, 0) << p.err;
     std::ifstream in(json);
     ASSERT_TRUE(in) << json;
@@ -810,8 +870,9 @@ TEST_F(CliErrors, ExportSizeAndTimeAreEstimatedBeforeRendering) {
     const std::vector<std::string> args{"render", scene.string(), "-o", (dir_ / "out").string(), "--frame-step", "2"};
     const Proc p = runTpb(args, dir_);
     ASSERT_EQ(p.code, 0) << p.err;
-    const size_t at = p.out.find("frames: 4 EXR files of 16x16 (float), up to 12.0 KiB uncompressed; writing them "
-                                 "will take ");
+    const size_t at = p.out.find(
+        "frames: 4 EXR files of 16x16 (float), up to 12.0 KiB uncompressed; writing them "
+        "will take ");
     EXPECT_NE(at, std::string::npos) << p.out;
     EXPECT_NE(p.out.find("after the render (estimated from preview.exr: ", at), std::string::npos) << p.out;
     EXPECT_LT(at, p.out.find("passes in")) << "printed before the render's report";
@@ -841,7 +902,8 @@ TEST_F(CliErrors, BadMeshVerticesNameTheSceneKeyAndTheObjLine) {
 
 // Item 12: camera.position 1e308 was reported as "camera.up ... parallel".
 TEST_F(CliErrors, HugeCameraPositionNamesThePosition) {
-    const fs::path f = write("scene.json", sceneWith(3, "  \"camera\": {\"position\": [1e308, 0.5, 3], \"look_at\": [0, 0.5, 0]},"));
+    const fs::path f =
+        write("scene.json", sceneWith(3, "  \"camera\": {\"position\": [1e308, 0.5, 3], \"look_at\": [0, 0.5, 0]},"));
     expectUserError(render(f), f.string() + ":3", "camera.position",
                     "position is too far out: scene coordinates and sizes must be within +-1e9 m");
 }
@@ -859,14 +921,15 @@ TEST_F(CliErrors, Utf16SceneFileSaysToConvertIt) {
 // handled like the first Ctrl-C: the pass in progress finishes, everything is written, and the exit
 // code (143 = 128 + SIGTERM) says the run was cut short. Also with the path tracer.
 TEST_F(CliErrors, SigtermWritesTheFinishedPassesAndExitsNonZero) {
-    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 20000, "
-                                                                            "\"passes\": 100000, \"seed\": 1}"));
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}",
+                                                           "{\"photons_per_pass\": 20000, "
+                                                           "\"passes\": 100000, \"seed\": 1}"));
     for (const std::string method : {"beams", "pt"}) {
         SCOPED_TRACE(method);
         const fs::path out = dir_ / ("out_" + method);
         const double t0 = now();
-        const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2", "--method", method},
-                                   dir_, {});
+        const pid_t pid =
+            spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2", "--method", method}, dir_, {});
         ASSERT_GT(pid, 0);
         ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "pass 1:", pid, 60.0)) << slurp(dir_ / "stderr.txt");
         kill(pid, SIGTERM);
@@ -885,11 +948,13 @@ TEST_F(CliErrors, SigtermWritesTheFinishedPassesAndExitsNonZero) {
 
 // Item 8: SIGTERM in `tpb reference` and `tpb converge`: the finished passes are written too.
 TEST_F(CliErrors, SigtermInReferenceAndConvergeWritesWhatWasDone) {
-    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 20000, "
-                                                                            "\"passes\": 100000, \"seed\": 1}"));
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}",
+                                                           "{\"photons_per_pass\": 20000, "
+                                                           "\"passes\": 100000, \"seed\": 1}"));
     const fs::path ref = dir_ / "ref.tpbref";
     double t0 = now();
-    pid_t pid = spawnTpb({"reference", scene.string(), "-o", ref.string(), "--time", "300", "--threads", "2"}, dir_, {});
+    pid_t pid =
+        spawnTpb({"reference", scene.string(), "-o", ref.string(), "--time", "300", "--threads", "2"}, dir_, {});
     ASSERT_GT(pid, 0);
     ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "reference: pass 1", pid, 60.0)) << slurp(dir_ / "stderr.txt");
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
@@ -1027,8 +1092,9 @@ TEST_F(CliErrors, StaleOutputsOfAnEarlierRenderAreRemoved) {
 // Item 9: two renders into one folder mixed their files. The second is refused while the first
 // runs (a lock the kernel releases when the process ends, also when it is killed).
 TEST_F(CliErrors, SecondConcurrentRenderIntoTheSameFolderIsRefused) {
-    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 20000, "
-                                                                            "\"passes\": 100000, \"seed\": 1}"));
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}",
+                                                           "{\"photons_per_pass\": 20000, "
+                                                           "\"passes\": 100000, \"seed\": 1}"));
     const fs::path out = dir_ / "out";
     const fs::path firstDir = dir_ / "first";
     fs::create_directories(firstDir);
@@ -1038,10 +1104,11 @@ TEST_F(CliErrors, SecondConcurrentRenderIntoTheSameFolderIsRefused) {
     ASSERT_TRUE(waitForText(firstDir / "stderr.txt", "pass 1:", pid, 60.0)) << slurp(firstDir / "stderr.txt");
     const Proc second = runTpb({"render", scene.string(), "-o", out.string(), "--passes", "1"}, dir_);
     EXPECT_EQ(second.code, 2) << second.err;
-    EXPECT_EQ(fromErrorLine(second.err).rfind("error: " + out.string() + ": another tpb run (tpb render, pid " + std::to_string(pid) +
-                                   ") is writing into this folder; two runs in one folder would mix their files: wait "
-                                   "for it to end, or give this one another folder with -o",
-                               0),
+    EXPECT_EQ(fromErrorLine(second.err)
+                  .rfind("error: " + out.string() + ": another tpb run (tpb render, pid " + std::to_string(pid) +
+                             ") is writing into this folder; two runs in one folder would mix their files: wait "
+                             "for it to end, or give this one another folder with -o",
+                         0),
               0u)
         << second.err;
     // Killed outright (no cleanup at all): the lock goes with the process.
@@ -1060,7 +1127,8 @@ TEST_F(CliErrors, AllBlackFilmIsAnErrorThatSaysHowToFixTheRange) {
         SCOPED_TRACE(method);
         const Proc p = render(f, {"-q", "--method", method});
         EXPECT_EQ(p.code, 2) << p.err;
-        const std::string head = "error: " + f.string() + ":4: film.start_m: every frame is black: all the energy that "
+        const std::string head = "error: " + f.string() +
+                                 ":4: film.start_m: every frame is black: all the energy that "
                                  "reached the camera arrived outside the film's time range, 100 to 104 m OPL";
         EXPECT_NE(p.err.find(head), std::string::npos) << p.err;
         EXPECT_NE(p.err.find("a pilot pass measured arrivals from "), std::string::npos) << p.err;
@@ -1100,7 +1168,8 @@ TEST_F(CliErrors, EstimatorAndTimeKernelErrorsNameTheAllowedValues) {
          "error: --time-kernel: gauss: allowed none, box or box:WIDTH"},
         {{"render", scene.string(), "-o", out, "--time-kernel", "box:0"}, "error: --time-kernel: box:0: allowed"},
         {{"render", scene.string(), "-o", out, "--time-kernel", "box:1000"},
-         "error: --time-kernel: the time kernel's width 1000 m (of optical path) is wider than the film's whole time range"},
+         "error: --time-kernel: the time kernel's width 1000 m (of optical path) is wider than the film's whole time "
+         "range"},
         {{"render", scene.string(), "-o", out, "--method", "pt", "--time-kernel", "box"},
          "error: --time-kernel applies to the photon-beams estimators only; --method pt"},
         {{"reference", scene.string(), "-o", out + "/r.tpbref", "--passes", "1", "--estimator", "beam2d"},
@@ -1118,8 +1187,9 @@ TEST_F(CliErrors, EstimatorAndTimeKernelErrorsNameTheAllowedValues) {
 TEST_F(CliErrors, ConvergeMeasuresEstimatorVariantsAndRefusesBadOnes) {
     const fs::path scene = write("scene.json", insideScene());
     const std::string ref = (dir_ / "r.tpbref").string(), out = (dir_ / "out").string();
-    const Proc r = runTpb({"reference", scene.string(), "-o", ref, "--passes", "2", "-q", "--width", "8", "--height", "8"}, dir_,
-                          {}, 60.0);
+    const Proc r =
+        runTpb({"reference", scene.string(), "-o", ref, "--passes", "2", "-q", "--width", "8", "--height", "8"}, dir_,
+               {}, 60.0);
     ASSERT_EQ(r.code, 0) << r.err;
     expectRefused({
         {{"converge", scene.string(), "--reference", ref, "-o", out, "--method", "beam2d,beam9", "--passes", "1"},
@@ -1129,8 +1199,8 @@ TEST_F(CliErrors, ConvergeMeasuresEstimatorVariantsAndRefusesBadOnes) {
         {{"converge", scene.string(), "--reference", ref, "-o", out, "--method", "pt,pt", "--passes", "1"},
          "error: --method pt,pt: \"pt\" is listed twice"},
     });
-    const Proc ok = runTpb({"converge", scene.string(), "--reference", ref, "-o", out, "--method", "beams,beam2d+box:0.05",
-                            "--passes", "2", "--no-plot", "-q"},
+    const Proc ok = runTpb({"converge", scene.string(), "--reference", ref, "-o", out, "--method",
+                            "beams,beam2d+box:0.05", "--passes", "2", "--no-plot", "-q"},
                            dir_, {}, 120.0);
     ASSERT_EQ(ok.code, 0) << ok.err;
     std::ifstream csv(dir_ / "out" / "convergence.csv");
@@ -1147,12 +1217,13 @@ TEST_F(CliErrors, ConvergeMeasuresEstimatorVariantsAndRefusesBadOnes) {
 using tpb::test::checkpointPayload;
 
 TEST_F(CliErrors, SigtermWritesACheckpointAndTheResumeEqualsAnUninterruptedRun) {
-    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 10000, "
-                                                                            "\"passes\": 16, \"seed\": 1}"));
+    const fs::path scene = write("scene.json", insideScene("{\"bins\": 8}",
+                                                           "{\"photons_per_pass\": 10000, "
+                                                           "\"passes\": 16, \"seed\": 1}"));
     const fs::path out = dir_ / "out";
     const double t0 = now();
-    const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2", "--strip", "0",
-                                "--radius", "0.02"}, dir_, {});
+    const pid_t pid = spawnTpb(
+        {"render", scene.string(), "-o", out.string(), "--threads", "2", "--strip", "0", "--radius", "0.02"}, dir_, {});
     ASSERT_GT(pid, 0);
     ASSERT_TRUE(waitForText(dir_ / "stderr.txt", "pass 1:", pid, 60.0)) << slurp(dir_ / "stderr.txt");
     kill(pid, SIGTERM);
@@ -1173,10 +1244,12 @@ TEST_F(CliErrors, SigtermWritesACheckpointAndTheResumeEqualsAnUninterruptedRun) 
     EXPECT_EQ(sum["per_pass"].size(), 16u);
 
     const fs::path whole = dir_ / "whole";
-    const Proc w = runTpb({"render", scene.string(), "-o", whole.string(), "--strip", "0", "--radius", "0.02",
-                           "--checkpoint", "-q"}, dir_, {}, 300.0);
+    const Proc w = runTpb(
+        {"render", scene.string(), "-o", whole.string(), "--strip", "0", "--radius", "0.02", "--checkpoint", "-q"},
+        dir_, {}, 300.0);
     ASSERT_EQ(w.code, 0) << w.err;
-    const std::string a = checkpointPayload(out / "checkpoint.tpbck"), b = checkpointPayload(whole / "checkpoint.tpbck");
+    const std::string a = checkpointPayload(out / "checkpoint.tpbck"),
+                      b = checkpointPayload(whole / "checkpoint.tpbck");
     ASSERT_FALSE(a.empty());
     EXPECT_TRUE(a == b) << "the resumed film differs from the uninterrupted one";
     EXPECT_EQ(slurp(out / "steady.exr"), slurp(whole / "steady.exr"));
@@ -1208,7 +1281,8 @@ TEST_F(CliErrors, PathTracerCheckpointResumesToTheFilmOfOneUninterruptedRun) {
     std::vector<std::string> once{"render", scene.string(), "-o", whole.string(), "--passes", "4", "--checkpoint"};
     once.insert(once.end(), pt.begin(), pt.end());
     ASSERT_EQ(runTpb(once, dir_, {}, 300.0).code, 0);
-    const std::string ca = checkpointPayload(out / "checkpoint.tpbck"), cb = checkpointPayload(whole / "checkpoint.tpbck");
+    const std::string ca = checkpointPayload(out / "checkpoint.tpbck"),
+                      cb = checkpointPayload(whole / "checkpoint.tpbck");
     ASSERT_FALSE(ca.empty());
     EXPECT_TRUE(ca == cb) << "the resumed path-traced film differs from the uninterrupted one";
     EXPECT_EQ(slurp(out / "steady.exr"), slurp(whole / "steady.exr"));
@@ -1222,8 +1296,11 @@ TEST_F(CliErrors, PathTracerCheckpointResumesToTheFilmOfOneUninterruptedRun) {
 TEST_F(CliErrors, ResumeRefusesAChangedSceneOrSettingAndNamesWhatChanged) {
     const fs::path scene = write("scene.json", insideScene());
     const fs::path out = dir_ / "out";
-    ASSERT_EQ(runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q"},
-                     dir_).code, 0);
+    ASSERT_EQ(
+        runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q"},
+               dir_)
+            .code,
+        0);
     const std::string cp = slurp(out / "checkpoint.tpbck");
     ASSERT_FALSE(cp.empty());
 
@@ -1253,11 +1330,12 @@ TEST_F(CliErrors, ResumeRefusesAChangedSceneOrSettingAndNamesWhatChanged) {
 // Issue 16: a Mitsuba 3 XML scene goes through every command like a JSON one; its mistakes are user
 // errors (exit 2) naming the XML file, the line and the element, a broken include its own file.
 TEST_F(CliErrors, MitsubaXmlScenesAreCheckedLikeJson) {
-    const fs::path good = write("ok.xml", "<scene version=\"3.0.0\">\n<shape type=\"cube\"/>\n"
-                                          "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n"
-                                          "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,5\" "
-                                          "target=\"0,0,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
-                                          "value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor></scene>\n");
+    const fs::path good = write("ok.xml",
+                                "<scene version=\"3.0.0\">\n<shape type=\"cube\"/>\n"
+                                "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n"
+                                "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,5\" "
+                                "target=\"0,0,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
+                                "value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor></scene>\n");
     const Proc ok = runTpb({"info", good.string()}, dir_);
     EXPECT_EQ(ok.code, 0) << ok.err;
     EXPECT_NE(ok.out.find("8x8"), std::string::npos) << ok.out;
@@ -1303,8 +1381,9 @@ TEST_F(CliErrors, NoFramesLastLineSaysWhatWasWrittenInstead) {
     const Proc p = render(f);
     ASSERT_EQ(p.code, 0) << p.err;
     EXPECT_EQ(p.out.find("wrote 0 frames"), std::string::npos) << p.out;
-    EXPECT_NE(p.out.find("wrote no frames (--no-frames): steady.exr, steady.png, summary.json in " + (dir_ / "out").string()),
-              std::string::npos)
+    EXPECT_NE(
+        p.out.find("wrote no frames (--no-frames): steady.exr, steady.png, summary.json in " + (dir_ / "out").string()),
+        std::string::npos)
         << p.out;
 }
 
@@ -1323,7 +1402,8 @@ TEST_F(CliErrors, FlagsThatWouldBeIgnoredAreRefused) {
     });
     // Still accepted: --preview alone or with "no strip", --spp with the path tracer.
     EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--preview", "--strip", "0", "-q"}, dir_).code, 0);
-    EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--method", "pt", "--spp", "2", "--no-frames", "-q"}, dir_).code, 0);
+    EXPECT_EQ(runTpb({"render", f.string(), "-o", out, "--method", "pt", "--spp", "2", "--no-frames", "-q"}, dir_).code,
+              0);
 }
 
 // `view --resume DIR --passes 80 --after-passes 72` rendered 142 passes: --passes is the total (as
@@ -1334,13 +1414,17 @@ TEST_F(CliErrors, ViewRefusesPassesThatDisagreeWithAfterPasses) {
     const fs::path out = dir_ / "out", shot = dir_ / "shot.png";
     Proc p = runTpb({"view", f.string(), "--screenshot", shot.string(), "--passes", "3", "--after-passes", "5"}, dir_);
     EXPECT_EQ(p.code, 2) << p.err;
-    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --passes 3 and --after-passes 5 disagree: --passes is the total", 0), 0u)
+    EXPECT_EQ(fromErrorLine(p.err).rfind("error: --passes 3 and --after-passes 5 disagree: --passes is the total", 0),
+              0u)
         << p.err;
     EXPECT_NE(p.err.find("give --after-passes 3"), std::string::npos) << p.err;
-    ASSERT_EQ(runTpb({"render", f.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q"},
-                     dir_).code, 0);
-    p = runTpb({"view", "--resume", out.string(), "--screenshot", shot.string(), "--passes", "80", "--after-passes", "79"},
-               dir_);
+    ASSERT_EQ(
+        runTpb({"render", f.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q"}, dir_)
+            .code,
+        0);
+    p = runTpb(
+        {"view", "--resume", out.string(), "--screenshot", shot.string(), "--passes", "80", "--after-passes", "79"},
+        dir_);
     EXPECT_EQ(p.code, 2) << p.err;
     EXPECT_NE(p.err.find("beyond the checkpoint's 2, so the render would go to pass 81; drop --passes, or give "
                          "--after-passes 78"),
@@ -1364,29 +1448,34 @@ TEST_F(CliErrors, LongUnknownKeyIsClippedInTheMessage) {
 TEST_F(CliErrors, ObjIndexOverflowAndUnsupportedMeshFormatsAreNamed) {
     const fs::path f = dir_ / "scene.json";
     const auto meshScene = [&](const std::string& file) {
-        return sceneWith(8, "  \"shapes\": [{\"type\": \"mesh\", \"file\": \"" + file + "\", \"material\": \"white\"}],");
+        return sceneWith(8,
+                         "  \"shapes\": [{\"type\": \"mesh\", \"file\": \"" + file + "\", \"material\": \"white\"}],");
     };
     write("big.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 1099511627776\n");
     write("scene.json", meshScene("big.obj"));
     expectUserError(render(f), f.string() + ":8", "shapes[0].file",
-                    "big.obj:4: corrupt OBJ file: face (\"f\" line 4): index 1099511627776 is beyond the largest OBJ index tpb reads "
+                    "big.obj:4: corrupt OBJ file: face (\"f\" line 4): index 1099511627776 is beyond the largest OBJ "
+                    "index tpb reads "
                     "(2147483647); the file has 3 vertices before this line");
     write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 0/1\n");
     write("scene.json", meshScene("zero.obj"));
-    expectUserError(render(f), f.string() + ":8", "shapes[0].file", "zero.obj:4: corrupt OBJ file: face (\"f\" line 4): index 0; OBJ indices start at 1");
+    expectUserError(render(f), f.string() + ":8", "shapes[0].file",
+                    "zero.obj:4: corrupt OBJ file: face (\"f\" line 4): index 0; OBJ indices start at 1");
     write("m.stl", "solid m\nendsolid m\n");
     write("scene.json", meshScene("m.stl"));
-    expectUserError(render(f), f.string() + ":8", "shapes[0].file",
-                    "m.stl: unsupported mesh format .stl; supported: .obj (Wavefront OBJ), .ply (PLY, ASCII or binary)");
+    expectUserError(
+        render(f), f.string() + ":8", "shapes[0].file",
+        "m.stl: unsupported mesh format .stl; supported: .obj (Wavefront OBJ), .ply (PLY, ASCII or binary)");
 }
 
 // A Mitsuba XML scene named .txt was read as JSON ("unexpected '<'"): XML is told by its content.
 TEST_F(CliErrors, XmlSceneUnderAnotherExtensionIsReadAsXml) {
-    const fs::path f = write("scene.txt", "\n  <scene version=\"3.0.0\">\n<shape type=\"cube\"/>\n"
-                                          "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n"
-                                          "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,5\" "
-                                          "target=\"0,0,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
-                                          "value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor></scene>\n");
+    const fs::path f = write("scene.txt",
+                             "\n  <scene version=\"3.0.0\">\n<shape type=\"cube\"/>\n"
+                             "<emitter type=\"point\"><point name=\"position\" value=\"0, 0, 3\"/></emitter>\n"
+                             "<sensor type=\"perspective\"><transform name=\"to_world\"><lookat origin=\"0,0,5\" "
+                             "target=\"0,0,0\"/></transform><film type=\"hdrfilm\"><integer name=\"width\" "
+                             "value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor></scene>\n");
     const Proc p = runTpb({"info", f.string()}, dir_);
     EXPECT_EQ(p.code, 0) << p.err;
     EXPECT_NE(p.out.find("8x8"), std::string::npos) << p.out;
@@ -1399,7 +1488,10 @@ TEST_F(CliErrors, ResumeDiffsPrintTheShortestNumbers) {
     const fs::path f = write("scene.json", scene);
     const fs::path out = dir_ / "out";
     ASSERT_EQ(runTpb({"render", f.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint", "-q",
-                      "--alpha", "0.7"}, dir_).code, 0);
+                      "--alpha", "0.7"},
+                     dir_)
+                  .code,
+              0);
     scene.replace(scene.find("\"power\": 0.3"), 12, "\"power\": 0.1");
     write("scene.json", scene);
     Proc p = runTpb({"render", "--resume", out.string()}, dir_);
@@ -1446,14 +1538,20 @@ std::string scaledInsideScene(double s) {
         return std::string(b);
     };
     return "{\"version\": 1,\n"
-           " \"camera\": {\"position\": [0, " + n(0.5 * s) + ", " + n(0.9 * s) + "], \"look_at\": [0, " + n(0.5 * s) +
+           " \"camera\": {\"position\": [0, " +
+           n(0.5 * s) + ", " + n(0.9 * s) + "], \"look_at\": [0, " + n(0.5 * s) +
            ", 0], \"fov\": 60, \"resolution\": [16, 16]},\n"
            " \"film\": {\"bins\": 8},\n"
-           " \"media\": {\"fog\": {\"sigma_s\": " + n(0.5 / s) + ", \"sigma_a\": " + n(0.05 / s) + "}}, \"global_medium\": \"fog\",\n"
+           " \"media\": {\"fog\": {\"sigma_s\": " +
+           n(0.5 / s) + ", \"sigma_a\": " + n(0.05 / s) +
+           "}}, \"global_medium\": \"fog\",\n"
            " \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},\n"
-           " \"shapes\": [{\"type\": \"box\", \"min\": [" + n(-s) + ", 0, " + n(-s) + "], \"max\": [" + n(s) + ", " + n(s) +
-           ", " + n(s) + "], \"material\": \"white\", \"flip_normals\": true}],\n"
-           " \"lights\": [{\"type\": \"point\", \"position\": [0, " + n(0.8 * s) + ", 0], \"power\": " + n(5 * s * s) + "}],\n"
+           " \"shapes\": [{\"type\": \"box\", \"min\": [" +
+           n(-s) + ", 0, " + n(-s) + "], \"max\": [" + n(s) + ", " + n(s) + ", " + n(s) +
+           "], \"material\": \"white\", \"flip_normals\": true}],\n"
+           " \"lights\": [{\"type\": \"point\", \"position\": [0, " +
+           n(0.8 * s) + ", 0], \"power\": " + n(5 * s * s) +
+           "}],\n"
            " \"render\": {\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1}}\n";
 }
 
@@ -1499,13 +1597,15 @@ TEST_F(CliErrors, ScaleMistakesAreWarnedAbout) {
     const fs::path farScene = write("far.json", far);
     Proc p = runTpb({"info", farScene.string()}, dir_);
     EXPECT_EQ(p.code, 0) << p.err;
-    EXPECT_NE(p.err.find("warning: " + farScene.string() + ":7: shapes[1] makes the scene 334x larger than everything "
+    EXPECT_NE(p.err.find("warning: " + farScene.string() +
+                         ":7: shapes[1] makes the scene 334x larger than everything "
                          "else (bounding diagonal 1002 m; 3 m without it)"),
               std::string::npos)
         << p.err;
 
     p = render(plain, {"-q", "--radius", "1e-300"});
-    EXPECT_NE(p.err.find("warning: --radius 1e-300 m is 3.3e-301 of the scene's diagonal (3 m)"), std::string::npos) << p.err;
+    EXPECT_NE(p.err.find("warning: --radius 1e-300 m is 3.3e-301 of the scene's diagonal (3 m)"), std::string::npos)
+        << p.err;
     p = render(plain, {"-q", "--warmup", "20", "--passes", "1"});
     EXPECT_NE(p.err.find("warning: --warmup 20 is as long as the render (1 passes)"), std::string::npos) << p.err;
 
@@ -1524,7 +1624,8 @@ TEST_F(CliErrors, ScaleMistakesAreWarnedAbout) {
 // The energy-outside warning advised "range": "auto" when the range was already automatic (a
 // white closed box: long surface paths past the pilot's window).
 TEST_F(CliErrors, EnergyOutsideAnAutomaticRangeIsNotToldToUseAuto) {
-    std::string scene = insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1, \"max_depth\": 200}");
+    std::string scene =
+        insideScene("{\"bins\": 8}", "{\"photons_per_pass\": 2000, \"passes\": 2, \"seed\": 1, \"max_depth\": 200}");
     scene.replace(scene.find(" \"media\""), scene.find(" \"materials\"") - scene.find(" \"media\""), "");
     scene.replace(scene.find("\"albedo\": 0.7"), 13, "\"albedo\": 0.97");
     const fs::path f = write("scene.json", scene);

@@ -98,7 +98,8 @@ std::vector<unsigned char> pngPixels(const fs::path& p) {
 class CliOutputs : public ::testing::Test {
 protected:
     void SetUp() override {
-        tmp_ = std::make_unique<tpb::test::TempDir>("clio_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        tmp_ = std::make_unique<tpb::test::TempDir>(
+            "clio_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
         dir_ = tmp_->path();
         scene_ = tmp_->write("scene.json", kScene);
     }
@@ -120,11 +121,12 @@ TEST_F(CliOutputs, Mp4WithoutFfmpegIsRefusedBeforeRendering) {
 TEST_F(CliOutputs, NpyMp4AndContactSheetAreWrittenAndListed) {
     const bool ffmpeg = std::system("command -v ffmpeg >/dev/null 2>&1") == 0;
     const fs::path out = dir_ / "out";
-    const std::string flags = std::string(" --npy --contact-sheet 5 --unwarp --continuous -q") + (ffmpeg ? " --mp4 --fps 10" : "");
+    const std::string flags =
+        std::string(" --npy --contact-sheet 5 --unwarp --continuous -q") + (ffmpeg ? " --mp4 --fps 10" : "");
     const Proc p = runTpb("render " + q(scene_) + " -o " + q(out) + flags, dir_);
     ASSERT_EQ(p.code, 0) << p.err;
-    std::vector<std::string> want = {"transient.npy", "transient.json", "steady.npy", "before.npy", "after.npy",
-                                     "contact_sheet.png"};
+    std::vector<std::string> want = {"transient.npy", "transient.json", "steady.npy",
+                                     "before.npy",    "after.npy",      "contact_sheet.png"};
     if (ffmpeg) want.push_back("transient.mp4");
     const json manifest = json::parse(slurp(out / ".tpb-manifest.json"));
     const json summary = json::parse(slurp(out / "summary.json"));
@@ -133,7 +135,8 @@ TEST_F(CliOutputs, NpyMp4AndContactSheetAreWrittenAndListed) {
         EXPECT_GT(fs::file_size(out / f), 0u) << f;
         EXPECT_NE(std::find(manifest["files"].begin(), manifest["files"].end(), f), manifest["files"].end()) << f;
         EXPECT_NE(std::find(summary["outputs"]["files"].begin(), summary["outputs"]["files"].end(), f),
-                  summary["outputs"]["files"].end()) << f;
+                  summary["outputs"]["files"].end())
+            << f;
     }
     // transient.npy: header + 14 x 21 x 12 x 3 floats; the side file names the axis and the render.
     EXPECT_EQ(fs::file_size(out / "transient.npy"), 128u + 14u * 21 * 12 * 3 * 4);
@@ -155,9 +158,10 @@ TEST_F(CliOutputs, NpyMp4AndContactSheetAreWrittenAndListed) {
     EXPECT_EQ(h, 2 * (14 + 9) + 3 * 2);
     EXPECT_GE(w, 3 * 21 + 4 * 2);
     if (ffmpeg && std::system("command -v ffprobe >/dev/null 2>&1") == 0) {
-        const std::string cmd = "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-                                "stream=nb_read_frames,width,height -of csv=p=0 " + q(out / "transient.mp4") + " > " +
-                                q(dir_ / "probe.txt");
+        const std::string cmd =
+            "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+            "stream=nb_read_frames,width,height -of csv=p=0 " +
+            q(out / "transient.mp4") + " > " + q(dir_ / "probe.txt");
         ASSERT_EQ(std::system(cmd.c_str()), 0);
         EXPECT_EQ(slurp(dir_ / "probe.txt"), "22,14,12\n") << "one frame per bin, the odd width padded";
     }
@@ -174,7 +178,8 @@ TEST_F(CliOutputs, CtrlCDuringEncodingLeavesNoHalfWrittenMp4) {
     const fs::path bin = dir_ / "fakebin";
     fs::create_directory(bin);
     const fs::path marker = dir_ / "ffmpeg_started";
-    std::ofstream(bin / "ffmpeg") << "#!/bin/sh\nfor a; do out=\"$a\"; done\necho partial > \"$out\"\ntouch " << q(marker)
+    std::ofstream(bin / "ffmpeg") << "#!/bin/sh\nfor a; do out=\"$a\"; done\necho partial > \"$out\"\ntouch "
+                                  << q(marker)
                                   << "\nwhile dd bs=65536 count=1 of=/dev/null 2>/dev/null; do sleep 0.2; done\n";
     fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
     const fs::path out = dir_ / "out";
@@ -204,16 +209,49 @@ TEST_F(CliOutputs, InfoJsonParsesAndHasTheDocumentedKeys) {
     ASSERT_EQ(p.code, 0) << p.err;
     const json j = json::parse(p.out);  // throws (fails the test) on anything but one JSON value
     ASSERT_TRUE(j.is_object());
-    const std::vector<std::string> keys = {
-        "scene.path", "scene.version", "camera.width", "camera.height", "camera.fov_y_deg", "camera.position",
-        "bounds.min", "bounds.max", "bounds.diagonal_m", "geometry.triangles", "geometry.spheres", "geometry.shapes",
-        "shapes", "regions", "lights", "film.bins", "film.start_opl_m", "film.bin_width_opl_m", "film.end_opl_m",
-        "film.start_ns", "film.bin_width_ns", "film.end_ns", "film.auto_range", "memory.film_bytes",
-        "memory.pixel_accumulator_bytes_per_thread", "memory.photon_map_bytes_per_pass_rough", "render.method",
-        "render.photons_per_pass", "render.radius", "render.surface_radius", "render.alpha", "render.passes",
-        "render.time_budget_s", "render.volume_estimator", "render.surface_estimator", "render.time_kernel",
-        "density.measured", "density.why", "density.pilot_photons", "density.scale_to_pass",
-        "density.gathered_per_ray", "density.radius_chosen_automatically", "stages"};
+    const std::vector<std::string> keys = {"scene.path",
+                                           "scene.version",
+                                           "camera.width",
+                                           "camera.height",
+                                           "camera.fov_y_deg",
+                                           "camera.position",
+                                           "bounds.min",
+                                           "bounds.max",
+                                           "bounds.diagonal_m",
+                                           "geometry.triangles",
+                                           "geometry.spheres",
+                                           "geometry.shapes",
+                                           "shapes",
+                                           "regions",
+                                           "lights",
+                                           "film.bins",
+                                           "film.start_opl_m",
+                                           "film.bin_width_opl_m",
+                                           "film.end_opl_m",
+                                           "film.start_ns",
+                                           "film.bin_width_ns",
+                                           "film.end_ns",
+                                           "film.auto_range",
+                                           "memory.film_bytes",
+                                           "memory.pixel_accumulator_bytes_per_thread",
+                                           "memory.photon_map_bytes_per_pass_rough",
+                                           "render.method",
+                                           "render.photons_per_pass",
+                                           "render.radius",
+                                           "render.surface_radius",
+                                           "render.alpha",
+                                           "render.passes",
+                                           "render.time_budget_s",
+                                           "render.volume_estimator",
+                                           "render.surface_estimator",
+                                           "render.time_kernel",
+                                           "density.measured",
+                                           "density.why",
+                                           "density.pilot_photons",
+                                           "density.scale_to_pass",
+                                           "density.gathered_per_ray",
+                                           "density.radius_chosen_automatically",
+                                           "stages"};
     for (const std::string& k : keys) {
         std::string pointer = "/" + k;
         std::replace(pointer.begin(), pointer.end(), '.', '/');
@@ -248,7 +286,8 @@ TEST_F(CliOutputs, ConvergenceJsonRowsAreTheCsvRows) {
     ASSERT_EQ(r.code, 0) << r.err;
     const fs::path out = dir_ / "conv";
     const Proc c = runTpb("converge " + q(scene_) + " --reference " + q(ref) + " -o " + q(out) +
-                              " --time 1.5 --no-plot --threads 2 --method both", dir_);
+                              " --time 1.5 --no-plot --threads 2 --method both",
+                          dir_);
     ASSERT_EQ(c.code, 0) << c.err;
     std::istringstream csv(slurp(out / "convergence.csv"));
     std::string line;
@@ -268,9 +307,12 @@ TEST_F(CliOutputs, ConvergenceJsonRowsAreTheCsvRows) {
             SCOPED_TRACE(header[i] + " row " + std::to_string(n));
             ASSERT_TRUE(row.contains(header[i]));
             const json& v = row[header[i]];
-            if (cell.empty()) EXPECT_TRUE(v.is_null());
-            else if (v.is_string()) EXPECT_EQ(v.get<std::string>(), cell);
-            else EXPECT_NEAR(v.get<double>(), std::stod(cell), 1e-5 * std::abs(std::stod(cell)) + 1e-300);
+            if (cell.empty())
+                EXPECT_TRUE(v.is_null());
+            else if (v.is_string())
+                EXPECT_EQ(v.get<std::string>(), cell);
+            else
+                EXPECT_NEAR(v.get<double>(), std::stod(cell), 1e-5 * std::abs(std::stod(cell)) + 1e-300);
         }
     }
     EXPECT_GE(n, 2u) << "both methods measured";
@@ -289,7 +331,8 @@ TEST_F(CliOutputs, EveryPictureIsAutoExposedByOneRuleRecordedInTheSummary) {
     const Proc p = runTpb("render " + q(scene) + " -o " + q(out) + " -q --no-frames --strip 4 --contact-sheet 4", dir_);
     ASSERT_EQ(p.code, 0) << p.err;
     const json ev = json::parse(slurp(out / "summary.json"))["outputs"]["exposure_ev"];
-    for (const char* f : {"preview.png", "steady.png", "strip.png", "contact_sheet.png"}) ASSERT_TRUE(ev.contains(f)) << f;
+    for (const char* f : {"preview.png", "steady.png", "strip.png", "contact_sheet.png"})
+        ASSERT_TRUE(ev.contains(f)) << f;
     // steady.png's EV is the automatic exposure of steady.exr, and its brightest pixels are near white.
     int w = 0, h = 0;
     std::vector<float> steady;
@@ -312,7 +355,8 @@ TEST_F(CliOutputs, EveryPictureIsAutoExposedByOneRuleRecordedInTheSummary) {
 // The progress line names what the chosen estimator stores: photon points for point3d (it said
 // "0 beams"), beams for beam2d, and surface photons where the scene has diffuse surfaces.
 TEST_F(CliOutputs, ProgressLineNamesWhatTheEstimatorStores) {
-    const Proc points = runTpb("render " + q(scene_) + " -o " + q(dir_ / "a") + " --no-frames --estimator point3d", dir_);
+    const Proc points =
+        runTpb("render " + q(scene_) + " -o " + q(dir_ / "a") + " --no-frames --estimator point3d", dir_);
     ASSERT_EQ(points.code, 0) << points.err;
     EXPECT_EQ(points.err.find(" beams"), std::string::npos) << points.err;
     EXPECT_NE(points.err.find(" photon points, "), std::string::npos) << points.err;

@@ -26,7 +26,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-
 namespace fs = std::filesystem;
 
 namespace {
@@ -37,7 +36,9 @@ using tpb::test::slurp;
 using tpb::test::spawnTpb;
 using tpb::test::tpbBinary;
 
-Proc waitTpb(pid_t pid, const fs::path& dir, double timeoutSec) { return tpb::test::waitTpb(pid, dir, now(), timeoutSec); }
+Proc waitTpb(pid_t pid, const fs::path& dir, double timeoutSec) {
+    return tpb::test::waitTpb(pid, dir, now(), timeoutSec);
+}
 
 Proc runTpb(const std::vector<std::string>& args, const fs::path& dir, const std::vector<std::string>& env = {},
             double timeoutSec = 120.0) {
@@ -60,14 +61,18 @@ bool waitForText(const fs::path& file, const std::string& text, pid_t pid, doubl
 // A closed box in fog with the camera and a point light inside: 16x16 px.
 std::string boxScene(int bins, const std::string& render) {
     return "{\"version\": 1,\n"
-           " \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"fov\": 60, \"resolution\": [16, 16]},\n"
-           " \"film\": {\"bins\": " + std::to_string(bins) + "},\n"
+           " \"camera\": {\"position\": [0, 0.5, 0.9], \"look_at\": [0, 0.5, 0], \"fov\": 60, \"resolution\": [16, "
+           "16]},\n"
+           " \"film\": {\"bins\": " +
+           std::to_string(bins) +
+           "},\n"
            " \"media\": {\"fog\": {\"sigma_s\": 0.5, \"sigma_a\": 0.05}}, \"global_medium\": \"fog\",\n"
            " \"materials\": {\"white\": {\"type\": \"diffuse\", \"albedo\": 0.7}},\n"
            " \"shapes\": [{\"type\": \"box\", \"min\": [-1, 0, -1], \"max\": [1, 1, 1], \"material\": \"white\", "
            "\"flip_normals\": true}],\n"
            " \"lights\": [{\"type\": \"point\", \"position\": [0, 0.8, 0], \"power\": 5}],\n"
-           " \"render\": " + render + "}\n";
+           " \"render\": " +
+           render + "}\n";
 }
 
 class CliSafety : public ::testing::Test {
@@ -93,7 +98,8 @@ protected:
 // send it) stops the render like SIGTERM: the finished passes and the checkpoint are written, exit
 // 129. Before, the default disposition killed the process and every pass was lost.
 TEST_F(CliSafety, SighupWritesTheFinishedPassesAndTheCheckpoint) {
-    const fs::path scene = write("scene.json", boxScene(8, "{\"photons_per_pass\": 20000, \"passes\": 100000, \"seed\": 1}"));
+    const fs::path scene =
+        write("scene.json", boxScene(8, "{\"photons_per_pass\": 20000, \"passes\": 100000, \"seed\": 1}"));
     const fs::path out = dir_ / "out";
     const pid_t pid = spawnTpb({"render", scene.string(), "-o", out.string(), "--threads", "2", "--strip", "0"}, dir_);
     ASSERT_GT(pid, 0);
@@ -132,9 +138,9 @@ TEST_F(CliSafety, NewRenderIntoAFolderWithACheckpointIsRefusedAndTheCheckpointKe
     const std::string steady = slurp(out / "steady.exr");
     ASSERT_FALSE(checkpoint.empty());
 
-    for (const std::vector<std::string>& extra : {std::vector<std::string>{"--preview"},
-                                                  std::vector<std::string>{"--no-checkpoint", "--passes", "1"},
-                                                  std::vector<std::string>{"--method", "pt", "--passes", "1"}}) {
+    for (const std::vector<std::string>& extra :
+         {std::vector<std::string>{"--preview"}, std::vector<std::string>{"--no-checkpoint", "--passes", "1"},
+          std::vector<std::string>{"--method", "pt", "--passes", "1"}}) {
         SCOPED_TRACE(extra[0]);
         p = runTpb(with(extra), dir_);
         EXPECT_EQ(p.code, 2) << p.err;
@@ -143,7 +149,9 @@ TEST_F(CliSafety, NewRenderIntoAFolderWithACheckpointIsRefusedAndTheCheckpointKe
                   std::string::npos)
             << p.err;
         EXPECT_NE(p.err.find("which this tpb render would remove; a checkpoint is never discarded silently: continue "
-                             "that render with `tpb render --resume " + out.string() + "`, give this run another "
+                             "that render with `tpb render --resume " +
+                             out.string() +
+                             "`, give this run another "
                              "folder with -o, or add --overwrite-checkpoint to discard it"),
                   std::string::npos)
             << p.err;
@@ -182,19 +190,20 @@ TEST_F(CliSafety, NewRenderIntoAFolderWithACheckpointIsRefusedAndTheCheckpointKe
 // error must name transient.mp4.
 TEST_F(CliSafety, VideoThatFfmpegLeftIncompleteIsRefusedAndNamed) {
     const fs::path scene = write("scene.json", boxScene(8, "{\"photons_per_pass\": 2000, \"passes\": 1, \"seed\": 1}"));
-    const fs::path fake = write("fakebin/ffmpeg",
-                                "#!/bin/sh\n"
-                                "for a; do last=$a; done\n"
-                                "cat >/dev/null\n"
-                                "printf '\\000\\000\\000\\030ftypisom\\000\\000\\002\\000isomiso2\\000\\000\\020\\000mdat' "
-                                ">\"$last\"\n"
-                                "echo \"[mp4 @ 0x1] Error writing trailer of $last: No space left on device\" >&2\n"
-                                "exit 0\n");
+    const fs::path fake =
+        write("fakebin/ffmpeg",
+              "#!/bin/sh\n"
+              "for a; do last=$a; done\n"
+              "cat >/dev/null\n"
+              "printf '\\000\\000\\000\\030ftypisom\\000\\000\\002\\000isomiso2\\000\\000\\020\\000mdat' "
+              ">\"$last\"\n"
+              "echo \"[mp4 @ 0x1] Error writing trailer of $last: No space left on device\" >&2\n"
+              "exit 0\n");
     fs::permissions(fake, fs::perms::owner_all);
     const fs::path out = dir_ / "out";
     const std::string path = "PATH=" + (dir_ / "fakebin").string() + ":" + std::getenv("PATH");
-    const Proc p = runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--mp4"}, dir_,
-                          {path});
+    const Proc p =
+        runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--mp4"}, dir_, {path});
     EXPECT_EQ(p.code, 2) << p.err;
     EXPECT_NE(p.err.find("error: " + (out / "transient.mp4").string() +
                          ": ffmpeg exited with 0 but the video it wrote is not playable: it is cut short"),
@@ -217,8 +226,8 @@ TEST_F(CliSafety, CheckpointThatCannotBeWrittenIsAnError) {
     const fs::path scene = write("scene.json", boxScene(8, "{\"photons_per_pass\": 2000, \"passes\": 1, \"seed\": 1}"));
     const fs::path out = dir_ / "out";
     fs::create_directories(out / "checkpoint.tpbck");
-    const Proc p = runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint"},
-                          dir_);
+    const Proc p =
+        runTpb({"render", scene.string(), "-o", out.string(), "--no-frames", "--strip", "0", "--checkpoint"}, dir_);
     EXPECT_EQ(p.code, 2) << p.err;
     EXPECT_NE(p.err.find("error: the checkpoint was not written: " + (out / "checkpoint.tpbck").string() + ": "),
               std::string::npos)

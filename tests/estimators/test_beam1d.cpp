@@ -112,7 +112,8 @@ struct GatherJob {
     TimeProfile profile = TimeProfile::Exact;
 };
 
-Gathered gatherWith(VolumeEstimator& est, const test::TestScene& sc, const std::vector<Beam>& beams, const GatherJob& job) {
+Gathered gatherWith(VolumeEstimator& est, const test::TestScene& sc, const std::vector<Beam>& beams,
+                    const GatherJob& job) {
     PhotonMap map;
     map.beams = beams;
     EstimatorPass ep;
@@ -160,7 +161,8 @@ void expectSameGather(const Gathered& a, const Gathered& b, const char* what) {
     for (int ax = 0; ax < 2; ++ax) {
         ASSERT_EQ(a.bins[ax].size(), b.bins[ax].size());
         for (size_t k = 0; k < a.bins[ax].size(); ++k)
-            for (int c = 0; c < 3; ++c) ASSERT_EQ(a.bins[ax][k][c], b.bins[ax][k][c]) << what << " axis " << ax << " bin " << k;
+            for (int c = 0; c < 3; ++c)
+                ASSERT_EQ(a.bins[ax][k][c], b.bins[ax][k][c]) << what << " axis " << ax << " bin " << k;
         for (int c = 0; c < 3; ++c) {
             EXPECT_EQ(a.before[ax][c], b.before[ax][c]) << what;
             EXPECT_EQ(a.after[ax][c], b.after[ax][c]) << what;
@@ -265,8 +267,8 @@ TEST(Beam1D, ClosestPointOnAPieceBoundaryCountsOnce) {
         std::vector<BeamPiece> pieces;
         accel->candidates(Vec3(0, -1, 0), Vec3(0, 1, 0), 2.0, 0, pieces);
         ASSERT_EQ(pieces.size(), beamPieceCount(L, radius));
-        std::vector<double> points = {0.0, L, std::nextafter(L, 0.0), std::nextafter(0.0, 1.0), std::nextafter(L, 2 * L),
-                                      -1e-300};
+        std::vector<double> points = {
+            0.0, L, std::nextafter(L, 0.0), std::nextafter(0.0, 1.0), std::nextafter(L, 2 * L), -1e-300};
         for (const BeamPiece& p : pieces) {
             points.push_back(p.sbLo);
             points.push_back(p.sbHi);
@@ -276,7 +278,8 @@ TEST(Beam1D, ClosestPointOnAPieceBoundaryCountsOnce) {
         for (double sb : points) {
             int on = 0;
             for (const BeamPiece& p : pieces) on += closestPointOnPiece(sb, p.sbLo, p.sbHi, L) ? 1 : 0;
-            EXPECT_EQ(on, sb >= 0.0 && sb <= L ? 1 : 0) << "radius " << radius << " pieces " << pieces.size() << " sb " << sb;
+            EXPECT_EQ(on, sb >= 0.0 && sb <= L ? 1 : 0)
+                << "radius " << radius << " pieces " << pieces.size() << " sb " << sb;
         }
     }
 }
@@ -323,8 +326,8 @@ TEST(Beam1D, GatherOfOneBeamMatchesTheFormulaOnBothAxes) {
         const Color tau = job.beamLength == BeamLength::Long ? m.sigma_t : m.sigma_t - Color(average(m.sigma_t));
         const double c = glm::dot(job.ray.d, b.dir);
         for (int ch = 0; ch < 3; ++ch)
-            ex.L[ch] = job.path.beta[ch] * m.sigma_s[ch] * m.phase.eval(-c) * b.power[ch] * std::exp(-m.sigma_t[ch] * s) *
-                       std::exp(-tau[ch] * t) / (2.0 * job.radius * sinT);
+            ex.L[ch] = job.path.beta[ch] * m.sigma_s[ch] * m.phase.eval(-c) * b.power[ch] *
+                       std::exp(-m.sigma_t[ch] * s) * std::exp(-tau[ch] * t) / (2.0 * job.radius * sinT);
         ex.tUnwarped = b.opl0 + 1.33 * t;
         ex.tReal = job.path.oplCam + ex.tUnwarped + 1.33 * s;
         const Gathered g = gather1D(sc, {b}, job);
@@ -369,7 +372,8 @@ TEST(Beam1D, LimitsThinThickGrazingAndEnds) {
         const Gathered g = gather1D(sc, {beamAt(0.01)}, job);
         // sigma_s rho Phi / (2 r sin(theta)) up to T = exp(-sigma_t s_r) = 1 - O(sigma) (grey short beams: tau_b = 0).
         const double ex = 0.5 * sigma * sc->regions[0].medium.phase.eval(-c) / (2.0 * r * sinT);
-        for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(g.steady[ch], ex * (ch + 1), 2.0 * sigma * ex * (ch + 1) + 1e-14 * ex) << sigma;
+        for (int ch = 0; ch < 3; ++ch)
+            EXPECT_NEAR(g.steady[ch], ex * (ch + 1), 2.0 * sigma * ex * (ch + 1) + 1e-14 * ex) << sigma;
     }
     for (double sigma : {40.0, 1e3, 1e6}) {
         MediumScene ms;
@@ -378,7 +382,8 @@ TEST(Beam1D, LimitsThinThickGrazingAndEnds) {
         auto sc = ms.build();
         const Gathered g = gather1D(sc, {beamAt(0.01)}, job);
         EXPECT_EQ(g.rejected, 0);
-        const double ex = 0.5 * sigma * sc->regions[0].medium.phase.eval(-c) * std::exp(-sigma * 1.0) / (2.0 * r * sinT);
+        const double ex =
+            0.5 * sigma * sc->regions[0].medium.phase.eval(-c) * std::exp(-sigma * 1.0) / (2.0 * r * sinT);
         for (int ch = 0; ch < 3; ++ch) {
             EXPECT_TRUE(std::isfinite(g.steady[ch]));
             EXPECT_NEAR(g.steady[ch], ex * (ch + 1), 1e-9 * ex * (ch + 1)) << sigma;  // short grey beams: tau_b = 0
@@ -389,11 +394,11 @@ TEST(Beam1D, LimitsThinThickGrazingAndEnds) {
     EXPECT_EQ(gather1D(sc, {beamAt(r * (1 - 1e-9))}, job).estimates, 1);
     EXPECT_EQ(gather1D(sc, {beamAt(r * (1 + 1e-9))}, job).estimates, 0);
     EXPECT_EQ(gather1D(sc, {beamAt(-r * (1 - 1e-9))}, job).estimates, 1);
-    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 1e-9)}, job).estimates, 1);             // s_r* just after the start
-    EXPECT_EQ(gather1D(sc, {beamAt(0.0, -1e-9)}, job).estimates, 0);            // just before it
-    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 2.0 - 1e-9)}, job).estimates, 1);       // just before sMax
-    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 2.0 + 1e-9)}, job).estimates, 0);       // just after it
-    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 1.0, 1e-9)}, job).estimates, 1);        // s_b* just after the beam's origin
+    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 1e-9)}, job).estimates, 1);        // s_r* just after the start
+    EXPECT_EQ(gather1D(sc, {beamAt(0.0, -1e-9)}, job).estimates, 0);       // just before it
+    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 2.0 - 1e-9)}, job).estimates, 1);  // just before sMax
+    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 2.0 + 1e-9)}, job).estimates, 0);  // just after it
+    EXPECT_EQ(gather1D(sc, {beamAt(0.0, 1.0, 1e-9)}, job).estimates, 1);   // s_b* just after the beam's origin
     EXPECT_EQ(gather1D(sc, {beamAt(0.0, 1.0, -1e-9)}, job).estimates, 0);
     EXPECT_EQ(gather1D(sc, {beamAt(0.0, 1.0, 1.0 - 1e-9)}, job).estimates, 1);  // just before its end
     EXPECT_EQ(gather1D(sc, {beamAt(0.0, 1.0, 1.0 + 1e-9)}, job).estimates, 0);
@@ -457,7 +462,8 @@ TEST(Beam1D, NearParallelPairsAreBoundedAndEqualBeam2D) {
         int binsHit = 0;
         for (const Color& v : g1.bins[0]) binsHit += v[0] > 0.0 ? 1 : 0;
         EXPECT_EQ(binsHit, 1) << f;  // an instant (beam2d spreads it over several 0.05 m bins)
-        const double bound = m.sigma_s[0] * m.phase.eval(-glm::dot(job.ray.d, b.dir)) * std::min(job.sMax, L) / (kPi * r * r);
+        const double bound =
+            m.sigma_s[0] * m.phase.eval(-glm::dot(job.ray.d, b.dir)) * std::min(job.sMax, L) / (kPi * r * r);
         EXPECT_LE(g1.steady[0], bound / f * (1 + 1e-9)) << f;
         EXPECT_GT(g2.steady[0], 0.0);
     }
@@ -532,7 +538,7 @@ namespace {
 struct PrismCase {
     const char* what;
     Vec3 wr, wb;
-    double sigmaScale = 1.0;  // of MediumScene's coefficients
+    double sigmaScale = 1.0;                // of MediumScene's coefficients
     double A = 0.25, Lb = 1.3, sMax = 3.0;  // m; the segment is cut to the prism's side faces
     double radius = 0.02;
     BeamLength beamLength = BeamLength::Long;
@@ -740,17 +746,18 @@ TEST(Beam1D, ExpectationOverBeamOffsetsIsTheLineIntegral) {
     for (const PrismCase& pc : cases) {
         const PrismResult r = runPrism(pc);
         const double z = (r.total - r.ref) / std::sqrt(r.totalSe * r.totalSe + 1e-6 * r.ref * r.ref);
-        const double zScaled = (0.95 * r.total - r.ref) / std::sqrt(0.95 * 0.95 * r.totalSe * r.totalSe + 1e-6 * r.ref * r.ref);
-        std::printf("%-40s total %.6g +- %.2g (%.2f%%) vs %.6g: z %.2f (x0.95: %.1f); bins chi2 real %.1f/%d unwarped "
-                    "%.1f/%d; x0.95 %.0f/%.0f, shifted %.0f/%.0f\n",
-                    pc.what, r.total, r.totalSe, 100 * r.totalSe / r.ref, r.ref, z, zScaled, r.bins[0].chi2,
-                    r.bins[0].dof, r.bins[1].chi2, r.bins[1].dof, r.scaled[0].chi2, r.scaled[1].chi2, r.shifted[0].chi2,
-                    r.shifted[1].chi2);
+        const double zScaled =
+            (0.95 * r.total - r.ref) / std::sqrt(0.95 * 0.95 * r.totalSe * r.totalSe + 1e-6 * r.ref * r.ref);
+        std::printf(
+            "%-40s total %.6g +- %.2g (%.2f%%) vs %.6g: z %.2f (x0.95: %.1f); bins chi2 real %.1f/%d unwarped "
+            "%.1f/%d; x0.95 %.0f/%.0f, shifted %.0f/%.0f\n",
+            pc.what, r.total, r.totalSe, 100 * r.totalSe / r.ref, r.ref, z, zScaled, r.bins[0].chi2, r.bins[0].dof,
+            r.bins[1].chi2, r.bins[1].dof, r.scaled[0].chi2, r.scaled[1].chi2, r.shifted[0].chi2, r.shifted[1].chi2);
         EXPECT_LT(std::abs(z), 4.0) << pc.what;
         EXPECT_GT(std::abs(zScaled), 4.0) << pc.what << ": the test cannot see a 5 % scale error";
         for (int axis = 0; axis < 2; ++axis) {
-            EXPECT_TRUE(chi2Ok(r.bins[axis])) << pc.what << " axis " << axis << ": chi2 " << r.bins[axis].chi2 << " over "
-                                              << r.bins[axis].dof << ", worst z " << r.bins[axis].worst;
+            EXPECT_TRUE(chi2Ok(r.bins[axis])) << pc.what << " axis " << axis << ": chi2 " << r.bins[axis].chi2
+                                              << " over " << r.bins[axis].dof << ", worst z " << r.bins[axis].worst;
             EXPECT_FALSE(chi2Ok(r.shifted[axis])) << pc.what << " axis " << axis << ": a one-bin shift passes";
         }
     }
@@ -914,10 +921,11 @@ TEST(Beam1DRender, SingleScatteringMatchesQuadraturePerPixelAndBinOnBothAxes) {
             const FilmChecks ok = checkFilm(r, rv, [&](int p, size_t i) { return vol[p][i]; });
             const FilmChecks scaled = checkFilm(r, rv, [&](int p, size_t i) { return 0.95 * vol[p][i]; });
             const FilmChecks shifted = checkFilm(r, rv, [&](int p, size_t i) { return i % B ? vol[p][i - 1] : 0.0; });
-            std::printf("%-22s per pixel and bin: relative RMSE %.4f (noise %.4f); profile chi2 %.1f / %d, worst z %.2f; "
-                        "x0.95: chi2 %.0f, worst z %.1f; shifted one bin: chi2 %.0f, worst z %.1f\n",
-                        what[a][mo], ok.rmse, ok.noise, ok.profile.chi2, ok.profile.dof, ok.profile.worst,
-                        scaled.profile.chi2, scaled.profile.worst, shifted.profile.chi2, shifted.profile.worst);
+            std::printf(
+                "%-22s per pixel and bin: relative RMSE %.4f (noise %.4f); profile chi2 %.1f / %d, worst z %.2f; "
+                "x0.95: chi2 %.0f, worst z %.1f; shifted one bin: chi2 %.0f, worst z %.1f\n",
+                what[a][mo], ok.rmse, ok.noise, ok.profile.chi2, ok.profile.dof, ok.profile.worst, scaled.profile.chi2,
+                scaled.profile.worst, shifted.profile.chi2, shifted.profile.worst);
             if (mo == 0) {
                 EXPECT_LT(ok.rmse, 1.5 * ok.noise + 0.01) << what[a][mo];
                 EXPECT_TRUE(deltaProfileOk(ok.profile)) << what[a][mo];

@@ -66,7 +66,10 @@ TEST(BeamKernel, OverlapIntervalMatchesPointSampling) {
         double lo = kInf, hi = -kInf;
         for (int i = 0; i <= n; ++i) {
             const double s = sMax * i / n;
-            if (insideKernel(xr + s * wr, xb, wb, L, r)) { lo = std::min(lo, s); hi = std::max(hi, s); }
+            if (insideKernel(xr + s * wr, xb, wb, L, r)) {
+                lo = std::min(lo, s);
+                hi = std::max(hi, s);
+            }
         }
         const double step = sMax / n;
         if (!hit) {
@@ -97,7 +100,8 @@ TEST(BeamKernel, TransmittanceIntegralMatchesQuadrature) {
                 const double closed = transmittanceIntegral(st, tau, o);
                 const double ref = quad([&](double s) { return std::exp(-st * s - tau * (o.sb0 + o.cosRB * s)); },
                                         o.sMinus, o.sPlus, 200);
-                EXPECT_NEAR(closed, ref, 1e-11 * std::max(1.0, ref) + 1e-12 * ref) << "sigma " << st << " trial " << trial;
+                EXPECT_NEAR(closed, ref, 1e-11 * std::max(1.0, ref) + 1e-12 * ref)
+                    << "sigma " << st << " trial " << trial;
                 ++checked;
             }
     }
@@ -117,7 +121,8 @@ TEST(BeamKernel, LimitsBeamTowardCameraPerpendicularParallelGrazing) {
     EXPECT_NEAR(towards, std::exp(-st * 2.0) * 1.0, 1e-14);
     // Beam going away along the ray: kappa = 2 sigma_t.
     ASSERT_TRUE(rayBeamOverlap(xr, wr, 10.0, Vec3(0, 0, 1.0), wr, 1.0, r, o));
-    EXPECT_NEAR(transmittanceIntegral(st, st, o), quad([&](double s) { return std::exp(-st * (s + s - 1.0)); }, 1.0, 2.0), 1e-12);
+    EXPECT_NEAR(transmittanceIntegral(st, st, o),
+                quad([&](double s) { return std::exp(-st * (s + s - 1.0)); }, 1.0, 2.0), 1e-12);
     // Perpendicular beam: chord of length 2r at s = 1 (c = 0, s_b constant).
     ASSERT_TRUE(rayBeamOverlap(xr, wr, 10.0, Vec3(-0.5, 0, 1.0), Vec3(1, 0, 0), 1.0, r, o));
     EXPECT_NEAR(o.sPlus - o.sMinus, 2 * r, 1e-12);
@@ -257,8 +262,12 @@ TEST(TimeSplat, OneBinIsExactAndChannelsMatchGreySplats) {
     const TimeBins tb{0.0, 1.0, 4};
     int calls = 0;
     Color got(0.0);
-    const OutsideFilm out = splatTime(tb, Color(2.0, 3.0, 5.0), Color(1.0, 40.0, -7.0), 0.2, 0.3, 1.1, 1.0,
-                                      [&](int k, const Color& c) { ++calls; EXPECT_EQ(k, 1); got = c; });
+    const OutsideFilm out =
+        splatTime(tb, Color(2.0, 3.0, 5.0), Color(1.0, 40.0, -7.0), 0.2, 0.3, 1.1, 1.0, [&](int k, const Color& c) {
+            ++calls;
+            EXPECT_EQ(k, 1);
+            got = c;
+        });
     EXPECT_EQ(calls, 1);
     EXPECT_EQ(got.x, 2.0);
     EXPECT_EQ(got.y, 3.0);
@@ -269,11 +278,12 @@ TEST(TimeSplat, OneBinIsExactAndChannelsMatchGreySplats) {
     const Color kappa(2.0, 35.0, -12.0);
     const double s0 = 0.1, s1 = 0.6, a = 0.6, b = -0.7;  // time runs backwards along s and crosses the film start
     std::vector<Color> colour(60, Color(0.0));
-    const OutsideFilm oc = splatTime(fine, Color(1.0), kappa, s0, s1, a, b, [&](int k, const Color& c) { colour[k] += c; });
+    const OutsideFilm oc =
+        splatTime(fine, Color(1.0), kappa, s0, s1, a, b, [&](int k, const Color& c) { colour[k] += c; });
     for (int ch = 0; ch < 3; ++ch) {
         std::vector<double> grey(60, 0.0);
-        const OutsideFilm og = splatTime(fine, Color(1.0), Color(kappa[ch]), s0, s1, a, b,
-                                         [&](int k, const Color& c) { grey[k] += c.x; });
+        const OutsideFilm og =
+            splatTime(fine, Color(1.0), Color(kappa[ch]), s0, s1, a, b, [&](int k, const Color& c) { grey[k] += c.x; });
         EXPECT_EQ(oc.before[ch], og.before.x) << ch;
         EXPECT_EQ(oc.after[ch], og.after.x) << ch;
         double total = oc.before[ch] + oc.after[ch];
@@ -289,14 +299,15 @@ TEST(TimeSplat, OneBinIsExactAndChannelsMatchGreySplats) {
 // and within a few ulp of the boundaries of films with awkward widths (0.1, 1/3, 0.3, 1e-3 ...),
 // far before and after them, at +-inf and NaN, and at random times.
 TEST(TimeSplat, BinByReciprocalIsTheBinByDivision) {
-    const TimeBins films[] = {{0.0, 0.1, 10}, {0.5, 0.3, 9}, {1.0, 1.0 / 3.0, 1024}, {-2.7, 1e-3, 4096},
+    const TimeBins films[] = {{0.0, 0.1, 10},         {0.5, 0.3, 9}, {1.0, 1.0 / 3.0, 1024}, {-2.7, 1e-3, 4096},
                               {123.456, 0.0123, 256}, {0.0, 7.0, 1}, {1e-9, 3e-5, 100000}};
     Rng rng(99, Stream::Test, 0, 0);
     int64_t checked = 0, nearBoundary = 0;
     for (const TimeBins& tb : films) {
         const double inv = 1.0 / tb.binWidth;
         const auto same = [&](double t) {
-            ASSERT_EQ(tb.binOf(t, inv), tb.binOf(t)) << "t = " << t << " start " << tb.startOpl << " width " << tb.binWidth;
+            ASSERT_EQ(tb.binOf(t, inv), tb.binOf(t))
+                << "t = " << t << " start " << tb.startOpl << " width " << tb.binWidth;
             ++checked;
         };
         for (int j = -3; j <= tb.bins + 3; j += (tb.bins > 5000 ? 97 : 1)) {
@@ -307,8 +318,7 @@ TEST(TimeSplat, BinByReciprocalIsTheBinByDivision) {
                 ++nearBoundary;
             }
         }
-        for (const double t : {kInf, -kInf, std::nan(""), 1e300, -1e300, 1e18, -1e18, 0.0, -0.0})
-            same(t);
+        for (const double t : {kInf, -kInf, std::nan(""), 1e300, -1e300, 1e18, -1e18, 0.0, -0.0}) same(t);
         for (int i = 0; i < 20000; ++i) same(tb.startOpl + (rng.uniform() * 1.4 - 0.2) * tb.bins * tb.binWidth);
     }
     EXPECT_GT(nearBoundary, 10000);
@@ -366,7 +376,8 @@ TEST(TimeSplat, PartlyOutsideAndNarrowerThanABin) {
     // Far in time with very fine bins (1e4 m of OPL, bins of 1e-4 m): still exact.
     TimeBins fine{1e4, 1e-4, 100};
     std::vector<double> fb(100, 0.0);
-    out = splatTime(fine, Color(1.0), Color(0.0), 0.0, 1e-3, 1e4 + 2e-3, 2.0, [&](int k, const Color& c) { fb[k] += c.x; });
+    out = splatTime(fine, Color(1.0), Color(0.0), 0.0, 1e-3, 1e4 + 2e-3, 2.0,
+                    [&](int k, const Color& c) { fb[k] += c.x; });
     for (int k = 20; k < 40; ++k) EXPECT_NEAR(fb[k], 0.05, 1e-9) << k;
     EXPECT_NEAR(fb[19] + fb[40], 0.0, 1e-9);
 }
@@ -400,7 +411,10 @@ TEST(PhaseFunction, HenyeyGreensteinNormalisedAndSamplingConsistent) {
         auto integral = [&](double lo, double hi) {  // int_lo^hi p(mu) dmu, lo < hi
             const double dLo = std::abs(peak - lo), dHi = std::abs(peak - hi);
             const double yA = std::log(std::max(std::min(dLo, dHi), 1e-30)), yB = std::log(std::max(dLo, dHi));
-            const auto f = [&](double y) { const double e = std::exp(y); return hg.eval(peak - (peak > 0 ? e : -e)) * e; };
+            const auto f = [&](double y) {
+                const double e = std::exp(y);
+                return hg.eval(peak - (peak > 0 ? e : -e)) * e;
+            };
             return quad(f, yA, yB, 4000);
         };
         const double norm = 2.0 * kPi * integral(-1.0, 1.0);

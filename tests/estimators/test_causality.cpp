@@ -54,7 +54,7 @@ const char* kWall = R"({
 })";
 
 struct Films {
-    std::vector<double> real, unwarped;          // W * H * bins * 3
+    std::vector<double> real, unwarped;             // W * H * bins * 3
     std::vector<float> beforeReal, beforeUnwarped;  // W * H * 3
 };
 
@@ -120,7 +120,7 @@ TEST_P(VolumeCausality, NothingBeforeTheFirstArrivalOnEitherAxis) {
     RenderSettings s = sc.settings;
     s.volumeEstimator = GetParam().estimator;
     if (s.volumeEstimator.rfind("beam", 0) == 0) s.photonsPerPass = 5000;  // long beams: fewer suffice
-    if (GetParam().box) s.timeKernel = {TimeKernelKind::Box, 0.6};  // half-width 0.3 m > eta r at pass 1
+    if (GetParam().box) s.timeKernel = {TimeKernelKind::Box, 0.6};         // half-width 0.3 m > eta r at pass 1
     ASSERT_EQ(sc->regions[0].ior, kEta);
     const Films f = render(sc, s, 2);
     const TimeBins& tb = sc.time;
@@ -137,7 +137,8 @@ TEST_P(VolumeCausality, NothingBeforeTheFirstArrivalOnEitherAxis) {
             binsChecked += real.earlyBins;
             const double d = pixelRayDistanceBound(sc->camera, x, y, Vec3(0.0));
             const Split unw = split(f.unwarped, f.beforeUnwarped, tb, px, kEta * (d - 2.0 * kRadius));
-            EXPECT_EQ(unw.early, 0.0) << "unwarped axis, pixel " << x << "," << y << ", light " << d << " m from its rays";
+            EXPECT_EQ(unw.early, 0.0) << "unwarped axis, pixel " << x << "," << y << ", light " << d
+                                      << " m from its rays";
             lateUnwarped += unw.late;
             binsChecked += unw.earlyBins;
         }
@@ -165,7 +166,7 @@ TEST_P(SurfaceCausality, NothingBeforeTheShortestPathOverTheWall) {
     // ppm takes a photon's time as the gather point's, up to r early; the floor (light from the
     // photon's vertex before straight to the gather point) keeps all of it after the shortest path.
     const double first = glm::length(C - mirroredLight);  // 2.7731 m, inside bin 277
-    const double firstUnwarped = 1.0;                      // the light's distance from the wall
+    const double firstUnwarped = 1.0;                     // the light's distance from the wall
     const int W = sc->camera.width, H = sc->camera.height;
     double late = 0.0, lateUnwarped = 0.0;
     for (int px = 0; px < W * H; ++px) {

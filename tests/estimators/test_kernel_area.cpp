@@ -98,7 +98,7 @@ TEST(KernelArea, BallTriangleIsTheDiscCutByThePlane) {
     EXPECT_NEAR(ballTriangleArea(Vec3(0, 1.7, 0), r, a, b, c), kPi * (r * r - 0.09), 1e-13);
     EXPECT_EQ(ballTriangleArea(Vec3(0, 2.5, 0), r, a, b, c), 0.0);
     EXPECT_NEAR(ballTriangleArea(Vec3(-5, 2, 0), r, a, b, c), 0.5 * kPi * r * r, 1e-13);  // on the edge x = -5
-    EXPECT_EQ(ballTriangleArea(Vec3(0, 2, 0), r, a, a, c), 0.0);                         // degenerate
+    EXPECT_EQ(ballTriangleArea(Vec3(0, 2, 0), r, a, a, c), 0.0);                          // degenerate
 }
 
 namespace {
@@ -114,14 +114,14 @@ struct KernelScene {
         SceneBuilder b;
         b.camera(Vec3(0, 1, 3), Vec3(0, 0, 0), 40.0, 4, 4).film(0.0, 0.1, 10);
         const int white = b.diffuse(Color(0.5));
-        b.quad(Vec3(-1, 0, -1), Vec3(0, 0, 2), Vec3(2, 0, 0), white);      // floor, normal +y
-        b.quad(Vec3(-1, 0, -1), Vec3(2, 0, 0), Vec3(0, 2, 0), white);      // back wall z = -1, normal +z
+        b.quad(Vec3(-1, 0, -1), Vec3(0, 0, 2), Vec3(2, 0, 0), white);                   // floor, normal +y
+        b.quad(Vec3(-1, 0, -1), Vec3(2, 0, 0), Vec3(0, 2, 0), white);                   // back wall z = -1, normal +z
         b.quad(Vec3(1, 0, 0.5), Vec3(0, 0, 0.5), Vec3(1, 0, 0), b.mirror(Color(0.9)));  // mirror tile x in [1, 2]
-        b.quad(Vec3(-3, 0, -1), Vec3(0, 0, 1), Vec3(1, 0, 0), white);      // floor x in [-3, -2] ...
-        b.quad(Vec3(-3, -0.001, -1), Vec3(1, 0, 0), Vec3(0, 0, 1), white); // ... a slab 1 mm thick
+        b.quad(Vec3(-3, 0, -1), Vec3(0, 0, 1), Vec3(1, 0, 0), white);                   // floor x in [-3, -2] ...
+        b.quad(Vec3(-3, -0.001, -1), Vec3(1, 0, 0), Vec3(0, 0, 1), white);              // ... a slab 1 mm thick
         b.sphere(Vec3(0, 0.5, 5), 0.3, white);
-        b.quad(Vec3(-1, 0, 2), Vec3(0, 0, 1), Vec3(2, 0, 0), white);       // floor z in [2, 3] ...
-        b.quad(Vec3(-1, 0, 3), Vec3(0, 0.2, 1), Vec3(2, 0, 0), white);     // ... then a ramp
+        b.quad(Vec3(-1, 0, 2), Vec3(0, 0, 1), Vec3(2, 0, 0), white);    // floor z in [2, 3] ...
+        b.quad(Vec3(-1, 0, 3), Vec3(0, 0.2, 1), Vec3(2, 0, 0), white);  // ... then a ramp
         b.pointLight(Vec3(0, 1, 0), Color(1.0));
         scene = Scene::build(b.desc(), analyzeStages);
         PhotonMap map;
@@ -157,11 +157,11 @@ TEST(KernelArea, GeometryReportsPrimitivesWithinReach) {
 TEST(KernelArea, EstimatorCountsTheSurfaceTheDiscCovers) {
     KernelScene k;
     const double disc = kPi * k.r * k.r;
-    EXPECT_EQ(k.area(Vec3(0.3, 0, 0.2)), disc);  // inside the floor, across its diagonal: exactly
-    EXPECT_NEAR(k.area(Vec3(0.3, 0, -1)), 0.5 * disc, 1e-12 * disc);   // at the wall's foot
-    EXPECT_NEAR(k.area(Vec3(0.3, 0, 1)), 0.5 * disc, 1e-12 * disc);    // at the floor's open edge
-    EXPECT_NEAR(k.area(Vec3(-1, 0, -1)), 0.25 * disc, 1e-12 * disc);   // in the room's corner
-    const double h = 0.02;  // 2 cm from the wall
+    EXPECT_EQ(k.area(Vec3(0.3, 0, 0.2)), disc);                       // inside the floor, across its diagonal: exactly
+    EXPECT_NEAR(k.area(Vec3(0.3, 0, -1)), 0.5 * disc, 1e-12 * disc);  // at the wall's foot
+    EXPECT_NEAR(k.area(Vec3(0.3, 0, 1)), 0.5 * disc, 1e-12 * disc);   // at the floor's open edge
+    EXPECT_NEAR(k.area(Vec3(-1, 0, -1)), 0.25 * disc, 1e-12 * disc);  // in the room's corner
+    const double h = 0.02;                                            // 2 cm from the wall
     const double segment = k.r * k.r * std::acos(h / k.r) - h * std::sqrt(k.r * k.r - h * h);
     EXPECT_NEAR(k.area(Vec3(0.3, 0, -1 + h)), disc - segment, 1e-12 * disc);
     // The wall's own disc at its foot: half (the floor is perpendicular to it).

@@ -34,8 +34,7 @@ Vec3 randomDir(Rng& rng) {
 }
 
 // Compares the batch with the scalar test on every piece; returns the number of overlaps.
-int compareWithScalar(const Vec3& xr, const Vec3& wr, double sMax, const std::vector<PieceCase>& cases,
-                      double radius) {
+int compareWithScalar(const Vec3& xr, const Vec3& wr, double sMax, const std::vector<PieceCase>& cases, double radius) {
     PieceAxes axes;
     for (const PieceCase& c : cases) axes.push(c.origin, c.dir, c.lo, c.hi);
     OverlapBatch batch;
@@ -44,7 +43,8 @@ int compareWithScalar(const Vec3& xr, const Vec3& wr, double sMax, const std::ve
     int overlaps = 0;
     for (size_t i = 0; i < cases.size(); ++i) {
         RayBeamOverlap o;
-        const bool hit = rayBeamOverlap(xr, wr, sMax, cases[i].origin, cases[i].dir, cases[i].lo, cases[i].hi, radius, o);
+        const bool hit =
+            rayBeamOverlap(xr, wr, sMax, cases[i].origin, cases[i].dir, cases[i].lo, cases[i].hi, radius, o);
         const bool listed = next < batch.hits.size() && batch.hits[next] == i;
         EXPECT_EQ(hit, listed) << "piece " << i;
         if (!listed) continue;
@@ -94,19 +94,19 @@ TEST(OverlapBatch, DegenerateConfigurationsMatchTheScalarTest) {
     const Vec3 xr(0.0, 0.0, 0.0), wr(0.0, 0.0, -1.0);
     const double r = 0.05;
     std::vector<PieceCase> cases = {
-        {Vec3(0.01, 0.0, -0.5), Vec3(0.0, 0.0, -1.0), 0.0, 1.0},   // parallel, inside the kernel
-        {Vec3(0.2, 0.0, -0.5), Vec3(0.0, 0.0, -1.0), 0.0, 1.0},    // parallel, outside
-        {Vec3(0.01, 0.0, -0.5), Vec3(0.0, 0.0, 1.0), 0.0, 1.0},    // antiparallel, inside
-        {Vec3(-1.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},    // perpendicular, crossing
-        {Vec3(-1.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 0.5},    // perpendicular, piece ends before
-        {Vec3(-1.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.98, 2.0},   // perpendicular, piece ends inside the kernel
-        {Vec3(-1.0, r, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},      // grazing the kernel (disc 0)
-        {Vec3(-1.0, 0.0, -0.99), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},   // the segment ends inside the kernel
-        {Vec3(-1.0, 0.0, 0.02), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},    // the kernel around the segment's start
-        {Vec3(-1.0, 0.0, -0.5), Vec3(0.6, 0.0, -0.8), 0.0, 3.0},   // oblique
-        {Vec3(0.0, 0.0, -0.5), Vec3(0.0, 0.0, 0.0), 0.0, 0.0},     // a point (zero direction)
-        {Vec3(0.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 0.0},     // a zero-length piece on the segment
-        {Vec3(0.0, 0.0, 3.0), Vec3(0.0, 0.0, -1.0), 0.0, 1.0},     // parallel, ends before the segment starts
+        {Vec3(0.01, 0.0, -0.5), Vec3(0.0, 0.0, -1.0), 0.0, 1.0},  // parallel, inside the kernel
+        {Vec3(0.2, 0.0, -0.5), Vec3(0.0, 0.0, -1.0), 0.0, 1.0},   // parallel, outside
+        {Vec3(0.01, 0.0, -0.5), Vec3(0.0, 0.0, 1.0), 0.0, 1.0},   // antiparallel, inside
+        {Vec3(-1.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},   // perpendicular, crossing
+        {Vec3(-1.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 0.5},   // perpendicular, piece ends before
+        {Vec3(-1.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.98, 2.0},  // perpendicular, piece ends inside the kernel
+        {Vec3(-1.0, r, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},     // grazing the kernel (disc 0)
+        {Vec3(-1.0, 0.0, -0.99), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},  // the segment ends inside the kernel
+        {Vec3(-1.0, 0.0, 0.02), Vec3(1.0, 0.0, 0.0), 0.0, 2.0},   // the kernel around the segment's start
+        {Vec3(-1.0, 0.0, -0.5), Vec3(0.6, 0.0, -0.8), 0.0, 3.0},  // oblique
+        {Vec3(0.0, 0.0, -0.5), Vec3(0.0, 0.0, 0.0), 0.0, 0.0},    // a point (zero direction)
+        {Vec3(0.0, 0.0, -0.5), Vec3(1.0, 0.0, 0.0), 0.0, 0.0},    // a zero-length piece on the segment
+        {Vec3(0.0, 0.0, 3.0), Vec3(0.0, 0.0, -1.0), 0.0, 1.0},    // parallel, ends before the segment starts
     };
     const int overlaps = compareWithScalar(xr, wr, 1.0, cases, r);
     EXPECT_GE(overlaps, 5);

@@ -38,7 +38,8 @@ std::string mediumScene(const std::string& shapes = "[]") {
       "media": {"m": {"sigma_s": [0.3, 0.5, 0.9], "sigma_a": [0.1, 0.05, 0.2], "g": 0.4, "ior": 1.3}},
       "materials": {"white": {"type": "diffuse", "albedo": 0.5}},
       "global_medium": "m",
-      "shapes": )" + shapes + R"(,
+      "shapes": )" +
+           shapes + R"(,
       "lights": [{"type": "point", "position": [0, 3, 0], "power": 1}],
       "render": {"photons_per_pass": 100, "radius": 0.05, "seed": 1}
     })";
@@ -71,11 +72,11 @@ TEST(Point2D, DiscGeometryProjectionDistanceAndSupport) {
             EXPECT_NEAR(d->dist2, u * u, 1e-13);
         }
     }
-    EXPECT_FALSE(rayPointDisc(xr, wr, 2.0, xr - 1e-9 * wr, r));                // behind the segment's start
-    EXPECT_FALSE(rayPointDisc(xr, wr, 2.0, xr + 2.000001 * wr, r));            // past its end
-    EXPECT_FALSE(rayPointDisc(xr, wr, 2.0, xr + 1.0 * wr + 0.05 * side, r));   // on the disc's rim: outside
+    EXPECT_FALSE(rayPointDisc(xr, wr, 2.0, xr - 1e-9 * wr, r));               // behind the segment's start
+    EXPECT_FALSE(rayPointDisc(xr, wr, 2.0, xr + 2.000001 * wr, r));           // past its end
+    EXPECT_FALSE(rayPointDisc(xr, wr, 2.0, xr + 1.0 * wr + 0.05 * side, r));  // on the disc's rim: outside
     EXPECT_FALSE(rayPointDisc(xr, wr, 2.0, xr + 1.0 * wr + 0.0500001 * side, r));
-    EXPECT_TRUE(rayPointDisc(xr, wr, kInf, xr + 1e6 * wr + 0.01 * side, r));    // unbounded segment
+    EXPECT_TRUE(rayPointDisc(xr, wr, kInf, xr + 1e6 * wr + 0.01 * side, r));  // unbounded segment
 }
 
 // One point: L = beta sigma_s rho(w_p . -w_r) Phi_p T_r(s_p) / (pi r^2), arriving at
@@ -112,7 +113,8 @@ TEST(Point2D, OnePointMatchesTheFormulaAtItsInstantOnBothAxes) {
             EXPECT_NEAR(res.binsTotal(TimeAxis::Unwarped)[c], expected[c], 1e-14 * expected[c]);
         }
         // Outside the support: past the segment's end, behind its start, farther than r.
-        for (const CameraSegment& s : {CameraSegment{seg.ray, 1.49, 0}, CameraSegment{Ray{Vec3(0, 0, 1.6), seg.ray.d}, 4.0, 0}}) {
+        for (const CameraSegment& s :
+             {CameraSegment{seg.ray, 1.49, 0}, CameraSegment{Ray{Vec3(0, 0, 1.6), seg.ray.d}, 4.0, 0}}) {
             Point2DEstimator e;
             EXPECT_EQ(test::gatherOnce(e, *sc, map, s, sc.time, g).estimates, 0);
         }
@@ -132,14 +134,15 @@ TEST(Point2D, KernelIntegratesToOneAcrossTheRay) {
     const Medium& m = sc->regions[0].medium;
     const double r = 0.08, S = 2.0;
     const Vec3 xr(0.0), wr(0.0, 0.0, 1.0), dirIn(0.0, 1.0, 0.0);
-    const int nU = 24, nPhi = 6;              // rings of width r/16: 16 inside the disc, 8 outside it
-    const double du = r / 16.0, ds = 0.002;   // midpoint rule along s
+    const int nU = 24, nPhi = 6;             // rings of width r/16: 16 inside the disc, 8 outside it
+    const double du = r / 16.0, ds = 0.002;  // midpoint rule along s
     PhotonMap map;
     for (double s = -0.2 + 0.5 * ds; s < S + 0.2; s += ds)
         for (int i = 0; i < nU; ++i)
             for (int j = 0; j < nPhi; ++j) {
                 const double u = (i + 0.5) * du, phi = 2.0 * kPi * (j + 0.5 + 0.3 * i) / nPhi;
-                const double dV = kPi * ((i + 1.0) * (i + 1.0) - double(i) * i) * du * du / nPhi * ds;  // exact ring area
+                const double dV =
+                    kPi * ((i + 1.0) * (i + 1.0) - double(i) * i) * du * du / nPhi * ds;  // exact ring area
                 map.points.push_back(point(Vec3(u * std::cos(phi), u * std::sin(phi), s), dirIn, Color(dV), 1.0));
             }
     const CameraSegment seg{Ray{xr, wr}, S, 0};
@@ -159,7 +162,8 @@ TEST(Point2D, KernelIntegratesToOneAcrossTheRay) {
 // A wall between the point and the camera segment (the kernel reaches through it) blocks the
 // estimate; the same point on the segment's side of the wall, or without the wall, counts.
 TEST(Point2D, AWallBetweenThePointAndTheRayBlocksIt) {
-    const std::string wall = R"([{"type": "quad", "corner": [-1, -1, 1], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}])";
+    const std::string wall =
+        R"([{"type": "quad", "corner": [-1, -1, 1], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}])";
     const test::TestScene walled = test::testSceneFrom(mediumScene(wall)), open = test::testSceneFrom(mediumScene());
     const CameraSegment seg{Ray{Vec3(-0.5, 0.0, 0.98), Vec3(1.0, 0.0, 0.0)}, 1.0, 0};
     test::GatherSetup g;

@@ -49,7 +49,8 @@ std::string mediumScene(const std::string& shapes = "[]") {
       "media": {"m": {"sigma_s": [0.3, 0.5, 0.9], "sigma_a": [0.1, 0.05, 2.2], "g": 0.4, "ior": 1.3}},
       "materials": {"white": {"type": "diffuse", "albedo": 0.5}},
       "global_medium": "m",
-      "shapes": )" + shapes + R"(,
+      "shapes": )" +
+           shapes + R"(,
       "lights": [{"type": "point", "position": [0, 3, 0], "power": 1}],
       "render": {"photons_per_pass": 100, "radius": 0.05, "seed": 1}
     })";
@@ -77,13 +78,17 @@ TEST(Point3D, ChordMatchesDenseSamplingClippedAndGrazing) {
         const Vec3 wr(std::sqrt(1.0 - z * z) * std::cos(phi), std::sqrt(1.0 - z * z) * std::sin(phi), z);
         const Vec3 xr(rng.uniform(), rng.uniform(), rng.uniform());
         const double r = 0.05 + 0.1 * rng.uniform(), sMax = 0.2 + rng.uniform();
-        const Vec3 xp = xr + (1.4 * rng.uniform() - 0.2) * wr + Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * (2.5 * r);
+        const Vec3 xp = xr + (1.4 * rng.uniform() - 0.2) * wr +
+                        Vec3(rng.uniform() - 0.5, rng.uniform() - 0.5, rng.uniform() - 0.5) * (2.5 * r);
         const auto chord = rayPointChord(xr, wr, sMax, xp, r);
         const int n = 20000;
         double lo = kInf, hi = -kInf;
         for (int i = 0; i <= n; ++i) {
             const double s = sMax * i / n;
-            if (glm::length(xr + s * wr - xp) < r) { lo = std::min(lo, s); hi = std::max(hi, s); }
+            if (glm::length(xr + s * wr - xp) < r) {
+                lo = std::min(lo, s);
+                hi = std::max(hi, s);
+            }
         }
         const double step = sMax / n;
         if (!chord) {
@@ -109,9 +114,9 @@ TEST(Point3D, ChordMatchesDenseSamplingClippedAndGrazing) {
         EXPECT_LT(len, prev);
         prev = len;
     }
-    EXPECT_FALSE(rayPointChord(xr, wr, 2.0, Vec3(0.1, 0.0, 1.0), 0.1));                  // touching: empty
-    EXPECT_FALSE(rayPointChord(xr, wr, 2.0, Vec3(0.0, 0.0, -0.1), 0.1));                 // touching the start
-    const auto open = rayPointChord(xr, wr, kInf, Vec3(0.0, 0.0, 1e5), 0.1);             // unbounded segment
+    EXPECT_FALSE(rayPointChord(xr, wr, 2.0, Vec3(0.1, 0.0, 1.0), 0.1));       // touching: empty
+    EXPECT_FALSE(rayPointChord(xr, wr, 2.0, Vec3(0.0, 0.0, -0.1), 0.1));      // touching the start
+    const auto open = rayPointChord(xr, wr, kInf, Vec3(0.0, 0.0, 1e5), 0.1);  // unbounded segment
     ASSERT_TRUE(open);
     EXPECT_NEAR(open->sPlus - open->sMinus, 0.2, 1e-9);
 }
@@ -120,17 +125,19 @@ TEST(Point3D, ChordMatchesDenseSamplingClippedAndGrazing) {
 // large sigma_t gives e^{-sigma_t s-} / sigma_t.
 TEST(Point3D, ChordTransmittanceMatchesQuadratureAndLimits) {
     for (double st : {1e-12, 1e-6, 1e-3, 0.5, 3.0, 40.0, 1e3}) {
-        for (auto [a, b] : {std::pair{0.0, 0.1}, std::pair{0.7, 0.8}, std::pair{2.0, 2.0 + 1e-7}, std::pair{0.0, 3.0}}) {
+        for (auto [a, b] :
+             {std::pair{0.0, 0.1}, std::pair{0.7, 0.8}, std::pair{2.0, 2.0 + 1e-7}, std::pair{0.0, 3.0}}) {
             const double closed = chordTransmittance(st, a, b);
             const double ref = quad([&](double s) { return std::exp(-st * s); }, a, b, 20000);
             EXPECT_NEAR(closed, ref, 1e-10 * ref) << st << " [" << a << ", " << b << "]";
         }
     }
-    EXPECT_NEAR(chordTransmittance(1e-14, 0.3, 0.5), 0.2, 1e-14);           // sigma_t -> 0: the chord length
+    EXPECT_NEAR(chordTransmittance(1e-14, 0.3, 0.5), 0.2, 1e-14);  // sigma_t -> 0: the chord length
     EXPECT_DOUBLE_EQ(chordTransmittance(0.0, 0.3, 0.5), 0.2 * 1.0);
     const double big = 1e4;
-    EXPECT_NEAR(chordTransmittance(big, 0.001, 0.1), std::exp(-big * 0.001) / big, 1e-12 * std::exp(-big * 0.001) / big);
-    EXPECT_EQ(chordTransmittance(1e6, 10.0, 11.0), 0.0);                    // underflows to 0, no NaN
+    EXPECT_NEAR(chordTransmittance(big, 0.001, 0.1), std::exp(-big * 0.001) / big,
+                1e-12 * std::exp(-big * 0.001) / big);
+    EXPECT_EQ(chordTransmittance(1e6, 10.0, 11.0), 0.0);  // underflows to 0, no NaN
     EXPECT_TRUE(std::isfinite(chordTransmittance(1e300, 0.0, 1.0)));
 }
 
@@ -175,12 +182,14 @@ TEST(Point3D, OnePointMatchesTheFormulaAndItsTimeProfilePerBin) {
             EXPECT_NEAR(res.bins[1][kUnwarped][c], expected[c], 1e-12 * expected[c]) << c;  // one instant
             // Real axis: bin k holds the energy of s with t_cam + t_p + eta s in the bin.
             const double a = g.path.oplCam + opl, total = quad([&](double s) { return std::exp(-m.sigma_t[c] * s); },
-                                                                 chord->sMinus, chord->sPlus);
+                                                               chord->sMinus, chord->sPlus);
             for (int k = 0; k < tb.bins; ++k) {
                 const double sLo = std::max(chord->sMinus, (tb.startOpl + k * tb.binWidth - a) / eta);
                 const double sHi = std::min(chord->sPlus, (tb.startOpl + (k + 1) * tb.binWidth - a) / eta);
-                const double share = sHi > sLo ? quad([&](double s) { return std::exp(-m.sigma_t[c] * s); }, sLo, sHi, 20) / total : 0.0;
-                EXPECT_NEAR(res.bins[0][k][c], expected[c] * share, 1e-10 * expected[c]) << "channel " << c << " bin " << k;
+                const double share =
+                    sHi > sLo ? quad([&](double s) { return std::exp(-m.sigma_t[c] * s); }, sLo, sHi, 20) / total : 0.0;
+                EXPECT_NEAR(res.bins[0][k][c], expected[c] * share, 1e-10 * expected[c])
+                    << "channel " << c << " bin " << k;
                 binsChecked += share > 0.0;
             }
         }
@@ -248,7 +257,8 @@ TEST(Point3D, KernelIntegratesToOneAlongTheRay) {
     const Medium& m = sc->regions[0].medium;
     const double r = 0.08, S = 2.0, ds = r / 40.0;
     static const double gx[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
-    static const double gw[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665, 0.2369268850561891};
+    static const double gw[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
+                                 0.2369268850561891};
     const int nPhi = 5;
     PhotonMap map;
     for (double s = -1.5 * r + 0.5 * ds; s < S + 1.5 * r; s += ds)
@@ -258,7 +268,8 @@ TEST(Point3D, KernelIntegratesToOneAlongTheRay) {
             const double dA = 2.0 * kPi * u * r * std::cos(theta) * wTheta;  // 2 pi u du
             for (int k = 0; k < nPhi; ++k) {
                 const double phi = 2.0 * kPi * (k + 0.37 * j) / nPhi;
-                map.points.push_back(point(Vec3(u * std::cos(phi), u * std::sin(phi), s), Vec3(0, 1, 0), Color(dA * ds / nPhi), 1.0));
+                map.points.push_back(
+                    point(Vec3(u * std::cos(phi), u * std::sin(phi), s), Vec3(0, 1, 0), Color(dA * ds / nPhi), 1.0));
             }
         }
     const CameraSegment seg{Ray{Vec3(0.0), Vec3(0.0, 0.0, 1.0)}, S, 0};
@@ -275,7 +286,8 @@ TEST(Point3D, KernelIntegratesToOneAlongTheRay) {
 }
 
 TEST(Point3D, AWallBetweenThePointAndTheRayBlocksIt) {
-    const std::string wall = R"([{"type": "quad", "corner": [-1, -1, 1], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}])";
+    const std::string wall =
+        R"([{"type": "quad", "corner": [-1, -1, 1], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}])";
     const test::TestScene walled = test::testSceneFrom(mediumScene(wall)), open = test::testSceneFrom(mediumScene());
     const CameraSegment seg{Ray{Vec3(-0.5, 0.0, 0.98), Vec3(1.0, 0.0, 0.0)}, 1.0, 0};
     test::GatherSetup g;

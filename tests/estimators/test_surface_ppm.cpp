@@ -43,7 +43,7 @@ SceneDesc edgeScene() {
     const double fov = 2.0 * std::atan(0.04) * 180.0 / kPi;
     b.camera(Vec3(0, 1, 0), Vec3(0, 0, 0), fov, kW, kH, Vec3(0, 0, -1)).film(0.0, 0.5, 8);
     const int white = b.diffuse(Color(0.7));
-    b.quad(Vec3(-1, 0, -1), Vec3(0, 0, 1), Vec3(2, 0, 0), white);    // floor z in [-1, 0], normal +y
+    b.quad(Vec3(-1, 0, -1), Vec3(0, 0, 1), Vec3(2, 0, 0), white);                   // floor z in [-1, 0], normal +y
     b.quad(Vec3(-1, 0, 0), Vec3(2, 0, 0), Vec3(0, 0.1, 0), b.diffuse(Color(0.5)));  // wall, normal -z
     b.spotLight(Vec3(0, 0.3, -0.005), Vec3(0, -1, 0), 16.0, 15.0, Color(1.0));
     return b.desc();
@@ -121,9 +121,10 @@ TEST(SurfacePpm, EdgePixelsMatchThePathTracer) {
                 std::chrono::duration<double>(t2 - t1).count());
     const double edge = ppm.mean.edge / pt.mean.edge - 1.0;
     const double inner = ppm.mean.inner / pt.mean.inner - 1.0;
-    std::printf("ppm vs path tracer after %d passes: edge band %+.3f %% (se %.3f %%, path tracer's %.3f %%), "
-                "inner band %+.3f %% (se %.3f %%)\n",
-                passes, 100.0 * edge, 100.0 * ppm.edgeSe, 100.0 * pt.edgeSe, 100.0 * inner, 100.0 * ppm.innerSe);
+    std::printf(
+        "ppm vs path tracer after %d passes: edge band %+.3f %% (se %.3f %%, path tracer's %.3f %%), "
+        "inner band %+.3f %% (se %.3f %%)\n",
+        passes, 100.0 * edge, 100.0 * ppm.edgeSe, 100.0 * pt.edgeSe, 100.0 * inner, 100.0 * ppm.innerSe);
     EXPECT_LT(ppm.edgeSe, 0.0015);  // the comparison resolves 0.5 %
     EXPECT_LT(ppm.innerSe, 0.0015);
     EXPECT_LT(pt.edgeSe, 0.0005);

@@ -23,7 +23,9 @@ namespace {
 // ---- the oracle: quadrature of the convolution, nothing from time_kernel.h --------------------
 
 // Composite 5-point Gauss-Legendre on n panels.
-double quad(const std::function<double(double)>& f, double a, double b, int n) { return test::gaussLegendre5(f, a, b, n); }
+double quad(const std::function<double(double)>& f, double a, double b, int n) {
+    return test::gaussLegendre5(f, a, b, n);
+}
 
 // The share of the time interval [lo, hi] (lo may be -inf, hi +inf) of the profile "density
 // exp(-kappa s) on [s0, s1], arriving at a + b s" (an instant when s1 == s0) convolved with the box of
@@ -72,7 +74,8 @@ Splat smoothed(const TimeBins& tb, const Color& E, const Color& kappa, double s0
 Splat plain(const TimeBins& tb, const Color& E, const Color& kappa, double s0, double s1, double a, double b) {
     Splat r;
     r.bins.assign(static_cast<size_t>(tb.bins), Color(0.0));
-    r.out = splatTime(tb, E, kappa, s0, s1, a, b, [&](int bin, const Color& c) { r.bins[static_cast<size_t>(bin)] += c; });
+    r.out =
+        splatTime(tb, E, kappa, s0, s1, a, b, [&](int bin, const Color& c) { r.bins[static_cast<size_t>(bin)] += c; });
     return r;
 }
 
@@ -167,8 +170,9 @@ TEST(TimeKernelMath, AFloorMirrorsTheSmoothedProfilesEarlyPart) {
                 const double F = tA - tau + lag;
                 Splat r;
                 r.bins.assign(static_cast<size_t>(kFilm.bins), Color(0.0));
-                r.out = splatTimeSmoothed(kFilm, Color(1.0), Color(c.kappa), c.s0, c.s1, c.a, c.b, box(tau),
-                                          [&](int bin, const Color& e) { r.bins[static_cast<size_t>(bin)] += e; }, F);
+                r.out = splatTimeSmoothed(
+                    kFilm, Color(1.0), Color(c.kappa), c.s0, c.s1, c.a, c.b, box(tau),
+                    [&](int bin, const Color& e) { r.bins[static_cast<size_t>(bin)] += e; }, F);
                 const auto share = [&](double lo, double hi) {
                     if (!(hi > F)) return 0.0;
                     const double l = std::max(lo, F);
@@ -179,8 +183,8 @@ TEST(TimeKernelMath, AFloorMirrorsTheSmoothedProfilesEarlyPart) {
                 for (int bin = 0; bin < kFilm.bins; ++bin) {
                     const double lo = kFilm.startOpl + bin * kFilm.binWidth, got = r.bins[static_cast<size_t>(bin)].x;
                     worst = std::max(worst, std::abs(got - share(lo, lo + kFilm.binWidth)));
-                    EXPECT_NEAR(got, share(lo, lo + kFilm.binWidth), 1e-12) << c.what << ", tau " << tau << ", lag " << lag
-                                                                          << ", bin " << bin;
+                    EXPECT_NEAR(got, share(lo, lo + kFilm.binWidth), 1e-12)
+                        << c.what << ", tau " << tau << ", lag " << lag << ", bin " << bin;
                     if (lo + kFilm.binWidth <= F) {
                         EXPECT_EQ(got, 0.0) << c.what << ", bin " << bin;
                     }
@@ -211,8 +215,9 @@ TEST(TimeKernelMath, EnergyIsConservedWithBeforeAndAfter) {
     for (int i = 0; i < 3000; ++i) {
         const double s0 = rng.uniform(), len = i % 7 == 0 ? 0.0 : 3.0 * rng.uniform();
         const double a = 0.5 + 6.0 * rng.uniform(), b = (rng.uniform() - 0.5) * (i % 5 == 0 ? 1e-6 : 4.0);
-        const Color kappa = i % 3 == 0 ? Color(20.0 * (rng.uniform() - 0.5))
-                                       : Color(20.0 * (rng.uniform() - 0.5), 1e-9 * rng.uniform(), -3.0 * rng.uniform());
+        const Color kappa = i % 3 == 0
+                                ? Color(20.0 * (rng.uniform() - 0.5))
+                                : Color(20.0 * (rng.uniform() - 0.5), 1e-9 * rng.uniform(), -3.0 * rng.uniform());
         const double tau = std::pow(10.0, -4.0 + 5.0 * rng.uniform());  // 1e-4 .. 10 m
         const Color E(1.0, 2.5, 0.25);
         const Splat s = smoothed(kFilm, E, kappa, s0, s0 + len, a, b, box(tau));
@@ -254,9 +259,11 @@ TEST(TimeKernelMath, AnInactiveKernelIsTheKernelFreeCodeBitForBit) {
     for (const Case& c : kCases) {
         const Color kappa = c.s1 > c.s0 ? Color(c.kappa, -1.5, 0.0) : Color(0.0);
         const Splat ref = plain(kFilm, Color(0.3, 1.0, 7.0), kappa, c.s0, c.s1, c.a, c.b);
-        for (const TimeKernel k : {TimeKernel{}, TimeKernel{TimeKernelKind::Box, 0.0}, TimeKernel{TimeKernelKind::None, 0.4}}) {
+        for (const TimeKernel k :
+             {TimeKernel{}, TimeKernel{TimeKernelKind::Box, 0.0}, TimeKernel{TimeKernelKind::None, 0.4}}) {
             const Splat s = smoothed(kFilm, Color(0.3, 1.0, 7.0), kappa, c.s0, c.s1, c.a, c.b, k);
-            for (int bin = 0; bin < kFilm.bins; ++bin) ASSERT_EQ(s.bins[static_cast<size_t>(bin)], ref.bins[static_cast<size_t>(bin)]);
+            for (int bin = 0; bin < kFilm.bins; ++bin)
+                ASSERT_EQ(s.bins[static_cast<size_t>(bin)], ref.bins[static_cast<size_t>(bin)]);
             ASSERT_EQ(s.out.before, ref.out.before);
             ASSERT_EQ(s.out.after, ref.out.after);
         }
@@ -267,7 +274,8 @@ TEST(TimeKernelMath, AnInactiveKernelIsTheKernelFreeCodeBitForBit) {
     for (const Case& c : kCases) {
         const Color kappa = c.s1 > c.s0 ? Color(c.kappa, -1.5, 0.0) : Color(0.0);
         splatSpread(kFilm, a, ta, Color(1.0, 2.0, 3.0), kappa, c.s0, c.s1, c.a, c.b, c.a - 1.0, 0.5 * c.b);
-        splatSpread(kFilm, b, tb, Color(1.0, 2.0, 3.0), kappa, c.s0, c.s1, c.a, c.b, c.a - 1.0, 0.5 * c.b, TimeKernel{});
+        splatSpread(kFilm, b, tb, Color(1.0, 2.0, 3.0), kappa, c.s0, c.s1, c.a, c.b, c.a - 1.0, 0.5 * c.b,
+                    TimeKernel{});
         splatInstant(kFilm, a, ta, Color(0.5), c.a, c.a - 0.7);
         splatInstant(kFilm, b, tb, Color(0.5), c.a, c.a - 0.7, TimeKernel{TimeKernelKind::Box, 0.0});
     }

@@ -74,7 +74,7 @@ TEST(ErrorMetrics, RelativeRmseExactValues) {
     const std::vector<double> ref = {1, 2, 3, 4};
     std::vector<double> x;
     for (double r : ref) x.push_back(1.1 * r);
-    EXPECT_NEAR(relativeRmse(x, ref), 0.1, 1e-12);  // a uniform 10% error
+    EXPECT_NEAR(relativeRmse(x, ref), 0.1, 1e-12);                                              // a uniform 10% error
     EXPECT_DOUBLE_EQ(relativeRmse(std::vector<double>{0, 0}, std::vector<double>{3, 4}), 1.0);  // black image
     EXPECT_DOUBLE_EQ(relativeRmse(ref, ref), 0.0);
     // sqrt((1 + 1) / 4)
@@ -176,8 +176,8 @@ TEST(ErrorMetrics, PowerLawFitInterpolationAndTimeToReach) {
     EXPECT_TRUE(std::isnan(interpolateLogLog(t, e, 0.5)));
     EXPECT_TRUE(std::isnan(interpolateLogLog(t, e, 1000.0)));
     EXPECT_NEAR(timeToReach(t, e, 0.4), 25.0, 1e-9);
-    EXPECT_DOUBLE_EQ(timeToReach(t, e, 5.0), 1.0);            // already there at the first point
-    EXPECT_TRUE(std::isnan(timeToReach(t, e, 0.01)));         // never reached
+    EXPECT_DOUBLE_EQ(timeToReach(t, e, 5.0), 1.0);                        // already there at the first point
+    EXPECT_TRUE(std::isnan(timeToReach(t, e, 0.01)));                     // never reached
     EXPECT_NEAR(timeToReach({1, 2, 4}, {1, 0.6, 0.7}, 0.6), 2.0, 1e-12);  // first crossing
 }
 
@@ -477,7 +477,8 @@ const char* kPointMedium = R"({
 })";
 
 // Relative RMSE of two arrays over the unmasked pixels (`per` values per pixel).
-double maskedRmse(const std::vector<float>& x, const std::vector<float>& ref, const std::vector<uint8_t>& mask, size_t per) {
+double maskedRmse(const std::vector<float>& x, const std::vector<float>& ref, const std::vector<uint8_t>& mask,
+                  size_t per) {
     SquaredError e;
     for (size_t p = 0; p < mask.size(); ++p)
         if (!mask[p])
@@ -489,7 +490,8 @@ double maskedRmse(const std::vector<float>& x, const std::vector<float>& ref, co
 
 TEST(Reference, SingleScatteringQuadratureAgreesWithThePathTracer) {
     auto scene = sceneFrom(kPointMedium);
-    const ReferenceVolume exact = singleScatteringReference(*scene, scene.time, scene.source.path, scene.settings, 4, 2);
+    const ReferenceVolume exact =
+        singleScatteringReference(*scene, scene.time, scene.source.path, scene.settings, 4, 2);
     EXPECT_EQ(exact.info.method, "analytic-single-scattering");
     EXPECT_EQ(exact.info.maxDepth, 1);
     // Energy bookkeeping: the bins hold what arrives inside the film, the steady image everything.
@@ -524,8 +526,10 @@ TEST(Reference, SingleScatteringQuadratureAgreesWithThePathTracer) {
     const double sSteady = referenceSelfError(pt, TimeAxis::Real, true, &mask);
     const double sReal = referenceSelfError(pt, TimeAxis::Real, false, &mask);
     const double sUnw = referenceSelfError(pt, TimeAxis::Unwarped, false, &mask);
-    std::printf("path tracer (2560 spp) vs quadrature: steady %.4f (own estimate %.4f), real %.4f (%.4f), "
-                "unwarped %.4f (%.4f)\n", eSteady, sSteady, eReal, sReal, eUnw, sUnw);
+    std::printf(
+        "path tracer (2560 spp) vs quadrature: steady %.4f (own estimate %.4f), real %.4f (%.4f), "
+        "unwarped %.4f (%.4f)\n",
+        eSteady, sSteady, eReal, sReal, eUnw, sUnw);
     // Unbiased: the actual error is the path tracer's noise, which the half-split estimates (the
     // pooled estimate itself fluctuates by ~10-20% here). With 40x the samples the error keeps
     // falling as t^-0.5 to ~0.25% (checked with `tpb converge --mask-lights 2.5`): no bias.
@@ -551,11 +555,13 @@ TEST(Reference, SingleScatteringRefusesOtherScenes) {
                       "\"materials\": {\"w\": {\"type\": \"diffuse\"}}, \"shapes\": [{\"type\": \"quad\", \"corner\": "
                       "[-1, -1, -1], \"edge_u\": [2, 0, 0], \"edge_v\": [0, 0, 2], \"material\": \"w\"}],\n  ");
     auto s1 = sceneFrom(withShape, "with_shape.json");
-    expectUserErrorMentioning([&] { singleScatteringReference(*s1, s1.time, s1.source.path, s1.settings); }, {"with_shape.json", "1 shapes"});
+    expectUserErrorMentioning([&] { singleScatteringReference(*s1, s1.time, s1.source.path, s1.settings); },
+                              {"with_shape.json", "1 shapes"});
     std::string twoLights = kPointMedium;
     twoLights.replace(twoLights.find("1}],"), 4, "1}, {\"type\": \"point\", \"position\": [1, 0, 0], \"power\": 1}],");
     auto s2 = sceneFrom(twoLights, "two_lights.json");
-    expectUserErrorMentioning([&] { singleScatteringReference(*s2, s2.time, s2.source.path, s2.settings); }, {"two_lights.json", "2 lights"});
+    expectUserErrorMentioning([&] { singleScatteringReference(*s2, s2.time, s2.source.path, s2.settings); },
+                              {"two_lights.json", "2 lights"});
 }
 
 // ---- 4. path tracer vs photon beams ------------------------------------------------------------
@@ -657,7 +663,8 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
         std::fill(est.begin(), est.end(), 0.0);
         parallelFor(static_cast<int64_t>(P), threads, [&](int64_t p, int t) {
             PixelAccumulator& acc = accs[t];
-            pathTracePixel(*scene, ps, pass, scene.time, static_cast<int>(p % W), static_cast<int>(p / W), acc, stats[t]);
+            pathTracePixel(*scene, ps, pass, scene.time, static_cast<int>(p % W), static_cast<int>(p / W), acc,
+                           stats[t]);
             for (int a = 0; a < 2; ++a)
                 for (int k = 0; k < B; ++k)
                     for (int c = 0; c < 3; ++c) est[slot(B, p, a * B + k, c)] = acc.bin(static_cast<TimeAxis>(a), k)[c];
@@ -721,10 +728,11 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
         }
     const Comparison cs = compare(pt, beams, steadyIdx), cr = compare(pt, beams, volIdx[0]),
                      cu = compare(pt, beams, volIdx[1]);
-    std::printf("beams vs path tracer: steady %d entries, %.1f%% within 4 sigma, chi2/n %.2f; volume real %d entries, "
-                "%.1f%%, %.2f; unwarped %d entries, %.1f%%, %.2f\n",
-                cs.entries, 100 * cs.within4, cs.chi2, cr.entries, 100 * cr.within4, cr.chi2, cu.entries,
-                100 * cu.within4, cu.chi2);
+    std::printf(
+        "beams vs path tracer: steady %d entries, %.1f%% within 4 sigma, chi2/n %.2f; volume real %d entries, "
+        "%.1f%%, %.2f; unwarped %d entries, %.1f%%, %.2f\n",
+        cs.entries, 100 * cs.within4, cs.chi2, cr.entries, 100 * cr.within4, cr.chi2, cu.entries, 100 * cu.within4,
+        cu.chi2);
     EXPECT_GT(cs.entries, 1000);
     EXPECT_GT(cs.within4, 0.92);
     EXPECT_GT(cr.within4, 0.92);
@@ -749,7 +757,8 @@ TEST(Consistency, PathTracerAndPhotonBeamsAgreeWithinErrorBars) {
         }
         for (int k = 0; k < B; ++k) {
             if (tp[k] < 0.02 * maxBin) continue;
-            EXPECT_NEAR(tb[k] / tp[k], 1.0, 0.06) << "axis " << a << " bin " << k << ": beams " << tb[k] << ", pt " << tp[k];
+            EXPECT_NEAR(tb[k] / tp[k], 1.0, 0.06)
+                << "axis " << a << " bin " << k << ": beams " << tb[k] << ", pt " << tp[k];
         }
     }
 }
@@ -788,10 +797,11 @@ TEST(Cli, ReferenceCacheAndConvergeOutputs) {
 
     // Converge against the quadrature: both methods, equal-time strip, plot.
     const std::string cv = dir + "/cv";
-    ASSERT_EQ(runTpb("converge " + scene + small + " --max-depth 1 --reference " + ref +
-                         " --method both --time 0.6 --first-checkpoint 0.05 --checkpoints 4 --frames 3 --at 0.3 -o " + cv,
-                     out),
-              0)
+    ASSERT_EQ(
+        runTpb("converge " + scene + small + " --max-depth 1 --reference " + ref +
+                   " --method both --time 0.6 --first-checkpoint 0.05 --checkpoints 4 --frames 3 --at 0.3 -o " + cv,
+               out),
+        0)
         << out;
     EXPECT_NE(out.find("fitted convergence slope"), std::string::npos) << out;
     const std::string csv = readText(cv + "/convergence.csv");
@@ -803,24 +813,29 @@ TEST(Cli, ReferenceCacheAndConvergeOutputs) {
     // (the SVG/PNG need gnuplot; converge only warns without it)
 
     // A run that does not match the reference: exit code 2 and a message naming the file.
-    EXPECT_EQ(runTpb("converge " + scene + " --width 16 --height 16 --bins 20 --threads 2 --max-depth 1 --reference " + ref +
-                         " --time 0.1 -o " + dir + "/cv2", out),
+    EXPECT_EQ(runTpb("converge " + scene + " --width 16 --height 16 --bins 20 --threads 2 --max-depth 1 --reference " +
+                         ref + " --time 0.1 -o " + dir + "/cv2",
+                     out),
               2);
     EXPECT_NE(out.find(ref), std::string::npos) << out;
     EXPECT_NE(out.find("bins"), std::string::npos) << out;
-    EXPECT_EQ(runTpb("converge " + scene + small + " --max-depth 3 --reference " + ref + " --time 0.1 -o " + dir + "/cv3",
-                     out),
-              2);
+    EXPECT_EQ(
+        runTpb("converge " + scene + small + " --max-depth 3 --reference " + ref + " --time 0.1 -o " + dir + "/cv3",
+               out),
+        2);
     EXPECT_NE(out.find("--max-depth 1"), std::string::npos) << out;
     // Without overrides the run takes the reference's resolution, bins and depth.
-    ASSERT_EQ(runTpb("converge " + scene + " --threads 2 --reference " + ref + " --time 0.2 --no-plot -o " + dir + "/cv4", out),
-              0)
+    ASSERT_EQ(
+        runTpb("converge " + scene + " --threads 2 --reference " + ref + " --time 0.2 --no-plot -o " + dir + "/cv4",
+               out),
+        0)
         << out;
     EXPECT_NE(out.find("--width 16 --height 16 --bins 24 --max-depth 1"), std::string::npos) << out;
 
     // render --method pt writes the same outputs as the beam renderer.
     const std::string rd = dir + "/render_pt";
-    ASSERT_EQ(runTpb("render " + scene + small + " --method pt --spp 2 --passes 2 --frame-step 8 -q -o " + rd, out), 0) << out;
+    ASSERT_EQ(runTpb("render " + scene + small + " --method pt --spp 2 --passes 2 --frame-step 8 -q -o " + rd, out), 0)
+        << out;
     for (const char* f : {"steady.exr", "steady.png", "summary.json", "strip.png", "frames/frame_00000.exr"})
         EXPECT_TRUE(fs::exists(rd + "/" + f)) << f;
     EXPECT_NE(readText(rd + "/summary.json").find("\"method\": \"pt\""), std::string::npos);

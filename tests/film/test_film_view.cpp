@@ -41,7 +41,8 @@ TEST(FilmView, ContinuousFrameIsBeforePlusTheDeltaBinsSoFar) {
                 const int t = s->tileOf(x, y);
                 const TileRect& r = s->tileRect(t);
                 const size_t pix = static_cast<size_t>(y - r.y0) * r.w + (x - r.x0);
-                for (int c = 0; c < 3; ++c) raw[(static_cast<size_t>(y) * W + x) * 3 + c] = s->block(t).sums.before[a][pix * 3 + c];
+                for (int c = 0; c < 3; ++c)
+                    raw[(static_cast<size_t>(y) * W + x) * 3 + c] = s->block(t).sums.before[a][pix * 3 + c];
             }
         double maxRel = 0.0;
         for (int k = 0; k < B; ++k) {
@@ -57,7 +58,8 @@ TEST(FilmView, ContinuousFrameIsBeforePlusTheDeltaBinsSoFar) {
                         raw[i] += s->block(t).sums.bins[a][s->block(t).sums.binIndex(pix, k) + c];
                         sumDelta[i] += delta[i];
                         EXPECT_EQ(cont[i], static_cast<float>(raw[i] * (1.0 / 3.0))) << x << "," << y << " bin " << k;
-                        maxRel = std::max(maxRel, std::abs(cont[i] - sumDelta[i]) / std::max(1e-30, std::abs(sumDelta[i])));
+                        maxRel =
+                            std::max(maxRel, std::abs(cont[i] - sumDelta[i]) / std::max(1e-30, std::abs(sumDelta[i])));
                     }
                 }
         }
@@ -71,8 +73,10 @@ TEST(FilmView, LastContinuousFrameIsSteadyMinusAfter) {
     const std::vector<float> steady = steadyImage(*s);
     for (int a = 0; a < 2; ++a) {
         const std::vector<float> after = afterImage(*s, static_cast<TimeAxis>(a));
-        const std::vector<float> last = frameImage(*s, s->bins() - 1, static_cast<TimeAxis>(a), EmissionMode::Continuous);
-        for (size_t i = 0; i < steady.size(); ++i) EXPECT_NEAR(last[i], steady[i] - after[i], 1e-5 * steady[i] + 1e-7) << i;
+        const std::vector<float> last =
+            frameImage(*s, s->bins() - 1, static_cast<TimeAxis>(a), EmissionMode::Continuous);
+        for (size_t i = 0; i < steady.size(); ++i)
+            EXPECT_NEAR(last[i], steady[i] - after[i], 1e-5 * steady[i] + 1e-7) << i;
     }
 }
 

@@ -122,7 +122,9 @@ TEST(VideoContactSheet, GridOfLabelledFramesWithTheToneMappedPixels) {
         for (int y = 0; y < 21; ++y)
             for (int x = 0; x < 37; ++x)
                 for (int c = 0; c < 3; ++c) {
-                    const unsigned char got = sheet.rgb[(static_cast<size_t>(sheet.frameY[i] + y) * sheet.width + sheet.frameX[i] + x) * 3 + c];
+                    const unsigned char got =
+                        sheet.rgb[(static_cast<size_t>(sheet.frameY[i] + y) * sheet.width + sheet.frameX[i] + x) * 3 +
+                                  c];
                     const unsigned char w = want[(static_cast<size_t>(y) * 37 + x) * 3 + c];
                     diff += got != w;
                     lit += w > 0;
@@ -147,20 +149,30 @@ TEST(VideoEncoder, Mp4HasOneFramePerBinAndEvenDimensions) {
     int calls = 0;
     ExportOptions opt;
     opt.mode = EmissionMode::Continuous;
-    const int n = exportMp4(*s, path, opt, autoExposedToneMap(*s, opt, ToneMap{}), 12.0,
-                            [&](int done, int total) { ++calls; EXPECT_EQ(total, 9); EXPECT_EQ(done, calls); });
+    const int n = exportMp4(*s, path, opt, autoExposedToneMap(*s, opt, ToneMap{}), 12.0, [&](int done, int total) {
+        ++calls;
+        EXPECT_EQ(total, 9);
+        EXPECT_EQ(done, calls);
+    });
     EXPECT_EQ(n, 9);
     ASSERT_TRUE(fs::exists(path));
     EXPECT_GT(fs::file_size(path), 0u);
     std::string out;
     ASSERT_EQ(run("ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames,width,height "
-                  "-of csv=p=0 '" + path + "'", out), 0) << out;
+                  "-of csv=p=0 '" +
+                      path + "'",
+                  out),
+              0)
+        << out;
     EXPECT_EQ(out, "38,22,9\n") << "37x21 padded to even, 9 frames";
     expectNoTemporaries(tmp.path());
     opt.step = 4;  // bins 0, 4, 8
     EXPECT_EQ(exportMp4(*s, path, opt, ToneMap{}, 24.0), 3);
-    ASSERT_EQ(run("ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 '" +
-                  path + "'", out), 0);
+    ASSERT_EQ(
+        run("ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 '" +
+                path + "'",
+            out),
+        0);
     EXPECT_EQ(out, "3\n");
 }
 
@@ -180,7 +192,8 @@ TEST(VideoEncoder, MissingFfmpegIsAUserErrorSayingHowToInstallIt) {
 TEST(VideoEncoder, FfmpegFailureReportsItsStderrAndLeavesNoFile) {
     test::TempDir tmp("ffail");
     // A stand-in ffmpeg that reads a little, complains and fails.
-    const fs::path fake = tmp.write("ffmpeg", "#!/bin/sh\nhead -c 10 >/dev/null\necho 'Unknown encoder libx264' >&2\nexit 3\n");
+    const fs::path fake =
+        tmp.write("ffmpeg", "#!/bin/sh\nhead -c 10 >/dev/null\necho 'Unknown encoder libx264' >&2\nexit 3\n");
     fs::permissions(fake, fs::perms::owner_all);
     const PathScope path(tmp.path().string() + ":/usr/bin:/bin");
     const std::string out = (tmp / "x.mp4").string();
@@ -204,8 +217,12 @@ TEST(VideoEncoder, CancelKillsFfmpegAndLeavesNoHalfWrittenMp4) {
     const auto s = snapshot();
     test::TempDir tmp("mp4cancel");
     std::atomic<bool> cancel{false};
-    const int n = exportMp4(*s, (tmp / "t.mp4").string(), ExportOptions{}, ToneMap{}, 24.0,
-                            [&](int done, int) { if (done == 4) cancel = true; }, &cancel);
+    const int n = exportMp4(
+        *s, (tmp / "t.mp4").string(), ExportOptions{}, ToneMap{}, 24.0,
+        [&](int done, int) {
+            if (done == 4) cancel = true;
+        },
+        &cancel);
     EXPECT_EQ(n, 0);
     EXPECT_FALSE(fs::exists(tmp / "t.mp4"));
     expectNoTemporaries(tmp.path());

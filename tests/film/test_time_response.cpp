@@ -89,9 +89,9 @@ TEST(TimeResponse, BinWeightsAreTheHistogramOfTheDelays) {
     std::uniform_real_distribution<double> U(0.0, 1.0);
     std::normal_distribution<double> N(0.0, 1.0);
     const double toSigma = 1.0 / 2.3548200450309493;
-    for (const TimeResponse& r : {pulse("gaussian:0.05"), pulse("gaussian:1"), pulse("square:0.1"), pulse("square:0.9"),
-                                  sensor("gaussian:0.4"), sensor("exp:0.03"), sensor("exp:0.6"),
-                                  both("gaussian:0.5", "exp:0.2"), both("square:0.4", "gaussian:0.2")}) {
+    for (const TimeResponse& r :
+         {pulse("gaussian:0.05"), pulse("gaussian:1"), pulse("square:0.1"), pulse("square:0.9"), sensor("gaussian:0.4"),
+          sensor("exp:0.03"), sensor("exp:0.6"), both("gaussian:0.5", "exp:0.2"), both("square:0.4", "gaussian:0.2")}) {
         SCOPED_TRACE(describe(r));
         const BinKernel k = binKernel(r, D);
         double sum = 0.0;
@@ -107,8 +107,10 @@ TEST(TimeResponse, BinWeightsAreTheHistogramOfTheDelays) {
             if (r.sensor == SensorShape::Gaussian) t += N(rng) * r.sensorWidth * toSigma;
             if (r.sensor == SensorShape::Exponential) t += -std::log(1.0 - U(rng)) * r.sensorWidth;
             const int m = static_cast<int>(std::floor(t / D)) - k.lo;
-            if (m < 0 || m >= static_cast<int>(hist.size())) ++outside;
-            else hist[static_cast<size_t>(m)] += 1.0;
+            if (m < 0 || m >= static_cast<int>(hist.size()))
+                ++outside;
+            else
+                hist[static_cast<size_t>(m)] += 1.0;
         }
         EXPECT_LE(outside, 2) << "the kernel's support misses delays";
         for (size_t m = 0; m < hist.size(); ++m) {
@@ -148,21 +150,24 @@ TEST(TimeResponse, BlurredSingleScatteringFilmMatchesRendersOfTheSpreadEmission)
     const std::vector<double> delta = fogVolume(t0);
     struct Case {
         TimeResponse r;
-        double a, b;                                   // emission offsets the reference integrates over
-        std::function<double(double)> density;          // of the offset
+        double a, b;                            // emission offsets the reference integrates over
+        std::function<double(double)> density;  // of the offset
     };
     const double sg = 0.3 / 2.3548200450309493, tau = 0.12;
     const std::vector<Case> cases = {
-        {make(PulseShape::Gaussian, 0.3), -6 * sg, 6 * sg, [&](double u) { return std::exp(-0.5 * u * u / (sg * sg)) / (sg * 2.5066282746310002); }},
+        {make(PulseShape::Gaussian, 0.3), -6 * sg, 6 * sg,
+         [&](double u) { return std::exp(-0.5 * u * u / (sg * sg)) / (sg * 2.5066282746310002); }},
         {make(PulseShape::Square, 0.3), 0.0, 0.3, [](double) { return 1.0 / 0.3; }},
-        {make(PulseShape::Delta, 0.0, SensorShape::Exponential, tau), 0.0, 12 * tau, [&](double u) { return std::exp(-u / tau) / tau; }},
+        {make(PulseShape::Delta, 0.0, SensorShape::Exponential, tau), 0.0, 12 * tau,
+         [&](double u) { return std::exp(-u / tau) / tau; }},
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(describe(c.r));
         // Reference: 5-point Gauss-Legendre over the offsets on panels of a quarter bin (a bin's
         // integral changes on the scale of a bin as the emission moves: coarser nodes miss that).
         std::vector<double> ref(delta.size(), 0.0);
-        static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
+        static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
+                                    0.9061798459386640};
         static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
                                     0.2369268850561891};
         const int panels = static_cast<int>(std::ceil((c.b - c.a) / (0.25 * D)));
@@ -211,7 +216,8 @@ TEST(TimeResponse, FilmReadersApplyTheKernelAlongEachPixelsSeries) {
             for (int x = r.x0; x < r.x0 + r.w; ++x) {
                 acc.reset(time.bins);
                 for (int k = 0; k < time.bins; ++k)
-                    if (rng.uniform() < 0.3) acc.add(TimeAxis::Real, k, Color(rng.uniform(), rng.uniform(), 2 * rng.uniform()));
+                    if (rng.uniform() < 0.3)
+                        acc.add(TimeAxis::Real, k, Color(rng.uniform(), rng.uniform(), 2 * rng.uniform()));
                 OutsideFilm o;
                 o.before = Color(0.5);
                 acc.addOutside(TimeAxis::Real, o);
@@ -281,8 +287,8 @@ TEST(TimeResponse, KernelCutToTheFilmReadsItAsTheWholeKernelDoes) {
     std::vector<double> x(static_cast<size_t>(B) * 3);
     for (double& v : x) v = rng.uniform();
     const double left[3] = {0.7, 0.2, 1.3}, right[3] = {2.0, 0.4, 0.9}, zero[3] = {0.0, 0.0, 0.0};
-    for (const TimeResponse& r : {both("gaussian:3", "exp:2"), both("square:20", "gaussian:1"), sensor("exp:40"),
-                                  pulse("gaussian:30")}) {
+    for (const TimeResponse& r :
+         {both("gaussian:3", "exp:2"), both("square:20", "gaussian:1"), sensor("exp:40"), pulse("gaussian:30")}) {
         SCOPED_TRACE(describe(r));
         const BinKernel whole = binKernel(r, D), cut = binKernel(r, D, B);
         ASSERT_GT(whole.w.size(), static_cast<size_t>(2 * B)) << "the response must be longer than the film";
@@ -303,7 +309,8 @@ TEST(TimeResponse, KernelCutToTheFilmReadsItAsTheWholeKernelDoes) {
             for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(b[i], a[i], tol * (1.0 + std::abs(a[i]))) << i;
         }
     }
-    const BinKernel narrow = binKernel(both("gaussian:0.6", "exp:0.1"), D), narrowCut = binKernel(both("gaussian:0.6", "exp:0.1"), D, B);
+    const BinKernel narrow = binKernel(both("gaussian:0.6", "exp:0.1"), D),
+                    narrowCut = binKernel(both("gaussian:0.6", "exp:0.1"), D, B);
     EXPECT_EQ(narrowCut.lo, narrow.lo);
     EXPECT_EQ(narrowCut.w, narrow.w);
     EXPECT_EQ(narrowCut.before, 0.0);

@@ -50,7 +50,7 @@ TEST(Film, BytesFormulaIsWhatTheFilmAllocates) {
 // Continuous emission is the step response (issue 12, item 1): frame k = before + bins 0..k, and
 // the last continuous frame = steady - after, through every reader (frame, pixel profile, volume).
 TEST(Film, ContinuousFramesStartFromWhatArrivedBeforeTheFilm) {
-    TransientFilm film(20, 18, TimeBins{1.0, 0.5, 4});  // film [1, 3)
+    TransientFilm film(20, 18, TimeBins{1.0, 0.5, 4});     // film [1, 3)
     addUniformPass(film, Color(1.0, 2.0, 3.0), 0.0, 5.0);  // t in [0, 5]: 0.2 before, 0.4 inside, 0.4 after
     addUniformPass(film, Color(1.0, 2.0, 3.0), 0.0, 5.0);
     std::vector<float> before, after, steady, f0, f3, prof;
@@ -68,7 +68,7 @@ TEST(Film, ContinuousFramesStartFromWhatArrivedBeforeTheFilm) {
             EXPECT_NEAR(before[i], 0.2 * L, 1e-6);
             EXPECT_NEAR(after[i], 0.4 * L, 1e-6);
             EXPECT_NEAR(steady[i], L, 1e-12);
-            EXPECT_NEAR(f0[i], 0.3 * L, 1e-6);             // before + bin 0
+            EXPECT_NEAR(f0[i], 0.3 * L, 1e-6);               // before + bin 0
             EXPECT_NEAR(f3[i], steady[i] - after[i], 1e-6);  // the last one: everything but what comes after
             EXPECT_NEAR(vol[p * 4 * 3 + c], 0.3 * L, 1e-6);
             EXPECT_NEAR(vol[(p * 4 + 3) * 3 + c], 0.6 * L, 1e-6);
@@ -183,8 +183,10 @@ TEST(PixelAccumulator, RunsAreTheMaximalRunsOfTouchedBins) {
             std::vector<std::pair<int, int>> expected, got;
             for (int k = 0; k < bins; ++k) {
                 if (!touched[a][k]) continue;
-                if (k > 0 && touched[a][k - 1]) expected.back().second = k;
-                else expected.push_back({k, k});
+                if (k > 0 && touched[a][k - 1])
+                    expected.back().second = k;
+                else
+                    expected.push_back({k, k});
             }
             acc.forEachRun(static_cast<TimeAxis>(a), [&](int k0, int k1) { got.push_back({k0, k1}); });
             ASSERT_EQ(got, expected) << "round " << round << " axis " << a;
@@ -249,7 +251,8 @@ TEST(Film, TouchedRunsAddWhatTheWholeAccumulatorHolds) {
                     for (int k = 0; k < time.bins; ++k)
                         for (int c = 0; c < 3; ++c) {
                             const double want = dense[a][((static_cast<size_t>(y) * 20 + x) * 300 + k) * 3 + c];
-                            ASSERT_EQ(s.bins[a][s.binIndex(p, k) + c], want) << x << "," << y << " axis " << a << " bin " << k;
+                            ASSERT_EQ(s.bins[a][s.binIndex(p, k) + c], want)
+                                << x << "," << y << " axis " << a << " bin " << k;
                             if (c == 0 && want > 0.0) {
                                 gappy += seen && gap;
                                 seen = true;
@@ -303,7 +306,9 @@ TEST(Film, MergeOfTwoRunsIsTheFilmOfAllTheirPasses) {
     EXPECT_EQ(first.minPasses(), 6);
     const auto a = all.snapshot(), m = first.snapshot();
     double maxRel = 0.0;
-    const auto compare = [&](double x, double y) { maxRel = std::max(maxRel, std::abs(x - y) / std::max(std::abs(x), 1e-300)); };
+    const auto compare = [&](double x, double y) {
+        maxRel = std::max(maxRel, std::abs(x - y) / std::max(std::abs(x), 1e-300));
+    };
     for (int t = 0; t < a->tileCount(); ++t) {
         const TileSums &sa = a->block(t).sums, &sm = m->block(t).sums;
         ASSERT_EQ(sm.passes, 6);
@@ -321,7 +326,8 @@ TEST(Film, MergeOfTwoRunsIsTheFilmOfAllTheirPasses) {
 
 TEST(Film, MergeRefusesAFilmOfAnotherShape) {
     TransientFilm film(8, 8, TimeBins{0.0, 1.0, 4});
-    TransientFilm wider(9, 8, TimeBins{0.0, 1.0, 4}), longer(8, 8, TimeBins{0.0, 1.0, 5}), later(8, 8, TimeBins{0.5, 1.0, 4});
+    TransientFilm wider(9, 8, TimeBins{0.0, 1.0, 4}), longer(8, 8, TimeBins{0.0, 1.0, 5}),
+        later(8, 8, TimeBins{0.5, 1.0, 4});
     EXPECT_THROW(film.merge(wider), std::invalid_argument);
     EXPECT_THROW(film.merge(longer), std::invalid_argument);
     EXPECT_THROW(film.merge(later), std::invalid_argument);

@@ -111,7 +111,8 @@ TEST(NpyVolumeExport, NumpyLoadsTheFilmValueForValueWithItsTimeAxis) {
     for (int a = 0; a < 2; ++a)
         for (EmissionMode mode : {EmissionMode::Delta, EmissionMode::Continuous}) {
             const TimeAxis axis = static_cast<TimeAxis>(a);
-            SCOPED_TRACE(std::string(a == 0 ? "real" : "unwarped") + (mode == EmissionMode::Delta ? " delta" : " continuous"));
+            SCOPED_TRACE(std::string(a == 0 ? "real" : "unwarped") +
+                         (mode == EmissionMode::Delta ? " delta" : " continuous"));
             ExportOptions opt;
             opt.axis = axis;
             opt.mode = mode;
@@ -126,10 +127,14 @@ TEST(NpyVolumeExport, NumpyLoadsTheFilmValueForValueWithItsTimeAxis) {
             EXPECT_EQ(names, volumeFileNames());
             EXPECT_EQ(lastRow, H);
             std::string out;
-            ASSERT_EQ(run(std::string(kPython) + " " + (tmp / "read_back.py").string() + " " + dir.string() + " 2>&1", out), 0) << out;
+            ASSERT_EQ(
+                run(std::string(kPython) + " " + (tmp / "read_back.py").string() + " " + dir.string() + " 2>&1", out),
+                0)
+                << out;
             const nlohmann::json info = nlohmann::json::parse(out);
             EXPECT_EQ(info["transient"]["shape"], nlohmann::json({H, W, B, 3}));
-            for (const char* n : {"steady", "before", "after"}) EXPECT_EQ(info[n]["shape"], nlohmann::json({H, W, 3})) << n;
+            for (const char* n : {"steady", "before", "after"})
+                EXPECT_EQ(info[n]["shape"], nlohmann::json({H, W, 3})) << n;
             for (const char* n : {"transient", "steady", "before", "after"}) {
                 EXPECT_EQ(info[n]["dtype"], "float32") << n;
                 EXPECT_FALSE(info[n]["fortran"].get<bool>()) << n;
@@ -155,7 +160,8 @@ TEST(NpyVolumeExport, NumpyLoadsTheFilmValueForValueWithItsTimeAxis) {
             EXPECT_EQ(info["probe"].get<float>(), pixelProfile(*s, 30, 3, axis, mode)[5 * 3 + 1]);
             // The continuous volume's bin k equals frameImage's continuous frame k (its prefix sums).
             const std::vector<float> f4 = frameImage(*s, 4, axis, mode);
-            EXPECT_EQ(vol[((static_cast<size_t>(7) * W + 11) * B + 4) * 3 + 2], f4[(static_cast<size_t>(7) * W + 11) * 3 + 2]);
+            EXPECT_EQ(vol[((static_cast<size_t>(7) * W + 11) * B + 4) * 3 + 2],
+                      f4[(static_cast<size_t>(7) * W + 11) * 3 + 2]);
             EXPECT_EQ(rawFloats(dir / "steady.raw"), steadyImage(*s));
             EXPECT_EQ(rawFloats(dir / "before.raw"), beforeImage(*s, axis));
             EXPECT_EQ(rawFloats(dir / "after.raw"), afterImage(*s, axis));
@@ -180,14 +186,17 @@ TEST(NpyVolumeExport, NumpyLoadsTheFilmValueForValueWithItsTimeAxis) {
             for (float v : beforeImage(*s, axis)) before += v;
             for (float v : afterImage(*s, axis)) after += v;
             const auto& e = j["energy"];
-            EXPECT_NEAR(e["before_rgb"][0].get<double>() + e["before_rgb"][1].get<double>() + e["before_rgb"][2].get<double>(),
-                        before, 1e-9 * before);
-            EXPECT_NEAR(e["after_rgb"][0].get<double>() + e["after_rgb"][1].get<double>() + e["after_rgb"][2].get<double>(),
-                        after, 1e-9 * after);
+            EXPECT_NEAR(
+                e["before_rgb"][0].get<double>() + e["before_rgb"][1].get<double>() + e["before_rgb"][2].get<double>(),
+                before, 1e-9 * before);
+            EXPECT_NEAR(
+                e["after_rgb"][0].get<double>() + e["after_rgb"][1].get<double>() + e["after_rgb"][2].get<double>(),
+                after, 1e-9 * after);
             EXPECT_GT(e["before_fraction"].get<double>(), 0.0);  // the synthetic passes put light before and after
             EXPECT_GT(e["after_fraction"].get<double>(), 0.0);
             EXPECT_NEAR(e["before_fraction"].get<double>() + e["inside_fraction"].get<double>() +
-                            e["after_fraction"].get<double>(), 1.0, 1e-9);
+                            e["after_fraction"].get<double>(),
+                        1.0, 1e-9);
         }
 }
 
@@ -195,8 +204,12 @@ TEST(NpyVolumeExport, CancelLeavesNoVolumeAndNoSideFile) {
     const auto s = snapshot();
     test::TempDir tmp("npy_cancel");
     std::atomic<bool> cancel{false};
-    const std::vector<std::string> names = exportVolumeNpy(*s, tmp.path().string(), ExportOptions{}, provenance(),
-                                                           [&](int rows, int) { if (rows == 5) cancel = true; }, &cancel);
+    const std::vector<std::string> names = exportVolumeNpy(
+        *s, tmp.path().string(), ExportOptions{}, provenance(),
+        [&](int rows, int) {
+            if (rows == 5) cancel = true;
+        },
+        &cancel);
     EXPECT_EQ(names, (std::vector<std::string>{"steady.npy", "before.npy", "after.npy"}));
     EXPECT_FALSE(fs::exists(tmp / "transient.npy"));
     EXPECT_FALSE(fs::exists(tmp / "transient.json"));

@@ -121,13 +121,15 @@ FilmValues read(const FilmSnapshot& snap) {
 // image of every pass is an independent sample; the volumes are averaged over the passes.
 struct PassSeries {
     int W = 0, H = 0, bins = 0, passes = 0;
-    std::vector<std::vector<float>> steady;                  // per pass, W H 3
+    std::vector<std::vector<float>> steady;                   // per pass, W H 3
     std::vector<std::vector<double>> realPass, unwarpedPass;  // per pass, delta volumes
-    std::vector<double> real, unwarped;                      // mean over passes
-    std::vector<PassStats> stats;                            // per pass
+    std::vector<double> real, unwarped;                       // mean over passes
+    std::vector<PassStats> stats;                             // per pass
 
     size_t pixels() const { return static_cast<size_t>(W) * H; }
-    struct MeanSe { double mean, se; };
+    struct MeanSe {
+        double mean, se;
+    };
     // Mean over passes and its standard error of pixel p's channel c (steady image).
     MeanSe pixel(size_t p, int c) const {
         std::vector<double> v;
@@ -311,8 +313,8 @@ TEST_P(PhysicalIntegrator, DiffusePlaneUnderPointLightMatchesClosedForm) {
                 const double ref = ps.albedo / kPiT * ps.power[c] * e;
                 const PassSeries::MeanSe m = r.pixel(pix, c);
                 const double z = zScore(m, ref, 1e-4);
-                EXPECT_LT(std::abs(z), 5.0) << methodLabel(v) << " pixel " << x << "," << y << " channel " << c
-                                            << ": " << m.mean << " +- " << m.se << " vs " << ref;
+                EXPECT_LT(std::abs(z), 5.0) << methodLabel(v) << " pixel " << x << "," << y << " channel " << c << ": "
+                                            << m.mean << " +- " << m.se << " vs " << ref;
                 z2 += z * z;
                 ++nz;
                 if (std::abs(z) > std::abs(worstZ)) worstZ = z, worst = static_cast<int>(pix);
@@ -373,8 +375,8 @@ TEST_P(PhysicalIntegrator, DiffusePlaneUnderPointLightMatchesClosedForm) {
                     const double v = vol[(pix * s.time.bins + k) * 3 + 1];
                     (k >= k0 && k <= k1 ? inside : outside) += v;
                 }
-                EXPECT_EQ(outside, 0.0) << methodLabel(v) << (ax == 0 ? " real" : " unwarped") << " pixel " << x
-                                        << "," << y << ": energy outside bins " << k0 << ".." << k1;
+                EXPECT_EQ(outside, 0.0) << methodLabel(v) << (ax == 0 ? " real" : " unwarped") << " pixel " << x << ","
+                                        << y << ": energy outside bins " << k0 << ".." << k1;
                 EXPECT_NEAR(inside, steady, 1e-5 * steady) << methodLabel(v) << " pixel " << x << "," << y;
             }
         }
@@ -502,8 +504,8 @@ TEST_P(MediumIntegrator, SingleScatteringMatchesQuadratureOracle) {
         double refTotal = 0.0;
         for (size_t p = 0; p < r.pixels(); ++p) refTotal += ref.steady[p * 3 + c];
         const PassSeries::MeanSe m = PassSeries::meanSe(totals);
-        std::printf("%s single scattering, channel %d: steady total %.5f +- %.5f vs %.5f\n", methodLabel(v), c,
-                    m.mean, m.se, refTotal);
+        std::printf("%s single scattering, channel %d: steady total %.5f +- %.5f vs %.5f\n", methodLabel(v), c, m.mean,
+                    m.se, refTotal);
         EXPECT_LT(std::abs(zScore(m, refTotal, 0.01)), 4.0) << methodLabel(v) << " channel " << c;
     }
 
@@ -512,7 +514,8 @@ TEST_P(MediumIntegrator, SingleScatteringMatchesQuadratureOracle) {
     for (TimeAxis axis : {TimeAxis::Real, TimeAxis::Unwarped}) {
         const std::vector<double>& vol = axis == TimeAxis::Real ? r.real : r.unwarped;
         const std::vector<float>& rf = ref.volume(axis);
-        const std::vector<double> rv = v.timeKernel ? blurred[static_cast<int>(axis)] : std::vector<double>(rf.begin(), rf.end());
+        const std::vector<double> rv =
+            v.timeKernel ? blurred[static_cast<int>(axis)] : std::vector<double>(rf.begin(), rf.end());
         double e2 = 0.0, r2 = 0.0, n2 = 0.0, sumFilm = 0.0, sumRef = 0.0;
         for (size_t i = 0; i < vol.size(); ++i) {
             const double se = r.bin(axis, i).se;
@@ -583,7 +586,7 @@ std::vector<std::vector<double>> binTotals(const PassSeries& r, TimeAxis axis, i
 // The path tracer's per-bin image totals (green) of every pass on the estimator's bins, from its
 // film of fine bins (boxRebin: the time kernel's box of half-width tau applied; 0 = off).
 std::vector<std::vector<double>> pathTracerBinTotals(const PassSeries& fine, double delta, TimeAxis axis, double tau,
-                                                      double w, int n) {
+                                                     double w, int n) {
     std::vector<std::vector<double>> out;
     for (const auto& vol : axis == TimeAxis::Real ? fine.realPass : fine.unwarpedPass) {
         std::vector<double> perFine(static_cast<size_t>(fine.bins), 0.0);
@@ -595,7 +598,7 @@ std::vector<std::vector<double>> pathTracerBinTotals(const PassSeries& fine, dou
 }
 
 struct PathTracerReference {
-    PassSeries fine;    // its films, on fine bins
+    PassSeries fine;     // its films, on fine bins
     double delta = 0.0;  // m, their width
 };
 
@@ -611,7 +614,8 @@ MediumComparison compareWithPathTracer(const PassSeries& est, const PathTracerRe
     int n = 0;
     for (size_t i = 0; i < est.pixels() * 3; ++i) {
         const PassSeries::MeanSe a = meanSeOf(est.steady, i, scale), b = meanSeOf(pt.steady, i, 1.0);
-        const double z = (a.mean - b.mean) / std::max(std::sqrt(a.se * a.se + b.se * b.se + 1e-4 * b.mean * b.mean), 1e-300);
+        const double z =
+            (a.mean - b.mean) / std::max(std::sqrt(a.se * a.se + b.se * b.se + 1e-4 * b.mean * b.mean), 1e-300);
         c.steadyMeanZ2 += z * z;
         ++n;
         if (std::abs(z) > std::abs(c.worstSteadyZ)) c.worstSteadyZ = z;
@@ -659,8 +663,7 @@ MediumComparison compareWithPathTracer(const PassSeries& est, const PathTracerRe
 bool acceptable(const MediumComparison& c) {
     bool ok = c.steadyMeanZ2 < 3.5 && std::abs(c.worstSteadyZ) < 5.0;
     for (double z : c.totalZ) ok = ok && std::abs(z) < 4.0;
-    for (int ax = 0; ax < 2; ++ax)
-        ok = ok && c.binMeanZ2[ax] < 3.5 && c.binRmse[ax] < 1.5 * c.binNoise[ax] + 0.02;
+    for (int ax = 0; ax < 2; ++ax) ok = ok && c.binMeanZ2[ax] < 3.5 && c.binRmse[ax] < 1.5 * c.binNoise[ax] + 0.02;
     return ok;
 }
 
@@ -683,7 +686,8 @@ TEST_P(MediumIntegrator, MultipleScatteringMatchesThePathTracer) {
     PathTracerReference ref;
     ref.delta = delta;
     {
-        RenderSetup pt = prepare(multipleScatteringScene(delta, 800)  /* 0.04 .. 8.04 m */, Variant::of(Method::PathTracer));
+        RenderSetup pt =
+            prepare(multipleScatteringScene(delta, 800) /* 0.04 .. 8.04 m */, Variant::of(Method::PathTracer));
         pt.settings.seed = 31;
         pt.settings.threads = 2;
         pt.settings.maxDepth = 6;
@@ -705,10 +709,11 @@ TEST_P(MediumIntegrator, MultipleScatteringMatchesThePathTracer) {
     EXPECT_EQ(tau > 0.0, v.timeKernel) << methodLabel(v);
 
     const MediumComparison c = compareWithPathTracer(r, ref, w, tau, 1.0, 0);
-    std::printf("%s vs path tracer, multiple scattering: steady mean z^2 %.2f (worst %.2f), totals z %.2f %.2f %.2f, "
-                "bins mean z^2 %.2f / %.2f (worst z %.2f / %.2f), bin RMSE %.4f (noise %.4f) / %.4f (noise %.4f)\n",
-                methodLabel(v), c.steadyMeanZ2, c.worstSteadyZ, c.totalZ[0], c.totalZ[1], c.totalZ[2], c.binMeanZ2[0],
-                c.binMeanZ2[1], c.worstBinZ[0], c.worstBinZ[1], c.binRmse[0], c.binNoise[0], c.binRmse[1], c.binNoise[1]);
+    std::printf(
+        "%s vs path tracer, multiple scattering: steady mean z^2 %.2f (worst %.2f), totals z %.2f %.2f %.2f, "
+        "bins mean z^2 %.2f / %.2f (worst z %.2f / %.2f), bin RMSE %.4f (noise %.4f) / %.4f (noise %.4f)\n",
+        methodLabel(v), c.steadyMeanZ2, c.worstSteadyZ, c.totalZ[0], c.totalZ[1], c.totalZ[2], c.binMeanZ2[0],
+        c.binMeanZ2[1], c.worstBinZ[0], c.worstBinZ[1], c.binRmse[0], c.binNoise[0], c.binRmse[1], c.binNoise[1]);
     EXPECT_LT(c.steadyMeanZ2, 3.5) << methodLabel(v);
     EXPECT_LT(std::abs(c.worstSteadyZ), 5.0) << methodLabel(v);
     for (int ch = 0; ch < 3; ++ch) EXPECT_LT(std::abs(c.totalZ[ch]), 4.0) << methodLabel(v) << " channel " << ch;
@@ -718,8 +723,10 @@ TEST_P(MediumIntegrator, MultipleScatteringMatchesThePathTracer) {
     }
     // Multiple scattering is really there: photons scatter more than once on average.
     const PassStats& st = r.stats.front();
-    if (points) EXPECT_GT(st.points, 2 * st.photons) << methodLabel(v);
-    else EXPECT_GT(st.beams, 2 * st.photons) << methodLabel(v);
+    if (points)
+        EXPECT_GT(st.points, 2 * st.photons) << methodLabel(v);
+    else
+        EXPECT_GT(st.beams, 2 * st.photons) << methodLabel(v);
     // The power: a film 4 % too dark, or one bin late, fails.
     const MediumComparison dark = compareWithPathTracer(r, ref, w, tau, 0.96, 0);
     const MediumComparison late = compareWithPathTracer(r, ref, w, tau, 1.0, 1);
@@ -798,10 +805,11 @@ INSTANTIATE_TEST_SUITE_P(Methods, PhysicalIntegrator,
                          variantName);
 
 INSTANTIATE_TEST_SUITE_P(Methods, MediumIntegrator,
-                         ::testing::Values(Variant::beams("beam2d"), Variant::beams("beam1d"), Variant::beams("point2d"),
-                                           Variant::beams("point3d"), Variant::beams("beam2d", true),
-                                           Variant::beams("beam1d", true), Variant::beams("point2d", true),
-                                           Variant::beams("point3d", true), Variant::of(Method::PathTracer)),
+                         ::testing::Values(Variant::beams("beam2d"), Variant::beams("beam1d"),
+                                           Variant::beams("point2d"), Variant::beams("point3d"),
+                                           Variant::beams("beam2d", true), Variant::beams("beam1d", true),
+                                           Variant::beams("point2d", true), Variant::beams("point3d", true),
+                                           Variant::of(Method::PathTracer)),
                          variantName);
 
 // ---- 4. what the Driver promises for every integrator ----------------------------------------------
@@ -896,8 +904,8 @@ TEST_P(AnyIntegrator, PassesOneToFourAreTheMergeOfOneTwoAndThreeFour) {
         size_t bad = 0, firstBad = 0;
         for (size_t i = 0; i < va.size(); ++i)
             if (!close(va[i], vm[i]) && bad++ == 0) firstBad = i;
-        EXPECT_EQ(bad, 0u) << methodLabel(v) << (ax == 0 ? " real" : " unwarped") << ": first at " << firstBad
-                           << ": " << va[firstBad] << " vs " << vm[firstBad];
+        EXPECT_EQ(bad, 0u) << methodLabel(v) << (ax == 0 ? " real" : " unwarped") << ": first at " << firstBad << ": "
+                           << va[firstBad] << " vs " << vm[firstBad];
     }
     // Steady, before and after are read as float images: equal up to the float conversion of two
     // doubles 1e-12 apart (one float ulp: at most 2^-23 = 1.2e-7 relative, checked at 2.4e-7).
@@ -949,9 +957,10 @@ TEST_P(AnyIntegrator, AbortBeforeAPassLeavesTheFilmUnchanged) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, AnyIntegrator,
-                         ::testing::Values(Variant::beams("beam2d"), Variant::beams("beam1d"), Variant::beams("point2d"),
-                                           Variant::beams("point3d"), Variant::beams("beam2d", true),
-                                           Variant::of(Method::PathTracer), Variant::of(Method::Preview)),
+                         ::testing::Values(Variant::beams("beam2d"), Variant::beams("beam1d"),
+                                           Variant::beams("point2d"), Variant::beams("point3d"),
+                                           Variant::beams("beam2d", true), Variant::of(Method::PathTracer),
+                                           Variant::of(Method::Preview)),
                          variantName);
 
 // ---- 5. the preview ---------------------------------------------------------------------------------

@@ -146,13 +146,19 @@ struct Binned {
     std::vector<Color> bin[2];
     Color outside[2] = {Color(0.0), Color(0.0)};
     Color total{0.0};
-    explicit Binned(int bins = 0) { bin[0].assign(bins, Color(0.0)); bin[1].assign(bins, Color(0.0)); }
+    explicit Binned(int bins = 0) {
+        bin[0].assign(bins, Color(0.0));
+        bin[1].assign(bins, Color(0.0));
+    }
     void add(const Color& e, double tReal, double tUnw, double start, double width) {
         const int n = static_cast<int>(bin[0].size());
         const double t[2] = {tReal, tUnw};
         for (int a = 0; a < 2; ++a) {
             const int k = binIndex(t[a], start, width, n);
-            if (k >= 0) bin[a][k] += e; else outside[a] += e;
+            if (k >= 0)
+                bin[a][k] += e;
+            else
+                outside[a] += e;
         }
         total += e;
     }
@@ -188,7 +194,8 @@ Estimates estimate(const test::TestScene& t, const RenderSettings& s, int passes
                 double* dst = &e.v[(static_cast<size_t>(p) * e.pixels + px) * e.slots() * 3];
                 for (int a = 0; a < 2; ++a)
                     for (int k = acc.lo(static_cast<TimeAxis>(a)); k <= acc.hi(static_cast<TimeAxis>(a)); ++k)
-                        for (int c = 0; c < 3; ++c) dst[(a * tb.bins + k) * 3 + c] = acc.bin(static_cast<TimeAxis>(a), k)[c];
+                        for (int c = 0; c < 3; ++c)
+                            dst[(a * tb.bins + k) * 3 + c] = acc.bin(static_cast<TimeAxis>(a), k)[c];
                 dst[2 * tb.bins * 3 + 0] = acc.steady().x;
                 dst[2 * tb.bins * 3 + 1] = acc.steady().y;
                 dst[2 * tb.bins * 3 + 2] = acc.steady().z;
@@ -198,7 +205,9 @@ Estimates estimate(const test::TestScene& t, const RenderSettings& s, int passes
 }
 
 // Mean and standard error over passes of a per-pass functional.
-struct MeanSe { double mean = 0.0, se = 0.0; };
+struct MeanSe {
+    double mean = 0.0, se = 0.0;
+};
 MeanSe overPasses(int passes, const std::function<double(int)>& f) {
     double s = 0.0, s2 = 0.0;
     for (int p = 0; p < passes; ++p) {
@@ -291,7 +300,9 @@ void singleScatterReference(const InfiniteMedium& m, const Vec3& o, const Vec3& 
     ASSERT_GT(h, 1e-3);
     const double phi0 = std::atan2(-sc, h), phi1 = 0.5 * kPiT;
     std::vector<double> cuts = {phi0, phi1};
-    auto addS = [&](double s) { if (s > 0.0) cuts.push_back(std::atan2(s - sc, h)); };
+    auto addS = [&](double s) {
+        if (s > 0.0) cuts.push_back(std::atan2(s - sc, h));
+    };
     for (int k = 0; k <= bins; ++k) {
         const double te = (start + k * width - m.emit) / m.ior;
         const double tau = te - sc;  // real: s + d(s) = te
@@ -322,8 +333,8 @@ void singleScatterReference(const InfiniteMedium& m, const Vec3& o, const Vec3& 
                 const double d = h / std::cos(phi);
                 const Vec3 x = o + s * dir;
                 const double cosTheta = glm::dot((x - m.light) / d, -dir);
-                const Color f = expC(-m.sigT * s) * m.sigS * henyeyGreenstein(m.g, cosTheta) * m.power /
-                                (4.0 * kPiT) * expC(-m.sigT * d) / h;
+                const Color f = expC(-m.sigT * s) * m.sigS * henyeyGreenstein(m.g, cosTheta) * m.power / (4.0 * kPiT) *
+                                expC(-m.sigT * d) / h;
                 sum += f * (pl * gw[q]);
             }
         }
@@ -422,7 +433,7 @@ TEST(PathTracer, SingleScatteringMatchesQuadrature) {
                 }
                 ++checkedBins;
                 EXPECT_LT(std::abs(tBin.add(m, ref)), 4.5) << "axis " << a << " bin " << k << " channel " << c << ": "
-                                                         << m.mean << " +- " << m.se << " vs " << ref;
+                                                           << m.mean << " +- " << m.se << " vs " << ref;
             }
             const MeanSe out = overPasses(passes, [&](int p) {
                 double v = 0.0;
@@ -462,7 +473,7 @@ TEST(PathTracer, EquiangularAgreesWithFreeFlightAndCutsTheVarianceNearThePointLi
     for (int depth : {1, 4}) {
         SCOPED_TRACE("max depth " + std::to_string(depth));
         RenderSettings s;
-    s.maxDepth = 64;  // the path tracer's depth unless set below
+        s.maxDepth = 64;  // the path tracer's depth unless set below
         s.seed = 11;
         s.samplesPerPixel = 8;
         s.maxDepth = depth;
@@ -495,8 +506,10 @@ TEST(PathTracer, EquiangularAgreesWithFreeFlightAndCutsTheVarianceNearThePointLi
         std::sort(ratioNear.begin(), ratioNear.end());
         std::sort(ratioFar.begin(), ratioFar.end());
         const double medNear = ratioNear[ratioNear.size() / 2], medFar = ratioFar[ratioFar.size() / 2];
-        std::printf("max depth %d: standard error equiangular / free flight, median: %.3f near the light "
-                    "(%zu values), %.3f elsewhere\n", depth, medNear, ratioNear.size(), medFar);
+        std::printf(
+            "max depth %d: standard error equiangular / free flight, median: %.3f near the light "
+            "(%zu values), %.3f elsewhere\n",
+            depth, medNear, ratioNear.size(), medFar);
         // Measured (seed 11): 0.54 / 0.60 at depth 1, 0.32 / 0.88 at depth 4. The free-flight error
         // estimate near the light is itself an underestimate (its variance is infinite), so the
         // true gain there is larger than this ratio shows.
@@ -571,8 +584,10 @@ TEST(PathTracer, FirstArrivalIsGeometricPathLengthWithMirror) {
                 if (camLen > glm::length(p - o) + 1e-9) ++mirrored;
                 const double unw = glm::length(L - p) + emit;
                 const double real = camLen + unw;
-                lo[0] = std::min(lo[0], real); hi[0] = std::max(hi[0], real);
-                lo[1] = std::min(lo[1], unw); hi[1] = std::max(hi[1], unw);
+                lo[0] = std::min(lo[0], real);
+                hi[0] = std::max(hi[0], real);
+                lo[1] = std::min(lo[1], unw);
+                hi[1] = std::max(hi[1], unw);
             });
             if (hits == 0) {
                 EXPECT_EQ(firstBin(film, x, y, TimeAxis::Real), -1) << x << "," << y;
@@ -641,8 +656,10 @@ TEST(PathTracer, FirstArrivalThroughGlassSlab) {
                 const Vec3 p = p2 + t3 * d2;
                 const double unw = glm::length(L - p) + emit;
                 const double real = t1 + n * t2 + t3 + unw;
-                lo[0] = std::min(lo[0], real); hi[0] = std::max(hi[0], real);
-                lo[1] = std::min(lo[1], unw); hi[1] = std::max(hi[1], unw);
+                lo[0] = std::min(lo[0], real);
+                hi[0] = std::max(hi[0], real);
+                lo[1] = std::min(lo[1], unw);
+                hi[1] = std::max(hi[1], unw);
             });
             ASSERT_LT(hi[0], start + width * bins);
             ASSERT_GT(lo[1], start);
@@ -681,16 +698,17 @@ SceneDesc cornellDesc(int res) {
     const int mirror = b.mirror(Color(0.9));
     const int glass = b.dielectric(1.5, Color(1.0, 0.95, 0.9));
     const int null = b.nullMaterial();
-    b.quad(Vec3(-1, 0, -1), Vec3(0, 0, 2), Vec3(2, 0, 0), white)   // floor
-        .quad(Vec3(-1, 2, -1), Vec3(2, 0, 0), Vec3(0, 0, 2), white)   // ceiling
-        .quad(Vec3(-1, 0, -1), Vec3(2, 0, 0), Vec3(0, 2, 0), white)   // back
-        .quad(Vec3(-1, 0, -1), Vec3(0, 2, 0), Vec3(0, 0, 2), red)     // left
-        .quad(Vec3(1, 0, -1), Vec3(0, 0, 2), Vec3(0, 2, 0), green)    // right
+    b.quad(Vec3(-1, 0, -1), Vec3(0, 0, 2), Vec3(2, 0, 0), white)     // floor
+        .quad(Vec3(-1, 2, -1), Vec3(2, 0, 0), Vec3(0, 0, 2), white)  // ceiling
+        .quad(Vec3(-1, 0, -1), Vec3(2, 0, 0), Vec3(0, 2, 0), white)  // back
+        .quad(Vec3(-1, 0, -1), Vec3(0, 2, 0), Vec3(0, 0, 2), red)    // left
+        .quad(Vec3(1, 0, -1), Vec3(0, 0, 2), Vec3(0, 2, 0), green)   // right
         .quad(Vec3(-0.9, 0.8, -0.95), Vec3(0.6, 0, 0), Vec3(0, 0.6, 0), mirror)
         .sphere(Vec3(0.45, 0.35, 0.2), 0.3, glass)
         .sphere(Vec3(-0.4, 0.5, -0.2), 0.35, null, dense);
     b.pointLight(Vec3(0.0, 1.7, 0.0), Color(20.0))
-        .areaLight(Vec3(-0.25, 1.98, -0.25), Vec3(0.5, 0, 0), Vec3(0, 0, 0.5), Color(15.0, 13.0, 10.0), 0.2)  // normal -y
+        .areaLight(Vec3(-0.25, 1.98, -0.25), Vec3(0.5, 0, 0), Vec3(0, 0, 0.5), Color(15.0, 13.0, 10.0),
+                   0.2)  // normal -y
         .spotLight(Vec3(0.5, 1.8, 0.5), Vec3(0, -1, 0), 35.0, 25.0, Color(10.0))
         .laser(Vec3(-0.8, 1.0, 0.5), Vec3(1, 0, 0), Color(2.0));
     return b.desc();
@@ -717,7 +735,7 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
     s.seed = 5;
     s.samplesPerPixel = 4;
     s.threads = 2;
-    {   // A film that cuts both ends: part of the energy falls outside on both axes.
+    {  // A film that cuts both ends: part of the energy falls outside on both axes.
         SceneDesc d = cornellDesc(16);
         setFilm(d, 3.0, 0.1, 20);
         auto scene = test::prepareTestScene(d);
@@ -739,7 +757,7 @@ TEST(PathTracer, SteadyStateIsBinsPlusOutside) {
             EXPECT_NEAR(inside, binned[a], 1e-5 * steady) << "axis " << a;
         }
     }
-    {   // A film covering every path (bounded depth): per pixel and channel, steady = sum of bins.
+    {  // A film covering every path (bounded depth): per pixel and channel, steady = sum of bins.
         SceneDesc d = cornellDesc(16);
         setFilm(d, 0.0, 2.0, 60);
         auto scene = test::prepareTestScene(d);
@@ -803,8 +821,8 @@ TEST(PathTracer, DiffuseSphereFurnace) {
             for (int px = 0; px < W * H; ++px) v += e.at(p, px, 2 * bins, c);
             return v / (W * H);
         });
-        EXPECT_LT(std::abs(tFurnace.add(m, expected[c])), 4.0) << "channel " << c << ": " << m.mean << " +- " << m.se
-                                                          << " vs " << expected[c];
+        EXPECT_LT(std::abs(tFurnace.add(m, expected[c])), 4.0)
+            << "channel " << c << ": " << m.mean << " +- " << m.se << " vs " << expected[c];
         EXPECT_NEAR(m.mean / expected[c], 1.0, 0.03);
     }
     // Light reaches the wall at emit + R (unwarped: the same for every pixel); the camera adds
@@ -817,7 +835,10 @@ TEST(PathTracer, DiffuseSphereFurnace) {
             for (int ax = 0; ax < 2; ++ax)
                 for (int k = 0; k < bins && first[ax] < 0; ++k)
                     for (int p = 0; p < passes; ++p)
-                        if (e.at(p, px, ax * bins + k, 1) > 0.0) { first[ax] = k; break; }
+                        if (e.at(p, px, ax * bins + k, 1) > 0.0) {
+                            first[ax] = k;
+                            break;
+                        }
             EXPECT_EQ(first[1], kUnw) << "pixel " << x << "," << y;
             double lo = kInf, hi = -kInf;
             gridFootprint(scene->camera, x, y, 6, [&](const Vec3& o, const Vec3& dir) {
@@ -854,10 +875,11 @@ TEST(PathTracer, AlbedoOneBoxWithAHugeMaxDepthEndsEveryPath) {
     ASSERT_EQ(test::renderPathTracer(*scene, s, 1, 1, film, &st), 1);
     const double q = kDeepRouletteSurvival, paths = double(st.cameraPaths);
     const double mean = kDeepRouletteDepth + q / (1.0 - q), sigmaMean = std::sqrt(q) / (1.0 - q) / std::sqrt(paths);
-    std::printf("albedo-1 box, max_depth 1e5: %lld paths, %.2f vertices (shadow rays) per path (expect %.2f +- %.2f), "
-                "%lld depth-limited\n",
-                static_cast<long long>(st.cameraPaths), st.shadowRays / paths, mean, sigmaMean,
-                static_cast<long long>(st.depthLimited));
+    std::printf(
+        "albedo-1 box, max_depth 1e5: %lld paths, %.2f vertices (shadow rays) per path (expect %.2f +- %.2f), "
+        "%lld depth-limited\n",
+        static_cast<long long>(st.cameraPaths), st.shadowRays / paths, mean, sigmaMean,
+        static_cast<long long>(st.depthLimited));
     EXPECT_EQ(st.cameraPaths, 8 * 8 * 4);
     EXPECT_EQ(st.depthLimited, 0);
     EXPECT_NEAR(st.shadowRays / paths, mean, 5.0 * sigmaMean);
@@ -871,7 +893,7 @@ TEST(PathTracer, AlbedoOneBoxWithAHugeMaxDepthEndsEveryPath) {
 TEST(PathTracer, AreaLightDirectAndNextEventMatchQuadrature) {
     const int W = 24, H = 24;
     const double emit = 0.43, albedo = 0.6, hl = 1.0;  // emit mid-bin
-    const double half = 0.4;  // light: [-half, half]^2 at height hl
+    const double half = 0.4;                           // light: [-half, half]^2 at height hl
     SceneDesc d = baseDesc(W, H, Vec3(0.0, 0.2, 1.2), Vec3(0.0, 0.45, 0.0), 70.0);
     const double start = 0.0, width = 0.05;
     const int bins = 120;
@@ -1133,7 +1155,8 @@ TEST(PathTracer, NullBoundedMediumSingleScattering) {
         for (int c = 0; c < 3; ++c) {
             const MeanSe m = overPasses(passes, [&](int p) { return e.at(p, pix[i], 2 * bins, c); });
             EXPECT_LT(std::abs(tNullPix.add(m, refs[i].total[c])), 4.5)
-                << "pixel " << pix[i] << " channel " << c << ": " << m.mean << " +- " << m.se << " vs " << refs[i].total[c];
+                << "pixel " << pix[i] << " channel " << c << ": " << m.mean << " +- " << m.se << " vs "
+                << refs[i].total[c];
         }
     int checkedBins = 0;
     for (int a = 0; a < 2; ++a)
@@ -1142,7 +1165,8 @@ TEST(PathTracer, NullBoundedMediumSingleScattering) {
             const MeanSe m = overPasses(passes, [&](int p) {
                 double v = 0.0;
                 for (int px : pix)
-                    v += lum(Color(e.at(p, px, a * bins + k, 0), e.at(p, px, a * bins + k, 1), e.at(p, px, a * bins + k, 2)));
+                    v += lum(Color(e.at(p, px, a * bins + k, 0), e.at(p, px, a * bins + k, 1),
+                                   e.at(p, px, a * bins + k, 2)));
                 return v;
             });
             if (ref < 1e-6 * lum(total.total)) {

@@ -19,9 +19,9 @@
 #include <string>
 
 using namespace tpb;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
-using ::testing::AllOf;
 
 namespace {
 
@@ -213,11 +213,13 @@ namespace {
 std::string sceneJson(const std::string& film, const std::string& render) {
     return R"({"version": 1,
 "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "resolution": [8, 6]},
-"film": )" + film + R"(,
+"film": )" +
+           film + R"(,
 "media": {"fog": {"sigma_s": 0.5, "sigma_a": 0.1}},
 "global_medium": "fog",
 "lights": [{"type": "point", "position": [0, 0, 0], "power": 1}],
-"render": )" + render + "}";
+"render": )" +
+           render + "}";
 }
 }  // namespace
 
@@ -335,7 +337,8 @@ TEST(SceneLoaderRender, EstimatorAndTimeKernelKeys) {
     const auto load = [&](const std::string& render) { return loadSceneFromString(sceneJson(film, render), "t.json"); };
     EXPECT_EQ(load(R"({"time_kernel": "box"})").render.timeKernel, (TimeKernelSettings{TimeKernelKind::Box, 0.0}));
     EXPECT_EQ(load(R"({"time_kernel": "none"})").render.timeKernel, TimeKernelSettings{});
-    EXPECT_EQ(load(R"({"time_kernel": {"width": 0.2}})").render.timeKernel, (TimeKernelSettings{TimeKernelKind::Box, 0.2}));
+    EXPECT_EQ(load(R"({"time_kernel": {"width": 0.2}})").render.timeKernel,
+              (TimeKernelSettings{TimeKernelKind::Box, 0.2}));
     EXPECT_EQ(load(R"({"volume_estimator": "beam2d", "surface_estimator": "ppm"})").render.volumeEstimator, "beam2d");
     EXPECT_THAT(errorOf([&] { load(R"({"time_kernel": "gauss"})"); }),
                 AllOf(StartsWith("t.json:7: render.time_kernel: "), HasSubstr("allowed: none, box")));

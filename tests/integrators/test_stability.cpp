@@ -145,18 +145,22 @@ struct LaserBox {
 
     std::string json() const {
         return R"({"version": 1,
-          "camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "fov": )" + num(fov) + R"(, "resolution": [)" +
-               std::to_string(res) + ", " + std::to_string(res) + R"(]},
-          "film": {"start_m": )" + num(filmStart) + R"(, "bin_width_m": )" + num(binWidth) + R"(, "bins": )" +
-               std::to_string(bins) + R"(},
-          "media": {"m": {"sigma_s": )" + num(sigmaS) + R"(, "sigma_a": )" + num(sigmaA) + R"(, "g": )" + num(g) +
-               R"(, "ior": )" + num(ior) + R"(}},
+          "camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "fov": )" +
+               num(fov) + R"(, "resolution": [)" + std::to_string(res) + ", " + std::to_string(res) + R"(]},
+          "film": {"start_m": )" +
+               num(filmStart) + R"(, "bin_width_m": )" + num(binWidth) + R"(, "bins": )" + std::to_string(bins) + R"(},
+          "media": {"m": {"sigma_s": )" +
+               num(sigmaS) + R"(, "sigma_a": )" + num(sigmaA) + R"(, "g": )" + num(g) + R"(, "ior": )" + num(ior) +
+               R"(}},
           "materials": {"boundary": {"type": "null"}},
-          "shapes": [{"type": "box", "min": )" + vec(boxLo) + R"(, "max": )" + vec(boxHi) +
+          "shapes": [{"type": "box", "min": )" +
+               vec(boxLo) + R"(, "max": )" + vec(boxHi) +
                R"(, "material": "boundary", "interior_medium": "m"}],
-          "lights": [{"type": "laser", "position": )" + vec(laser) + R"(, "direction": )" + vec(dir) +
-               R"(, "power": )" + num(power) + R"(, "emit_time_m": )" + num(emit) + R"(}],
-          "render": {"photons_per_pass": )" + std::to_string(photons) + R"(, "radius": )" + num(radius) +
+          "lights": [{"type": "laser", "position": )" +
+               vec(laser) + R"(, "direction": )" + vec(dir) + R"(, "power": )" + num(power) + R"(, "emit_time_m": )" +
+               num(emit) + R"(}],
+          "render": {"photons_per_pass": )" +
+               std::to_string(photons) + R"(, "radius": )" + num(radius) +
                R"(, "surface_radius": 0.02, "alpha": 1.0, "max_depth": 1, "seed": )" + std::to_string(seed) + "}}";
     }
 };
@@ -169,8 +173,8 @@ struct ImageIntegral {
 // The reference of the file comment: 3D midpoint quadrature over the kernel cylinder.
 // sigmaT < 0: the box's sigma_s + sigma_a; 0 gives the sigma_t -> 0 limit (per unit sigma_s when
 // c.sigmaS = 1).
-ImageIntegral cylinderReference(const LaserBox& c, const test::TestScene& t, int nz = 1200, int nr = 12,
-                                int nphi = 24, double sigmaT = -1.0) {
+ImageIntegral cylinderReference(const LaserBox& c, const test::TestScene& t, int nz = 1200, int nr = 12, int nphi = 24,
+                                double sigmaT = -1.0) {
     const Scene& sc = *t;
     const TimeBins& time = t.time;
     ImageIntegral ref;
@@ -195,7 +199,8 @@ ImageIntegral cylinderReference(const LaserBox& c, const test::TestScene& t, int
                 const Vec3 x = c.laser + z * wb + rho * (std::cos(phi) * e1 + std::sin(phi) * e2);
                 if (glm::any(glm::lessThan(x, c.boxLo)) || glm::any(glm::greaterThan(x, c.boxHi))) continue;
                 double px, py;
-                if (!sc.camera.project(x, px, py) || px < 0 || py < 0 || px >= sc.camera.width || py >= sc.camera.height)
+                if (!sc.camera.project(x, px, py) || px < 0 || py < 0 || px >= sc.camera.width ||
+                    py >= sc.camera.height)
                     continue;
                 const Vec3 v = x - cam;
                 const double dist = glm::length(v);
@@ -331,11 +336,14 @@ ImageIntegral checkLaserBox(const LaserBox& c, const char* what, double tolStead
         int worstK = -1;
         for (int k = 0; k < sc.time.bins; ++k) {
             const double e = std::abs(got.bins[a][k] - ref.bins[a][k]);
-            if (e > worst) { worst = e; worstK = k; }
+            if (e > worst) {
+                worst = e;
+                worstK = k;
+            }
         }
-        EXPECT_LT(worst, tolBin * ref.steady) << what << " axis " << a << " bin " << worstK << ": "
-                                              << got.bins[a][std::max(worstK, 0)] << " vs "
-                                              << ref.bins[a][std::max(worstK, 0)];
+        EXPECT_LT(worst, tolBin * ref.steady)
+            << what << " axis " << a << " bin " << worstK << ": " << got.bins[a][std::max(worstK, 0)] << " vs "
+            << ref.bins[a][std::max(worstK, 0)];
     }
     return got;
 }
@@ -502,7 +510,7 @@ TEST(StabilityEmptyMedium, UnboundedBeamsOfAPointLightMatchTheClosedForm) {
                     const double sStar = glm::dot(-ray.o, ray.d), h = glm::length(ray.o + sStar * ray.d);
                     const double k = sigma * power / (16.0 * kPi * kPi) / (g * g);
                     const double tFirst = glm::length(ray.o);  // s = 0: straight from the light
-                    const auto mass = [&](double t) {  // int_0^{s(t)} ds / (h^2 + (s - s*)^2)
+                    const auto mass = [&](double t) {          // int_0^{s(t)} ds / (h^2 + (s - s*)^2)
                         if (t <= tFirst) return 0.0;
                         const double tp = t - sStar, u = (tp * tp - h * h) / (2.0 * tp);
                         return std::max(0.0, (std::atan(u / h) - std::atan(-sStar / h)) / h);
@@ -541,7 +549,8 @@ TEST(StabilityThickMedium, AbsorbingSlabTransmitsExactlyExpOfMinusTau) {
         return R"({"version": 1,
           "camera": {"position": [0, 0.3, 1.5], "look_at": [0, 0, 0], "fov": 30, "resolution": [16, 16]},
           "film": {"start_m": 1.5, "bin_width_m": 0.05, "bins": 40},
-          "media": {"slab": {"sigma_a": )" + num(sigmaA) + R"(}},
+          "media": {"slab": {"sigma_a": )" +
+               num(sigmaA) + R"(}},
           "materials": {"white": {"type": "diffuse", "albedo": 0.5}, "boundary": {"type": "null"}},
           "shapes": [{"type": "quad", "corner": [-2, 0, -2], "edge_u": [0, 0, 4], "edge_v": [4, 0, 0], "material": "white"},
                      {"type": "box", "min": [-0.5, 0.4, -0.5], "max": [0.5, 0.5, 0.5], "material": "boundary",
@@ -640,13 +649,15 @@ TEST(StabilityThickMedium, SemiInfiniteSlabReflectsThePlaneAlbedoAndNothingPasse
         deepest = std::max(deepest, -std::min(b.origin.y, b.origin.y + b.length * b.dir.y));
     }
     const double sigmaR = std::sqrt(albedoRef * (1.0 - albedoRef) / pt.photons);
-    std::printf("thick slab: reflected %.4f vs plane albedo %.4f (H(1) = %.5f); %.2f beams/photon, deepest %.3g m, "
-                "%.3f s\n", reflected, albedoRef, H1, double(map.beams.size()) / pt.photons, deepest, sec);
+    std::printf(
+        "thick slab: reflected %.4f vs plane albedo %.4f (H(1) = %.5f); %.2f beams/photon, deepest %.3g m, "
+        "%.3f s\n",
+        reflected, albedoRef, H1, double(map.beams.size()) / pt.photons, deepest, sec);
     EXPECT_EQ(map.rejected, 0);
     EXPECT_EQ(below, 0.0);
     EXPECT_NEAR(reflected, albedoRef, 5.0 * sigmaR + 0.003);
     EXPECT_LT(double(map.beams.size()) / pt.photons, 4.0);  // Russian roulette on albedo 0.5
-    EXPECT_LT(deepest, 1e-3);                                // a thousand mean free paths
+    EXPECT_LT(deepest, 1e-3);                               // a thousand mean free paths
     // The full render: finite, and quick since photons die fast.
     const double r0 = nowSec();
     Rendered r = renderScene(json, 2);
@@ -857,7 +868,10 @@ TEST(StabilityManyPasses, PassOneMillionKeepsTheFilmFiniteAndNormalised) {
         std::vector<float> after;
         drv.film().steadyImage(after);
         double a = 0.0, b = 0.0;
-        for (size_t i = 0; i < after.size(); i += 3) { a += after[i]; b += before[i]; }
+        for (size_t i = 0; i < after.size(); i += 3) {
+            a += after[i];
+            b += before[i];
+        }
         EXPECT_GT(a, 0.0);
         if (alpha == 0.7) {
             EXPECT_NEAR(a, b, 0.1 * b);  // mean of 5 passes vs mean of 4
@@ -879,7 +893,8 @@ TEST(StabilityIor, GlassSlabDelaysArrivalsByEtaMinusOneTimesThickness) {
           "camera": {"position": [0, 0, 0], "look_at": [0, 0, -1], "fov": 30, "resolution": [32, 32]},
           "film": {"start_m": 2.0, "bin_width_m": 0.01, "bins": 400},
           "media": {"fog": {"sigma_s": 0.5, "sigma_a": 0.1, "g": 0.2}},
-          "materials": {"glass": {"type": "dielectric", "ior": )" + num(n) + R"(}, "boundary": {"type": "null"}},
+          "materials": {"glass": {"type": "dielectric", "ior": )" +
+               num(n) + R"(}, "boundary": {"type": "null"}},
           "shapes": [{"type": "box", "min": [-1.0, -0.3, -2.3], "max": [-0.9, 0.3, -1.7], "material": "glass"},
                      {"type": "box", "min": [-0.6, -0.4, -2.4], "max": [0.6, 0.4, -1.6], "material": "boundary",
                       "interior_medium": "fog"}],
@@ -921,12 +936,15 @@ TEST(StabilityIor, GlassSlabDelaysArrivalsByEtaMinusOneTimesThickness) {
                 if (firstB < 0 && b[k * 3] > 0.0) firstB = k;
                 peak = std::max(peak, a[k * 3]);
             }
-            if (firstA < 0) { EXPECT_LT(firstB, 0); continue; }
+            if (firstA < 0) {
+                EXPECT_LT(firstB, 0);
+                continue;
+            }
             ++lit;
             EXPECT_EQ(firstB, firstA + shift) << "ior " << n << " pixel " << p;
             for (int k = 0; k + shift < B; ++k)
-                EXPECT_NEAR(b[(k + shift) * 3], frac * a[k * 3], 1e-3 * frac * peak) << "ior " << n << " pixel " << p
-                                                                                    << " bin " << k;
+                EXPECT_NEAR(b[(k + shift) * 3], frac * a[k * 3], 1e-3 * frac * peak)
+                    << "ior " << n << " pixel " << p << " bin " << k;
         }
         EXPECT_GT(lit, 20);  // the fog beam's row across the image
     }
@@ -1031,7 +1049,8 @@ TEST(StabilityAlbedoOne, ClosedBoxFurnace) {
           "camera": {"position": [0, 0, 0.9], "look_at": [0, 0, 0], "fov": 60, "resolution": [16, 16]},
           "film": {"start_m": 0, "bin_width_m": 0.25, "bins": 32},
           "media": {"m": {"sigma_s": 2.0}}, "global_medium": "m",
-          "materials": {"wall": {"type": "diffuse", "albedo": )" + num(albedo) + R"(}},
+          "materials": {"wall": {"type": "diffuse", "albedo": )" +
+               num(albedo) + R"(}},
           "shapes": [{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": "wall", "flip_normals": true}],
           "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
           "render": {"photons_per_pass": 4000, "radius": 0.03, "surface_radius": 0.08, "max_depth": 48, "seed": 8}})";
@@ -1063,7 +1082,7 @@ TEST(StabilityAlbedoOne, ClosedBoxFurnace) {
         pt.threads = 2;
         const PhotonMap map = tracePhotons(*sc, pt);
         const size_t events = map.beams.size() + map.photons.size();
-        EXPECT_GE(events, static_cast<size_t>(pt.photons * pt.maxDepth));   // one beam or landing per level
+        EXPECT_GE(events, static_cast<size_t>(pt.photons * pt.maxDepth));      // one beam or landing per level
         EXPECT_LE(events, static_cast<size_t>(2 * pt.photons * pt.maxDepth));  // at most both
         for (const Beam& b : map.beams) ASSERT_EQ(b.power.x, 2.0 / pt.photons);
         for (const SurfacePhoton& ph : map.photons) ASSERT_EQ(ph.power.x, 2.0 / pt.photons);
@@ -1176,10 +1195,12 @@ TEST(StabilityFaults, ParallelForRethrowsAWorkersExceptionOnTheCallingThread) {
     for (int threads : {1, 2, 4}) {
         SCOPED_TRACE(threads);
         std::atomic<int64_t> ran{0};
-        EXPECT_THROW(parallelFor(100000, threads, [&](int64_t i, int) {
-            ++ran;
-            if (i == 37) throw std::runtime_error("item 37");
-        }), std::runtime_error);
+        EXPECT_THROW(parallelFor(100000, threads,
+                                 [&](int64_t i, int) {
+                                     ++ran;
+                                     if (i == 37) throw std::runtime_error("item 37");
+                                 }),
+                     std::runtime_error);
         EXPECT_GE(ran.load(), 38);
         EXPECT_LT(ran.load(), 100000);  // the other items were not all run after the failure
     }
@@ -1201,7 +1222,8 @@ TEST(StabilityDegenerate, ZeroAreaTrianglesAreHarmless) {
           "film": {"start_m": 1.5, "bin_width_m": 0.1, "bins": 30},
           "media": {"fog": {"sigma_s": 0.2}}, "global_medium": "fog",
           "materials": {"white": {"type": "diffuse", "albedo": 0.8}},
-          "shapes": [{"type": "mesh", "file": ")" + (dir / obj).string() + R"(", "material": "white"}],
+          "shapes": [{"type": "mesh", "file": ")" +
+               (dir / obj).string() + R"(", "material": "white"}],
           "lights": [{"type": "point", "position": [0.3, 0.8, 0.2], "power": 10}],
           "render": {"photons_per_pass": 3000, "radius": 0.03, "surface_radius": 0.05, "max_depth": 4, "seed": 5}})";
     };
@@ -1381,14 +1403,14 @@ TEST(StabilityDegenerate, ZeroLengthAndZeroPowerBeams) {
     };
     const Color P(0.01);
     const std::vector<Beam> good = {
-        {Vec3(-0.3, 0.05, -2.0), Vec3(1, 0, 0), 0.6, P, 0.0, 0, 1},                     // perpendicular
-        {Vec3(0.0, 0.0, -3.0), Vec3(0, 0, 1), 2.0, P, 0.0, 0, 1},                       // at the camera
+        {Vec3(-0.3, 0.05, -2.0), Vec3(1, 0, 0), 0.6, P, 0.0, 0, 1},                      // perpendicular
+        {Vec3(0.0, 0.0, -3.0), Vec3(0, 0, 1), 2.0, P, 0.0, 0, 1},                        // at the camera
         {Vec3(0.02, -0.3, -2.5), glm::normalize(Vec3(0, 1, 1e-9)), 1e12, P, 0.0, 0, 1},  // 1e12 m
     };
     std::vector<Beam> all = good;
-    all.push_back({Vec3(0.0, 0.0, -2.0), Vec3(1, 0, 0), 0.0, P, 0.0, 0, 1});           // zero length
-    all.push_back({Vec3(0.0, 0.0, -2.0), Vec3(0, 0, 1), 1e-300, P, 0.0, 0, 1});        // 1e-300 m
-    all.push_back({Vec3(0.0, 0.0, -2.5), Vec3(0, 1, 0), 1.0, Color(0.0), 0.0, 0, 1});  // zero power
+    all.push_back({Vec3(0.0, 0.0, -2.0), Vec3(1, 0, 0), 0.0, P, 0.0, 0, 1});               // zero length
+    all.push_back({Vec3(0.0, 0.0, -2.0), Vec3(0, 0, 1), 1e-300, P, 0.0, 0, 1});            // 1e-300 m
+    all.push_back({Vec3(0.0, 0.0, -2.5), Vec3(0, 1, 0), 1.0, Color(0.0), 0.0, 0, 1});      // zero power
     all.push_back({Vec3(0.0, -0.5, -2.5), Vec3(0, 1, 0), 1.0, Color(1e-300), 0.0, 0, 1});  // denormal result
     for (AccelBackend kind : {AccelBackend::Embree, AccelBackend::BruteForce, AccelBackend::Bvh}) {
         std::vector<double> a, b;
@@ -1427,7 +1449,10 @@ TEST(StabilityConcurrent, ViewerReadsWhileTheDriverRenders) {
     std::atomic<int64_t> badValues{0}, reads{0};
     const auto finite = [&](const std::vector<float>& v) {
         for (float x : v)
-            if (!(std::isfinite(x) && x >= 0.0f)) { ++badValues; return; }
+            if (!(std::isfinite(x) && x >= 0.0f)) {
+                ++badValues;
+                return;
+            }
     };
     drv.start([&](const PassStats& p) {
         EXPECT_GT(p.pass, 0u);

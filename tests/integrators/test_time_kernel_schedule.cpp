@@ -59,7 +59,7 @@ TEST(TimeKernelSchedule, RadiusAndHalfWidthShrinkAsIToTheMinusOneMinusAlphaOverD
         const PhotonBeamsIntegrator pb(*sc, s);
         const TimeKernelSchedule k = pb.timeKernels(sc.time);
         ASSERT_TRUE(k.volume.on);
-        EXPECT_EQ(k.volume.dim(), 3);  // beam2d: 2 + 1
+        EXPECT_EQ(k.volume.dim(), 3);   // beam2d: 2 + 1
         EXPECT_EQ(k.surface.dim(), 3);  // ppm: 2 + 1
         const double tau1 = k.volume.kernel(1).halfWidth, r1 = pb.beamRadius(1);
         EXPECT_EQ(r1, 0.03);
@@ -80,16 +80,16 @@ TEST(TimeKernelSchedule, RadiusAndHalfWidthShrinkAsIToTheMinusOneMinusAlphaOverD
         EXPECT_NEAR(logSlope(k.surface.kernel(100000).halfWidth, k.surface.kernel(10000000).halfWidth, 1e5, 1e7),
                     expected, 1e-5);
         // Off: D = 2, the faster shrink.
-        EXPECT_NEAR(logSlope(progressiveRadius(0.03, alpha, 100000, 2), progressiveRadius(0.03, alpha, 10000000, 2), 1e5,
-                             1e7),
-                    -(1.0 - alpha) / 2.0, 1e-5);
+        EXPECT_NEAR(
+            logSlope(progressiveRadius(0.03, alpha, 100000, 2), progressiveRadius(0.03, alpha, 10000000, 2), 1e5, 1e7),
+            -(1.0 - alpha) / 2.0, 1e-5);
     }
 }
 
 TEST(TimeKernelSchedule, DefaultWidthIsTheTimeToCrossThePassOneKernel) {
     auto sc = test::testSceneFrom(kScene);
-    EXPECT_DOUBLE_EQ(maxIndexOfRefraction(*sc, true), 1.33);   // the fog
-    EXPECT_DOUBLE_EQ(maxIndexOfRefraction(*sc, false), 1.5);   // the glass too
+    EXPECT_DOUBLE_EQ(maxIndexOfRefraction(*sc, true), 1.33);  // the fog
+    EXPECT_DOUBLE_EQ(maxIndexOfRefraction(*sc, false), 1.5);  // the glass too
     RenderSettings s = sc.settings;
     s.timeKernel = {TimeKernelKind::Box, 0.0};
     const TimeKernelSchedule k = timeKernelSchedule(*sc, s, sc.time);

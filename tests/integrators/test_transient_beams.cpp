@@ -49,7 +49,8 @@ double singleScatterReference(const test::TestScene& t, const Ray& ray, std::vec
         const Vec3 v = x - l.position;
         const double d = glm::length(v);
         const double cosT = glm::dot(v / d, -ray.d);
-        const double L = ss * std::exp(-st * s) * m.phase.eval(cosT) * l.power.x / (4.0 * kPi * d * d) * std::exp(-st * d);
+        const double L =
+            ss * std::exp(-st * s) * m.phase.eval(cosT) * l.power.x / (4.0 * kPi * d * d) * std::exp(-st * d);
         const int k = t.time.binOf(s + d + l.emitOpl);
         if (k >= 0 && k < t.time.bins) bins[k] += weight * L * h;
         total += weight * L * h;
@@ -82,7 +83,8 @@ std::string replaced(std::string s, const std::string& from, const std::string& 
 // The single-scattering setup with a denser medium, multiple scattering and a film long enough
 // that no energy arrives after its end.
 std::string denseScene() {
-    std::string json = replaced(kSingleScatter, "\"sigma_s\": 0.4, \"sigma_a\": 0.1", "\"sigma_s\": 2.0, \"sigma_a\": 0.5");
+    std::string json =
+        replaced(kSingleScatter, "\"sigma_s\": 0.4, \"sigma_a\": 0.1", "\"sigma_s\": 2.0, \"sigma_a\": 0.5");
     json = replaced(json, "\"bins\": 40", "\"bins\": 300");
     return replaced(json, "\"max_depth\": 1", "\"max_depth\": 8");
 }
@@ -111,7 +113,8 @@ TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
         double se = 0.0, sr = 0.0, be = 0.0, br = 0.0;
         for (int p = 0; p < W * H; ++p) {
             for (int k = 0; k < B; ++k) {
-                const double e = r.volume[(static_cast<size_t>(p) * B + k) * 3], rf = ref[static_cast<size_t>(p) * B + k];
+                const double e = r.volume[(static_cast<size_t>(p) * B + k) * 3],
+                             rf = ref[static_cast<size_t>(p) * B + k];
                 be += (e - rf) * (e - rf);
                 br += rf * rf;
             }
@@ -125,8 +128,8 @@ TEST(TransientBeams, SingleScatteringMatchesQuadraturePerPixelAndBin) {
     double s8, b8, s128, b128;
     errors(render(sc, ds, 8), s8, b8);
     errors(render(sc, ds, 128), s128, b128);
-    std::printf("single scattering: relative RMSE steady %.4f -> %.4f, per bin %.4f -> %.4f (8 -> 128 passes)\n", s8, s128,
-                b8, b128);
+    std::printf("single scattering: relative RMSE steady %.4f -> %.4f, per bin %.4f -> %.4f (8 -> 128 passes)\n", s8,
+                s128, b8, b128);
     EXPECT_LT(s128, 0.03);
     EXPECT_LT(b128, 0.06);
     EXPECT_LT(b128, b8);  // converges as passes accumulate and the radius shrinks
@@ -168,8 +171,10 @@ TEST(TransientBeams, SteadyStateEqualsBeforePlusBinsPlusAfterOnBothAxes) {
                 for (int k = 0; k < B; ++k) sum += vol[(p * B + k) * 3 + c];
                 // Continuous emission = step response: what came before, then the running sum.
                 const double b = before[p * 3 + c], e = after[p * 3 + c];
-                EXPECT_NEAR(cont[(p * B) * 3 + c], b + vol[(p * B) * 3 + c], 1e-6 * (b + sum) + 1e-15);  // `before` is read back as float
-                EXPECT_NEAR(cont[(p * B + B - 1) * 3 + c], b + sum, 1e-6 * (b + sum) + 1e-15);  // `before` is read back as float
+                EXPECT_NEAR(cont[(p * B) * 3 + c], b + vol[(p * B) * 3 + c],
+                            1e-6 * (b + sum) + 1e-15);  // `before` is read back as float
+                EXPECT_NEAR(cont[(p * B + B - 1) * 3 + c], b + sum,
+                            1e-6 * (b + sum) + 1e-15);  // `before` is read back as float
                 // Nothing is lost: steady = before + bins + after, on each axis.
                 EXPECT_NEAR(b + sum + e, steady[p * 3 + c], 1e-5 * steady[p * 3 + c] + 1e-12);
                 beforeTotal[a] += b;
@@ -229,8 +234,7 @@ TEST(TransientBeams, ContinuousEmissionIsTheStepResponseOnBothAxes) {
     for (TimeAxis axis : {TimeAxis::Real, TimeAxis::Unwarped}) {
         drv.film().afterImage(axis, after);
         drv.film().frame(B - 1, axis, EmissionMode::Continuous, last);
-        for (size_t i = 0; i < steady.size(); ++i)
-            EXPECT_NEAR(last[i], steady[i] - after[i], 1e-5 * steady[i]) << i;
+        for (size_t i = 0; i < steady.size(); ++i) EXPECT_NEAR(last[i], steady[i] - after[i], 1e-5 * steady[i]) << i;
     }
 }
 
@@ -243,8 +247,10 @@ TEST(TransientBeams, ContinuousEmissionIsTheStepResponseOnBothAxes) {
 //  - every beam reaches the film's end;
 //  - a film three times longer (longer beams, same photons) has the same values in the common bins.
 TEST(TransientBeams, LongBeamsInAnUnboundedMediumLoseNothingTheFilmShows) {
-    std::string json = replaced(kSingleScatter, "\"sigma_s\": 0.4, \"sigma_a\": 0.1", "\"sigma_s\": 0.0008, \"sigma_a\": 0.0002");
-    json = replaced(json, "\"start_m\": 2.8, \"bin_width_m\": 0.1, \"bins\": 40", "\"start_m\": 2.8, \"bin_width_m\": 1.0, \"bins\": 60");
+    std::string json =
+        replaced(kSingleScatter, "\"sigma_s\": 0.4, \"sigma_a\": 0.1", "\"sigma_s\": 0.0008, \"sigma_a\": 0.0002");
+    json = replaced(json, "\"start_m\": 2.8, \"bin_width_m\": 0.1, \"bins\": 40",
+                    "\"start_m\": 2.8, \"bin_width_m\": 1.0, \"bins\": 60");
     json = replaced(json, "\"look_at\": [0.6, 0, 0]", "\"look_at\": [0.6, 0, -10]");
     const std::string longer = replaced(json, "\"bins\": 60", "\"bins\": 180");
     auto sc = sceneFrom(json);
@@ -287,7 +293,10 @@ TEST(TransientBeams, LongBeamsInAnUnboundedMediumLoseNothingTheFilmShows) {
     EXPECT_LT(diff, 1e-6 * total);  // the same up to float summation order
     // The steady image of the short film misses some of the longer beams' light, by at most the cut flux's share.
     double steadyA = 0.0, steadyB = 0.0;
-    for (size_t i = 0; i < a.steady.size(); i += 3) { steadyA += a.steady[i]; steadyB += b.steady[i]; }
+    for (size_t i = 0; i < a.steady.size(); i += 3) {
+        steadyA += a.steady[i];
+        steadyB += b.steady[i];
+    }
     EXPECT_LE(steadyA, steadyB * (1 + 1e-6));
 }
 
@@ -345,7 +354,8 @@ TEST(TransientBeams, OneAndTwoThreadsGiveIdenticalFilms) {
     // Not vacuous: the camera is inside the box, so most pixels and many bins hold light (the fog,
     // the walls, the caustic and the mirror's images), all of which the two thread counts must share.
     size_t litPixels = 0, litValues = 0;
-    for (size_t p = 0; p < a.steady.size() / 3; ++p) litPixels += a.steady[3 * p] + a.steady[3 * p + 1] + a.steady[3 * p + 2] > 0.0f;
+    for (size_t p = 0; p < a.steady.size() / 3; ++p)
+        litPixels += a.steady[3 * p] + a.steady[3 * p + 1] + a.steady[3 * p + 2] > 0.0f;
     for (double v : a.volume) litValues += v > 0.0;
     EXPECT_GT(litPixels, a.steady.size() / 3 * 9 / 10) << "of " << a.steady.size() / 3 << " pixels";
     EXPECT_GT(litValues, a.volume.size() / 4) << "of " << a.volume.size() << " pixel-bin channels";
@@ -466,7 +476,8 @@ TEST(TransientBeams, WarmupPassesWeighByTheirShareOfThePhotons) {
     warm.warmupPasses = 1;
     EXPECT_EQ(warm.passWeight(1), 0.5);
     EXPECT_EQ(warm.passWeight(2), 1.0);
-    const Rendered w1 = render(sc, warm, 1), w2 = render(sc, warm, 2), p1 = render(sc, plain, 1), p2 = render(sc, plain, 2);
+    const Rendered w1 = render(sc, warm, 1), w2 = render(sc, warm, 2), p1 = render(sc, plain, 1),
+                   p2 = render(sc, plain, 2);
     ASSERT_EQ(w2.volume.size(), p2.volume.size());
     double scale = 0.0, err = 0.0, errEqual = 0.0;
     for (size_t i = 0; i < w2.volume.size(); ++i) {
@@ -497,7 +508,10 @@ TEST(TransientBeams, ExactAndUniformProfilesCarryTheSameEnergy) {
     for (size_t p = 0; p < a.steady.size() / 3; ++p) {
         EXPECT_EQ(a.steady[p * 3], b.steady[p * 3]);
         double sa = 0.0, sb = 0.0;
-        for (int k = 0; k < B; ++k) { sa += a.volume[(p * B + k) * 3]; sb += b.volume[(p * B + k) * 3]; }
+        for (int k = 0; k < B; ++k) {
+            sa += a.volume[(p * B + k) * 3];
+            sb += b.volume[(p * B + k) * 3];
+        }
         EXPECT_NEAR(sa, sb, 1e-5 * sa + 1e-12);
     }
 }
@@ -553,7 +567,8 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
     // Bins much finer than the time a ray-beam kernel spans: the paper's even spread smears each
     // estimate over its interval; the exact exponential profile keeps the shape. Same photons and
     // radii for both (same seed), so the difference is the time profile alone.
-    std::string json = replaced(kSingleScatter, "\"bin_width_m\": 0.1, \"bins\": 40", "\"bin_width_m\": 0.01, \"bins\": 400");
+    std::string json =
+        replaced(kSingleScatter, "\"bin_width_m\": 0.1, \"bins\": 40", "\"bin_width_m\": 0.01, \"bins\": 400");
     json = replaced(json, "\"radius\": 0.06", "\"radius\": 0.15");
     json = replaced(json, "\"resolution\": [6, 6]", "\"resolution\": [4, 4]");
     // Optically thick at the kernel's scale (sigma_t r ~ 0.5): the transmittance varies across
@@ -568,7 +583,8 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
             const int g = 4;
             for (int j = 0; j < g; ++j)
                 for (int i = 0; i < g; ++i)
-                    singleScatterReference(sc, sc->camera.generate(x + (i + 0.5) / g, y + (j + 0.5) / g), bins, 1.0 / (g * g));
+                    singleScatterReference(sc, sc->camera.generate(x + (i + 0.5) / g, y + (j + 0.5) / g), bins,
+                                           1.0 / (g * g));
             for (int k = 0; k < B; ++k) ref[(static_cast<size_t>(y) * W + x) * B + k] = bins[k];
         }
     auto binError = [&](const Rendered& r) {
@@ -587,8 +603,8 @@ TEST(TransientBeams, ExactTimeProfileBeatsUniformSpreadOnFineBins) {
     const double exact = binError(render(sc, ds, 48));
     ds.profile = TimeProfile::Uniform;
     const double uniform = binError(render(sc, ds, 48));
-    std::printf("per-bin relative RMSE with 0.01 m bins and r = 0.15 m: exact profile %.4f, uniform spread %.4f\n", exact,
-                uniform);
+    std::printf("per-bin relative RMSE with 0.01 m bins and r = 0.15 m: exact profile %.4f, uniform spread %.4f\n",
+                exact, uniform);
     EXPECT_LT(exact, uniform);
 }
 
@@ -637,17 +653,22 @@ TEST(TransientBeams, TimeKernelSmoothsBinsFarFinerThanTheSurfaceKernel) {
     const Rendered b = render(sc, on, passes);
     const size_t pixels = a.steady.size() / 3;
     const double ra = roughness(a.volume, pixels, sc.time.bins), rb = roughness(b.volume, pixels, sc.time.bins);
-    std::printf("surface ppm on 1000 bins of 2 mm, %d passes: bin-to-bin roughness %.4f without the time kernel, "
-                "%.4f with it (factor %.1f)\n", passes, ra, rb, ra / rb);
-    EXPECT_GT(ra, 0.5);        // spiky
-    EXPECT_LT(rb, 0.1);        // smooth
+    std::printf(
+        "surface ppm on 1000 bins of 2 mm, %d passes: bin-to-bin roughness %.4f without the time kernel, "
+        "%.4f with it (factor %.1f)\n",
+        passes, ra, rb, ra / rb);
+    EXPECT_GT(ra, 0.5);  // spiky
+    EXPECT_LT(rb, 0.1);  // smooth
     EXPECT_GT(ra / rb, 10.0);
     // Same photons and (pass 1) the same radius: the first pass's steady image is the same, and the
     // energy in the bins + outside is the same on both runs.
     const Rendered a1 = render(sc, off, 1), b1 = render(sc, on, 1);
     EXPECT_EQ(a1.steady, b1.steady);
     double sa = 0.0, sb = 0.0;
-    for (size_t i = 0; i < a1.volume.size(); i += 3) { sa += a1.volume[i]; sb += b1.volume[i]; }
+    for (size_t i = 0; i < a1.volume.size(); i += 3) {
+        sa += a1.volume[i];
+        sb += b1.volume[i];
+    }
     EXPECT_NEAR(sa, sb, 1e-3 * sa);  // the same up to the energy a box pushes past the film's ends
 }
 
@@ -679,8 +700,10 @@ TEST(TransientBeams, TimeKernelNarrowerThanTheBinsStillMatchesSingleScatteringOn
     wide.timeKernel = {TimeKernelKind::Box, 0.4};
     for (TimeAxis axis : {TimeAxis::Real, TimeAxis::Unwarped}) {
         const double eOff = error(ds, axis), eNarrow = error(narrow, axis), eWide = error(wide, axis);
-        std::printf("%s axis, %d passes: relative RMSE per bin vs quadrature: no time kernel %.4f, 2 cm kernel %.4f, "
-                    "40 cm kernel %.4f\n", axis == TimeAxis::Real ? "real" : "unwarped", passes, eOff, eNarrow, eWide);
+        std::printf(
+            "%s axis, %d passes: relative RMSE per bin vs quadrature: no time kernel %.4f, 2 cm kernel %.4f, "
+            "40 cm kernel %.4f\n",
+            axis == TimeAxis::Real ? "real" : "unwarped", passes, eOff, eNarrow, eWide);
         EXPECT_LT(eNarrow, 0.08);
         EXPECT_LT(eNarrow, eOff + 0.01);
         EXPECT_GT(eWide, 1.5 * eNarrow);
@@ -735,8 +758,8 @@ TEST(TransientBeams, DISABLED_MeasureTimeKernelOnFineBins) {
         s.alpha = c.alpha;
         s.timeKernel = c.kernel;
         Driver drv(*sc, s, sc.time);
-        std::printf("time kernel %s width %.4f, alpha %.3f: relative RMSE per bin", c.kernel.kind == TimeKernelKind::Box ? "box" : "none",
-                    c.kernel.width, c.alpha);
+        std::printf("time kernel %s width %.4f, alpha %.3f: relative RMSE per bin",
+                    c.kernel.kind == TimeKernelKind::Box ? "box" : "none", c.kernel.width, c.alpha);
         for (int p = 1; p <= 256; ++p) {
             ASSERT_TRUE(drv.runPass(p));
             if (p != 4 && p != 16 && p != 64 && p != 256) continue;

@@ -36,7 +36,8 @@ std::string slurp(const fs::path& p) {
 
 int countTmpFiles(const fs::path& dir) {
     int n = 0;
-    for (const auto& e : fs::directory_iterator(dir)) n += e.path().filename().string().find(".tmp-") != std::string::npos;
+    for (const auto& e : fs::directory_iterator(dir))
+        n += e.path().filename().string().find(".tmp-") != std::string::npos;
     return n;
 }
 

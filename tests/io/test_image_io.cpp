@@ -52,7 +52,8 @@ TEST(ImageIo, NonFiniteTexelIsRefusedAndNothingIsWritten) {
 // A light whose power could overflow the film's float sums is refused at load, naming the key.
 TEST(ImageIo, LightPowerBeyondTheFilmsRangeIsRefusedAtLoad) {
     for (const char* power : {"1e100", "1e300", "[1, 1, 1e21]"}) {
-        const std::string json = std::string(R"({"version": 1, "lights": [{"type": "point", "power": )") + power + "}]}";
+        const std::string json =
+            std::string(R"({"version": 1, "lights": [{"type": "point", "power": )") + power + "}]}";
         try {
             loadSceneFromString(json, "big.json");
             ADD_FAILURE() << power << " was accepted";

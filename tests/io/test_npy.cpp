@@ -23,7 +23,8 @@ std::string slurp(const std::filesystem::path& p) {
 }  // namespace
 
 TEST(NpyHeader, MagicVersionLengthAndDictPaddedTo64Bytes) {
-    for (const std::vector<int64_t>& shape : std::vector<std::vector<int64_t>>{{4, 5, 7, 3}, {2, 3, 3}, {10}, {1024, 2048, 4096, 3}}) {
+    for (const std::vector<int64_t>& shape :
+         std::vector<std::vector<int64_t>>{{4, 5, 7, 3}, {2, 3, 3}, {10}, {1024, 2048, 4096, 3}}) {
         const std::string h = npyHeader(shape);
         ASSERT_GE(h.size(), 10u);
         EXPECT_EQ(h.substr(0, 6), std::string("\x93NUMPY"));
@@ -41,9 +42,9 @@ TEST(NpyHeader, MagicVersionLengthAndDictPaddedTo64Bytes) {
         EXPECT_EQ(dict.substr(0, want.size()), want);
         EXPECT_EQ(dict.find_first_not_of(' ', want.size()), dict.size() - 1) << "only spaces, then the newline";
     }
-    EXPECT_EQ(npyHeader({4, 5, 7, 3}),
-              std::string("\x93NUMPY\x01\x00\x76\x00", 10) +
-                  "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 5, 7, 3), }" + std::string(52, ' ') + "\n");
+    EXPECT_EQ(npyHeader({4, 5, 7, 3}), std::string("\x93NUMPY\x01\x00\x76\x00", 10) +
+                                           "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 5, 7, 3), }" +
+                                           std::string(52, ' ') + "\n");
     EXPECT_EQ(npyCount({4, 5, 7, 3}), 420u);
 }
 

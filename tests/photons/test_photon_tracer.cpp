@@ -36,7 +36,8 @@ std::string boxScene(const std::string& medium) {
       "version": 1,
       "camera": {"position": [0, 1, 0.9], "look_at": [0, 1, 0], "fov": 40, "resolution": [8, 8]},
       "film": {"start_m": 0, "bin_width_m": 0.1, "bins": 8},
-      "media": {"fog": )" + medium + R"(},
+      "media": {"fog": )" +
+           medium + R"(},
       "global_medium": "fog",
       "materials": {"white": {"type": "diffuse", "albedo": 0.7}},
       "shapes": [{"type": "box", "min": [-1, 0, -1], "max": [1, 2, 1], "material": "white", "flip_normals": true}],
@@ -51,7 +52,8 @@ std::string openScene(const std::string& medium) {
       "version": 1,
       "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 20, "resolution": [4, 4]},
       "film": {"start_m": 0, "bin_width_m": 0.1, "bins": 8},
-      "media": {"m": )" + medium + R"(},
+      "media": {"m": )" +
+           medium + R"(},
       "global_medium": "m",
       "lights": [{"type": "point", "position": [0, 0, 0], "power": 7}],
       "render": {"photons_per_pass": 1000, "radius": 0.05, "seed": 2}
@@ -80,7 +82,8 @@ bool sameBeam(const Beam& a, const Beam& b) {
            a.region == b.region && a.depth == b.depth;
 }
 bool samePhoton(const SurfacePhoton& a, const SurfacePhoton& b) {
-    return a.position == b.position && a.dirIn == b.dirIn && a.normal == b.normal && a.power == b.power && a.opl == b.opl;
+    return a.position == b.position && a.dirIn == b.dirIn && a.normal == b.normal && a.power == b.power &&
+           a.opl == b.opl;
 }
 
 // The axis-aligned region R of the fluence integrals.
@@ -117,7 +120,11 @@ double expIntegral(double tau, double t0, double t1) {
 struct Moments {
     Color sum{0.0}, sum2{0.0};
     int64_t n = 0;
-    void add(const Color& x) { sum += x; sum2 += x * x; ++n; }
+    void add(const Color& x) {
+        sum += x;
+        sum2 += x * x;
+        ++n;
+    }
     Color total() const { return sum; }  // the estimate of the integral (powers are divided by n)
     // Standard error of the total: n * sqrt(var / n).
     Color totalError() const {
@@ -182,14 +189,16 @@ TEST(PhotonTracerPoints, EachPointEndsItsBeamWithTheSameDepthAndWeight) {
             size_t k = 0;
             for (const Beam& b : one.beams) {
                 const Vec3 end = b.origin + b.length * b.dir;
-                if (k < one.points.size() && glm::length(one.points[k].position - end) < 1e-9 * (1.0 + glm::length(end))) {
+                if (k < one.points.size() &&
+                    glm::length(one.points[k].position - end) < 1e-9 * (1.0 + glm::length(end))) {
                     const VolumePhoton& v = one.points[k];
                     EXPECT_EQ(v.depth, b.depth);
                     EXPECT_EQ(v.region, b.region);
                     EXPECT_EQ(v.dirIn, b.dir);
                     EXPECT_NEAR(v.opl, b.opl0 + eta * b.length, 1e-12 * (1.0 + v.opl));
                     for (int c = 0; c < 3; ++c) {
-                        const double atEnd = b.power[c] * std::exp(-m.sigma_t[c] * b.length) / std::exp(-sigmaBar * b.length);
+                        const double atEnd =
+                            b.power[c] * std::exp(-m.sigma_t[c] * b.length) / std::exp(-sigmaBar * b.length);
                         EXPECT_NEAR(v.power[c], atEnd / sigmaBar, 1e-12 * v.power[c]) << "channel " << c;
                     }
                     if (v.depth > 0) ++deeper;
@@ -225,7 +234,8 @@ TEST(PhotonTracerPoints, PointsEstimateTheSameFluenceAsLongAndShortBeams) {
             const auto beamPart = [&](const Beam& b, const Color& tau) {
                 const auto in = region.clip(b.origin, b.dir, b.length);
                 if (!in) return Color(0.0);
-                return b.power * Color(expIntegral(tau.x, in->first, in->second), expIntegral(tau.y, in->first, in->second),
+                return b.power * Color(expIntegral(tau.x, in->first, in->second),
+                                       expIntegral(tau.y, in->first, in->second),
                                        expIntegral(tau.z, in->first, in->second));
             };
             for (const Beam& b : l.beams) xl += beamPart(b, m.sigma_t);
@@ -240,9 +250,11 @@ TEST(PhotonTracerPoints, PointsEstimateTheSameFluenceAsLongAndShortBeams) {
             const double total = longBeams.total()[c];
             const double zLong = dLong.total()[c] / dLong.totalError()[c];
             const double zShort = dShort.total()[c] / dShort.totalError()[c];
-            std::printf("%s channel %d: fluence integral points %.5f +- %.5f, long beams %.5f, short beams %.5f (z %.2f, %.2f)\n",
-                        medium == kGrey ? "grey" : "chromatic", c, points.total()[c], points.totalError()[c], total,
-                        shortBeams.total()[c], zLong, zShort);
+            std::printf(
+                "%s channel %d: fluence integral points %.5f +- %.5f, long beams %.5f, short beams %.5f (z %.2f, "
+                "%.2f)\n",
+                medium == kGrey ? "grey" : "chromatic", c, points.total()[c], points.totalError()[c], total,
+                shortBeams.total()[c], zLong, zShort);
             EXPECT_LT(std::abs(zLong), 4.0) << "channel " << c;
             EXPECT_LT(std::abs(zShort), 4.0) << "channel " << c;
             // The test resolves a few percent: the difference's error is well below 1% of the value.
@@ -307,7 +319,8 @@ std::string furnaceScene(double wallAlbedo, bool fog = true) {
       "camera": {"position": [0, 0, 0.9], "look_at": [0, 0, 0], "fov": 60, "resolution": [8, 8]},
       "film": {"start_m": 0, "bin_width_m": 0.25, "bins": 8},)") +
            (fog ? R"("media": {"m": {"sigma_s": 2.0}}, "global_medium": "m",)" : "") + R"(
-      "materials": {"wall": {"type": "diffuse", "albedo": )" + std::to_string(wallAlbedo) + R"(}},
+      "materials": {"wall": {"type": "diffuse", "albedo": )" +
+           std::to_string(wallAlbedo) + R"(}},
       "shapes": [{"type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": "wall", "flip_normals": true}],
       "lights": [{"type": "point", "position": [0.2, 0.1, -0.3], "power": 2}],
       "render": {"photons_per_pass": 2000, "seed": 8}})";
@@ -334,10 +347,11 @@ TEST(PhotonTracerDeepRoulette, AlbedoOneBoxWithAHugeMaxDepthEndsEveryPhoton) {
     const double beamsPerPhoton = double(map.beams.size()) / double(p.photons);
     uint32_t deepest = 0;
     for (const Beam& b : map.beams) deepest = std::max(deepest, b.depth);
-    std::printf("albedo-1 box, max_depth 1e6: %.2f beams/photon (expect %.2f +- %.2f), %.2f surface photons/photon, "
-                "deepest event %u, %.1f MB\n",
-                beamsPerPhoton, meanEvents, sigmaMean, double(map.photons.size()) / p.photons, deepest,
-                storedMapBytes(map) / 1e6);
+    std::printf(
+        "albedo-1 box, max_depth 1e6: %.2f beams/photon (expect %.2f +- %.2f), %.2f surface photons/photon, "
+        "deepest event %u, %.1f MB\n",
+        beamsPerPhoton, meanEvents, sigmaMean, double(map.photons.size()) / p.photons, deepest,
+        storedMapBytes(map) / 1e6);
     EXPECT_NEAR(beamsPerPhoton, meanEvents, 5.0 * sigmaMean);
     EXPECT_LT(deepest, 1000u);  // P(one photon past 1000) = 0.95^936 ~ 1e-21
 }
@@ -374,13 +388,16 @@ TEST(PhotonTracerDeepRoulette, EndingFullWeightPathsKeepsTheEnergy) {
     const Tally off = run(std::numeric_limits<int>::max()), deep = run(1);
     const double n = 20000.0, phi = 2.0;
     const auto var = [&](double s, double s2) { return (s2 - s * s / n) / (n - 1.0) * n; };  // of the sum
-    const double zLanded = (deep.landed - off.landed) / std::sqrt(var(deep.landed, deep.landed2) + var(off.landed, off.landed2));
-    const double zTrack = (deep.track - off.track) / std::sqrt(var(deep.track, deep.track2) + var(off.track, off.track2));
+    const double zLanded =
+        (deep.landed - off.landed) / std::sqrt(var(deep.landed, deep.landed2) + var(off.landed, off.landed2));
+    const double zTrack =
+        (deep.track - off.track) / std::sqrt(var(deep.track, deep.track2) + var(off.track, off.track2));
     const double zClosed = (deep.landed - phi / (1.0 - 0.8)) / std::sqrt(var(deep.landed, deep.landed2));
-    std::printf("deep roulette: landed %.4f vs %.4f without vs %.4f closed form (z %.2f, %.2f); track %.4f vs %.4f "
-                "(z %.2f); %.1f vs %.1f events/photon\n",
-                deep.landed / phi, off.landed / phi, 1.0 / (1.0 - 0.8), zLanded, zClosed, deep.track, off.track, zTrack,
-                deep.events / n, off.events / n);
+    std::printf(
+        "deep roulette: landed %.4f vs %.4f without vs %.4f closed form (z %.2f, %.2f); track %.4f vs %.4f "
+        "(z %.2f); %.1f vs %.1f events/photon\n",
+        deep.landed / phi, off.landed / phi, 1.0 / (1.0 - 0.8), zLanded, zClosed, deep.track, off.track, zTrack,
+        deep.events / n, off.events / n);
     EXPECT_LT(deep.events, 0.8 * off.events);  // the deep rule did act
     EXPECT_LT(std::abs(zLanded), 4.0);
     EXPECT_LT(std::abs(zTrack), 4.0);

@@ -75,10 +75,14 @@ std::string cpuKey() {
     std::ifstream in("/proc/cpuinfo");
     std::string line, flags;
     while (std::getline(in, line))
-        if (line.rfind("flags", 0) == 0) { flags = " " + line.substr(line.find(':') + 1) + " "; break; }
+        if (line.rfind("flags", 0) == 0) {
+            flags = " " + line.substr(line.find(':') + 1) + " ";
+            break;
+        }
     std::string isa;
     for (const char* f : {"sse4_2", "avx", "avx2", "avx512f", "avx512vl", "avx512bw", "avx512dq"})
-        if (flags.find(std::string(" ") + f + " ") != std::string::npos) isa += (isa.empty() ? "" : " ") + std::string(f);
+        if (flags.find(std::string(" ") + f + " ") != std::string::npos)
+            isa += (isa.empty() ? "" : " ") + std::string(f);
     return cpuModel() + " [" + isa + "]";
 }
 
@@ -96,9 +100,15 @@ std::vector<HashBlock> readHashFile(const std::string& path) {
     std::string line;
     while (std::getline(in, line)) {
         if (line.empty() || line[0] == '#') continue;
-        if (line.rfind("cpu ", 0) == 0) { blocks.push_back({line.substr(4), "", {}}); continue; }
+        if (line.rfind("cpu ", 0) == 0) {
+            blocks.push_back({line.substr(4), "", {}});
+            continue;
+        }
         if (blocks.empty()) blocks.push_back({"unknown", "", {}});
-        if (line.rfind("build ", 0) == 0) { blocks.back().build = line.substr(6); continue; }
+        if (line.rfind("build ", 0) == 0) {
+            blocks.back().build = line.substr(6);
+            continue;
+        }
         std::istringstream ss(line);
         std::string name;
         Signature s;
@@ -229,7 +239,8 @@ TEST(FilmHashes, EveryShippedSceneRendersAsRecorded) {
                 if (b.cpu != cpuKey()) keep.push_back(b);
         keep.push_back({cpuKey(), buildFingerprint(), got});
         std::ofstream out(kDataFile);
-        out << "# tests/regression/test_film_hashes.cpp: scene hash sum_real sum_unwarped sum_steady before_real before_unwarped sumsq_real\n";
+        out << "# tests/regression/test_film_hashes.cpp: scene hash sum_real sum_unwarped sum_steady before_real "
+               "before_unwarped sumsq_real\n";
         for (const HashBlock& b : keep) {
             out << "cpu " << b.cpu << "\n";
             out << "build " << b.build << "\n";
@@ -266,10 +277,13 @@ TEST(FilmHashes, EveryShippedSceneRendersAsRecorded) {
         const double tol = exact ? 1e-5 : 1e-3;
         for (int i = 0; i < 6; ++i)
             EXPECT_NEAR(s.sums[i], w->sums[i], tol * std::abs(w->sums[i]) + 1e-30) << name << " sum " << i;
-        if (exact) EXPECT_EQ(s.hash, w->hash) << name << ": the film changed (a block of this CPU, " << cpuKey() << ", holds another hash)";
+        if (exact)
+            EXPECT_EQ(s.hash, w->hash) << name << ": the film changed (a block of this CPU, " << cpuKey()
+                                       << ", holds another hash)";
         else if (s.hash != w->hash)
             std::printf("note: %s hash %s differs from the recorded %s (recorded on another CPU: %s; this is %s)\n",
-                        name.c_str(), s.hash.c_str(), w->hash.c_str(), candidates.front()->cpu.c_str(), cpuKey().c_str());
+                        name.c_str(), s.hash.c_str(), w->hash.c_str(), candidates.front()->cpu.c_str(),
+                        cpuKey().c_str());
     }
     EXPECT_EQ(got.size(), want.size()) << "scenes were added or removed: re-record with TPB_UPDATE_HASHES=1";
 }

@@ -36,14 +36,17 @@ std::string boxScene(const std::string& render, const std::string& estimator = "
   "materials": {"white": {"type": "diffuse", "albedo": 0.5}},
   "shapes": [{"type": "box", "min": [-1, 0, -1], "max": [1, 2, 1], "material": "white", "flip_normals": true}],
   "lights": [{"type": "point", "position": [0.2, 1.5, -0.3], "power": 10}],
-  "render": {"volume_estimator": ")" + estimator + R"(", "photons_per_pass": 3000, "max_depth": 8, "seed": 5)" +
-           render + "}\n}";
+  "render": {"volume_estimator": ")" +
+           estimator + R"(", "photons_per_pass": 3000, "max_depth": 8, "seed": 5)" + render + "}\n}";
 }
 
-PreparedRender prepare(const std::string& json, const SettingsOverrides& o = {}, std::vector<std::string>* warnings = nullptr) {
+PreparedRender prepare(const std::string& json, const SettingsOverrides& o = {},
+                       std::vector<std::string>* warnings = nullptr) {
     PrepareOptions opt;
     opt.pilot.run = false;
-    opt.warn = [warnings](const std::string& w) { if (warnings) warnings->push_back(w); };
+    opt.warn = [warnings](const std::string& w) {
+        if (warnings) warnings->push_back(w);
+    };
     return prepareRender(loadSceneFromString(json, "auto.json"), o, opt);
 }
 
@@ -92,7 +95,8 @@ TEST(AutoRadius, BeamsPerRandomChordMatchTheTarget) {
     int lines = 0;
     while (lines < 3000) {
         const Vec3 d = sampleUniformSphere(rng.uniform(), rng.uniform());
-        const Vec3 t1 = glm::normalize(std::abs(d.x) < 0.9 ? glm::cross(d, Vec3(1, 0, 0)) : glm::cross(d, Vec3(0, 1, 0)));
+        const Vec3 t1 =
+            glm::normalize(std::abs(d.x) < 0.9 ? glm::cross(d, Vec3(1, 0, 0)) : glm::cross(d, Vec3(0, 1, 0)));
         const Vec3 t2 = glm::cross(d, t1);
         const double u = 2.0 * rng.uniform() - 1.0, v = 2.0 * rng.uniform() - 1.0;
         if (u * u + v * v > 1.0) continue;
@@ -169,7 +173,8 @@ TEST(AutoRadius, FlagsOverridesAndBadValues) {
     ASSERT_EQ(warnings.size(), 1u);
     EXPECT_THAT(warnings[0], HasSubstr("render.radius: auto: no scattering medium"));
     // Bad values name the file, the line and the key.
-    EXPECT_THAT(errorOf(boxScene(R"(, "radius": "big")")), HasSubstr("auto.json:10: render.radius: radius must be a length"));
+    EXPECT_THAT(errorOf(boxScene(R"(, "radius": "big")")),
+                HasSubstr("auto.json:10: render.radius: radius must be a length"));
     EXPECT_THAT(errorOf(boxScene(R"(, "radius": "auto", "radius_relative": 0.01)")),
                 HasSubstr("render.radius_relative: give either radius"));
 }

@@ -109,47 +109,49 @@ TEST_F(CheckpointTest, WrittenAndReadBackIsTheSameFilm) {
 // Also with a warm-up that the checkpoint cuts in two (passes 1-2 of W = 3 weigh about 1/8 + 1/4): the
 // summed weight, the film's divisor, comes back from the file.
 TEST_F(CheckpointTest, ResumedRenderIsBitIdenticalToOneUninterruptedRun) {
-  for (const int warmup : {0, 3}) {
-    SCOPED_TRACE("warm-up " + std::to_string(warmup));
-    const test::TestScene ts = test::testSceneFrom(kScene);
-    RenderSettings s = ts.settings;  // 6 passes
-    s.threads = 2;
-    s.warmupPasses = warmup;
-    Driver whole(*ts, s, ts.time);
-    whole.start();
-    whole.wait();
-    ASSERT_EQ(whole.completedPasses(), 6u);
+    for (const int warmup : {0, 3}) {
+        SCOPED_TRACE("warm-up " + std::to_string(warmup));
+        const test::TestScene ts = test::testSceneFrom(kScene);
+        RenderSettings s = ts.settings;  // 6 passes
+        s.threads = 2;
+        s.warmupPasses = warmup;
+        Driver whole(*ts, s, ts.time);
+        whole.start();
+        whole.wait();
+        ASSERT_EQ(whole.completedPasses(), 6u);
 
-    RenderSettings first = s;
-    first.passes = 2;
-    first.threads = 1;
-    Driver part(*ts, first, ts.time);
-    part.start();
-    part.wait();
-    writeCheckpoint(path(), infoOf(ts, s, 2), part.film(), part.history());
+        RenderSettings first = s;
+        first.passes = 2;
+        first.threads = 1;
+        Driver part(*ts, first, ts.time);
+        part.start();
+        part.wait();
+        writeCheckpoint(path(), infoOf(ts, s, 2), part.film(), part.history());
 
-    Checkpoint c = readCheckpoint(path());
-    RenderSettings rest = s;
-    rest.threads = 2;
-    Driver resumed(*ts, rest, ts.time);
-    resumed.restore(std::move(c.film), std::move(c.history));
-    EXPECT_EQ(resumed.completedPasses(), 2u);
-    resumed.start();
-    resumed.wait();
-    ASSERT_EQ(resumed.completedPasses(), 6u);
-    ASSERT_EQ(resumed.history().size(), 6u);
-    EXPECT_EQ(resumed.history()[2].pass, 3u) << "the resumed run goes on with pass 3, not pass 1 again";
-    expectSameFilm(whole.film(), resumed.film());
-    EXPECT_EQ(resumed.film().stats.inside[0].load(), whole.film().stats.inside[0].load());
+        Checkpoint c = readCheckpoint(path());
+        RenderSettings rest = s;
+        rest.threads = 2;
+        Driver resumed(*ts, rest, ts.time);
+        resumed.restore(std::move(c.film), std::move(c.history));
+        EXPECT_EQ(resumed.completedPasses(), 2u);
+        resumed.start();
+        resumed.wait();
+        ASSERT_EQ(resumed.completedPasses(), 6u);
+        ASSERT_EQ(resumed.history().size(), 6u);
+        EXPECT_EQ(resumed.history()[2].pass, 3u) << "the resumed run goes on with pass 3, not pass 1 again";
+        expectSameFilm(whole.film(), resumed.film());
+        EXPECT_EQ(resumed.film().stats.inside[0].load(), whole.film().stats.inside[0].load());
 
-    EXPECT_EQ(resumed.history()[2].beamRadius, whole.history()[2].beamRadius);
-    const double weight = resumed.film().snapshot()->block(0).sums.weight;
-    double expected = 0.0;
-    for (uint64_t i = 1; i <= 6; ++i) expected += s.passWeight(i);
-    EXPECT_EQ(weight, expected);
-    if (warmup == 0) EXPECT_EQ(weight, 6.0);
-    else EXPECT_NEAR(weight, 0.125 + 0.25 + 0.5 + 3.0, 3.0 / static_cast<double>(s.photonsPerPass));
-  }
+        EXPECT_EQ(resumed.history()[2].beamRadius, whole.history()[2].beamRadius);
+        const double weight = resumed.film().snapshot()->block(0).sums.weight;
+        double expected = 0.0;
+        for (uint64_t i = 1; i <= 6; ++i) expected += s.passWeight(i);
+        EXPECT_EQ(weight, expected);
+        if (warmup == 0)
+            EXPECT_EQ(weight, 6.0);
+        else
+            EXPECT_NEAR(weight, 0.125 + 0.25 + 0.5 + 3.0, 3.0 / static_cast<double>(s.photonsPerPass));
+    }
 }
 
 // Read into the driver's own film (a resume holds one film, not two): the same sums; a film of
@@ -291,7 +293,8 @@ TEST(Fingerprint, OlderKeyNamesStillResume) {
     pt.method = Method::PathTracer;
     pt.samplesPerPixel = 4;
     Fingerprint olderPt;
-    for (const auto& [k, v] : settingsFingerprint(pt)) olderPt.emplace_back(k == "render.samples_per_pixel" ? "render.spp" : k, v);
+    for (const auto& [k, v] : settingsFingerprint(pt))
+        olderPt.emplace_back(k == "render.samples_per_pixel" ? "render.spp" : k, v);
     EXPECT_TRUE(fingerprintChanges(olderPt, settingsFingerprint(pt)).empty());
 }
 
@@ -327,7 +330,8 @@ TEST(ResumeOverrides, AdoptTheCheckpointsFlagsAndRefuseOtherValues) {
         resumeOverrides(cp, given);
         ADD_FAILURE() << "a different seed was accepted";
     } catch (const UserError& e) {
-        EXPECT_NE(std::string(e.what()).find("--seed 5: the checkpoint's render ran with 4"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("--seed 5: the checkpoint's render ran with 4"), std::string::npos)
+            << e.what();
     }
     SettingsOverrides wider;
     wider.width = 64;

@@ -26,9 +26,7 @@ namespace {
 struct Rng {
     std::mt19937_64 gen;
     explicit Rng(uint64_t seed) : gen(seed) {}
-    double uniform(double a = 0.0, double b = 1.0) {
-        return std::uniform_real_distribution<double>(a, b)(gen);
-    }
+    double uniform(double a = 0.0, double b = 1.0) { return std::uniform_real_distribution<double>(a, b)(gen); }
     Vec3 unitVector() {
         for (;;) {
             const Vec3 v(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
@@ -93,15 +91,13 @@ void expectUnit(const Vec3& v, double tol = 1e-12) { EXPECT_NEAR(glm::length(v),
 
 // Checks one sphere query against the reference; `skipNearTangent` ignores rays whose margin is
 // so small that double precision itself cannot decide.
-void checkSphereRay(const Geometry& g, const Ray& ray, const Vec3& c, double r, int shapeId,
-                    int& hits, int& misses) {
+void checkSphereRay(const Geometry& g, const Ray& ray, const Vec3& c, double r, int shapeId, int& hits, int& misses) {
     const SphereRef ref = sphereReference(ray.o, ray.d, c, r);
     if (ref.hit && std::abs(double(ref.margin)) < 1e-10) return;  // numerically tangent
     if (!ref.hit && std::abs(double(ref.margin)) < 1e-10) return;
     const double expected = sphereExpected(ref, ray.tmin, ray.tmax);
     // Roots within rounding of tmin: either answer is right.
-    if (ref.hit && (std::abs(double(ref.t0) - ray.tmin) < 1e-9 * r ||
-                    std::abs(double(ref.t1) - ray.tmin) < 1e-9 * r))
+    if (ref.hit && (std::abs(double(ref.t0) - ray.tmin) < 1e-9 * r || std::abs(double(ref.t1) - ray.tmin) < 1e-9 * r))
         return;
     const auto h = g.intersect(ray);
     EXPECT_EQ(g.occluded(ray), h.has_value());
@@ -125,8 +121,7 @@ void checkSphereRay(const Geometry& g, const Ray& ray, const Vec3& c, double r, 
 }
 
 std::filesystem::path tempDir() {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     ("tpb_test_geometry_" + std::to_string(::getpid()));
+    const auto dir = std::filesystem::temp_directory_path() / ("tpb_test_geometry_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     return dir;
 }
@@ -313,9 +308,7 @@ struct QuadRef {
 // Ray-plane intersection and parallelogram coordinates, in long double.
 QuadRef quadReference(const Vec3& corner, const Vec3& U, const Vec3& V, const Ray& ray) {
     using L = long double;
-    auto dot = [](const Vec3& a, const Vec3& b) {
-        return L(a.x) * L(b.x) + L(a.y) * L(b.y) + L(a.z) * L(b.z);
-    };
+    auto dot = [](const Vec3& a, const Vec3& b) { return L(a.x) * L(b.x) + L(a.y) * L(b.y) + L(a.z) * L(b.z); };
     const Vec3 n = glm::cross(U, V);
     QuadRef q;
     const L denom = dot(ray.d, n);
@@ -360,8 +353,7 @@ TEST(GeometryQuad, RandomRaysMatchRayPlaneReference) {
             const auto h = g.intersect(ray);
             EXPECT_EQ(g.occluded(ray), h.has_value());
             // Skip rays within float rounding of an edge, or nearly parallel to the plane.
-            const double edge = std::min({std::abs(ref.s), std::abs(ref.s - 1), std::abs(ref.u),
-                                          std::abs(ref.u - 1)});
+            const double edge = std::min({std::abs(ref.s), std::abs(ref.s - 1), std::abs(ref.u), std::abs(ref.u - 1)});
             if (edge < 1e-4 || std::abs(glm::dot(ray.d, n)) < 1e-3) continue;
             if (!ref.hit) {
                 EXPECT_FALSE(h.has_value()) << "s=" << ref.s << " u=" << ref.u << " t=" << ref.t;
@@ -404,7 +396,10 @@ TEST(GeometryQuad, HitsOnTheSharedDiagonalAreNotMissed) {
             const Ray up = makeRay(Vec3(lambda, lambda, -1.0), Vec3(0, 0, 1));
             for (const Ray& ray : {down, up}) {
                 const auto h = g.intersect(ray);
-                if (!h) { ++missed; continue; }
+                if (!h) {
+                    ++missed;
+                    continue;
+                }
                 EXPECT_NEAR(h->t, 1.0, 1e-12);
                 EXPECT_LT(glm::length(h->ng - Vec3(0, 0, 1)), 1e-15);
                 EXPECT_TRUE(g.occluded(ray));
@@ -430,7 +425,10 @@ TEST(GeometryQuad, HitsOnTheSharedDiagonalAreNotMissed) {
             if (std::abs(glm::dot(ray.d, n)) < 1e-2) continue;
             ++tested;
             const auto h = g.intersect(ray);
-            if (!h) { ++missed; continue; }
+            if (!h) {
+                ++missed;
+                continue;
+            }
             EXPECT_LT(glm::length(h->p - p), 1e-5 * (1 + glm::length(o - p)));
             EXPECT_TRUE(g.occluded(ray));
         }
@@ -506,10 +504,16 @@ TEST(GeometryBox, RaysFromInsideHitTheWallWithOutwardNormal) {
         for (int k = 0; k < 3; ++k) {
             if (ray.d[k] == 0.0) continue;
             const double tk = ((ray.d[k] > 0 ? hi[k] : lo[k]) - o[k]) / ray.d[k];
-            if (tk < tExit) { tExit = tk; axis = k; }
+            if (tk < tExit) {
+                tExit = tk;
+                axis = k;
+            }
         }
         const auto h = g.intersect(ray);
-        if (!h) { ++missed; continue; }
+        if (!h) {
+            ++missed;
+            continue;
+        }
         EXPECT_EQ(h->shape, 9);
         EXPECT_LT(relErr(h->t, tExit), 1e-5);
         EXPECT_GT(glm::dot(h->ng, ray.d), 0.0);
@@ -711,8 +715,8 @@ TEST(Mesh, TransformAndFlip) {
     shear[1][2] = 1.0;  // z += y
     quad.transform(shear);
     const auto& t = quad.triangles[0];
-    const Vec3 ng = glm::normalize(glm::cross(quad.positions[t.y] - quad.positions[t.x],
-                                              quad.positions[t.z] - quad.positions[t.x]));
+    const Vec3 ng = glm::normalize(
+        glm::cross(quad.positions[t.y] - quad.positions[t.x], quad.positions[t.z] - quad.positions[t.x]));
     for (const Vec3& n : quad.normals) EXPECT_LT(glm::length(n - ng), 1e-12);
     // Flip reverses winding and normals.
     TriangleMesh flipped = box;
@@ -810,7 +814,10 @@ TEST(ObjLoader, ErrorsNameTheFile) {
         {"empty.obj", "# nothing\n", "no triangles"},
         {"points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n", "no triangles"},
         {"all_degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "degenerate"},
-        {"binary.obj", "\x7f" "ELF\x01\x02\x03\n\xff\xfe garbage\n", "no triangles"},
+        {"binary.obj",
+         "\x7f"
+         "ELF\x01\x02\x03\n\xff\xfe garbage\n",
+         "no triangles"},
     };
     for (const Case& c : cases) {
         const std::string path = writeFile(c.name, c.text);

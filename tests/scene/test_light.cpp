@@ -131,7 +131,8 @@ TEST(LightEmission, AreaLightPositionIsUniformOverTheQuad) {
             EXPECT_EQ(e.power, d.power);
             const Vec3 q = e.ray.o - d.corner;
             EXPECT_NEAR(glm::dot(q, n), 0.0, 1e-14);
-            return Point2D{glm::dot(q, d.edgeU) / glm::dot(d.edgeU, d.edgeU), glm::dot(q, d.edgeV) / glm::dot(d.edgeV, d.edgeV)};
+            return Point2D{glm::dot(q, d.edgeU) / glm::dot(d.edgeU, d.edgeU),
+                           glm::dot(q, d.edgeV) / glm::dot(d.edgeV, d.edgeV)};
         },
         [](double, double) { return 1.0; }, Domain2D{}, settings(4));
     EXPECT_FALSE(r.rejected) << r.summary();
@@ -142,9 +143,9 @@ TEST(LightEmission, AreaLightDirectionIsCosineAroundItsNormal) {
     const LightDesc d = areaDesc();
     const Light light = Light::fromDesc(d);
     const Vec3 n = glm::normalize(glm::cross(d.edgeU, d.edgeV));
-    const Chi2Result r = chi2TestDirections([&](Rng& rng) { return light.sampleEmission(rng, 1e-5).ray.d; },
-                                            [&](const Vec3& w) { return std::max(glm::dot(w, n), 0.0) / kPi; }, n, 0.0,
-                                            settings(5));
+    const Chi2Result r =
+        chi2TestDirections([&](Rng& rng) { return light.sampleEmission(rng, 1e-5).ray.d; },
+                           [&](const Vec3& w) { return std::max(glm::dot(w, n), 0.0) / kPi; }, n, 0.0, settings(5));
     EXPECT_FALSE(r.rejected) << r.summary();
     EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-9);
 }

@@ -60,12 +60,14 @@ struct Cage {
     }
     double highestY() const {
         double y = -1e9;
-        for (int i = 0; i < 8; ++i) y = std::max(y, toWorld(Vec3(i & 1 ? 0.5 : -0.5, i & 2 ? 1.0 : 0.0, i & 4 ? 0.5 : -0.5)).y);
+        for (int i = 0; i < 8; ++i)
+            y = std::max(y, toWorld(Vec3(i & 1 ? 0.5 : -0.5, i & 2 ? 1.0 : 0.0, i & 4 ? 0.5 : -0.5)).y);
         return y;
     }
     double lowestY() const {
         double y = 1e9;
-        for (int i = 0; i < 8; ++i) y = std::min(y, toWorld(Vec3(i & 1 ? 0.5 : -0.5, i & 2 ? 1.0 : 0.0, i & 4 ? 0.5 : -0.5)).y);
+        for (int i = 0; i < 8; ++i)
+            y = std::min(y, toWorld(Vec3(i & 1 ? 0.5 : -0.5, i & 2 ? 1.0 : 0.0, i & 4 ? 0.5 : -0.5)).y);
         return y;
     }
 };
@@ -79,16 +81,22 @@ std::string closedBoxScene(const Cage& cage, const std::string& light, bool fog,
   "camera": {"position": [0.3, 0.6, 3.0], "look_at": [0, 0.6, 0], "fov": 70, "resolution": [32, 32]},
   "film": {"start_m": 0, "bin_width_m": 0.25, "bins": 48},
   "media": {"fog": {"sigma_s": 0.3, "sigma_a": 0.05, "g": 0.2}},
-  )" + std::string(fog ? R"("global_medium": "fog",)" : "") + R"(
+  )" + std::string(fog ? R"("global_medium": "fog",)" : "") +
+           R"(
   "materials": {"white": {"type": "diffuse", "albedo": 0.8}},
   "shapes": [
     {"name": "cage", "type": "box", "min": [-0.5, 0, -0.5], "max": [0.5, 1, 0.5], "material": "white",
-     "transform": {"rotate": {"axis": )" + vec(cage.axis) + R"(, "angle_deg": )" + std::to_string(cage.deg) + R"(}}},
-    {"name": "ceiling", "type": "quad", "corner": [-2, )" + std::to_string(top) + R"(, -2], "edge_u": [4, 0, 0], "edge_v": [0, 0, 4], "material": "white"},
-    {"name": "floor", "type": "quad", "corner": [-2, )" + std::to_string(bottom) + R"(, -2], "edge_u": [0, 0, 4], "edge_v": [4, 0, 0], "material": "white"}
+     "transform": {"rotate": {"axis": )" +
+           vec(cage.axis) + R"(, "angle_deg": )" + std::to_string(cage.deg) + R"(}}},
+    {"name": "ceiling", "type": "quad", "corner": [-2, )" +
+           std::to_string(top) + R"(, -2], "edge_u": [4, 0, 0], "edge_v": [0, 0, 4], "material": "white"},
+    {"name": "floor", "type": "quad", "corner": [-2, )" +
+           std::to_string(bottom) + R"(, -2], "edge_u": [0, 0, 4], "edge_v": [4, 0, 0], "material": "white"}
   ],
-  "lights": [)" + light + R"(],
-  "render": {"photons_per_pass": )" + std::to_string(photons) + R"(, "radius_relative": 0.01, "surface_radius_relative": 0.02,
+  "lights": [)" +
+           light + R"(],
+  "render": {"photons_per_pass": )" +
+           std::to_string(photons) + R"(, "radius_relative": 0.01, "surface_radius_relative": 0.02,
              "passes": 2, "max_depth": 16, "seed": 5}
 })";
 }
@@ -204,7 +212,8 @@ TEST(ClosedBox, PointLightInFogLightsNothingOutsideTheBox) {
     // Fog everywhere (one region inside and outside): the beam kernel (r = 6.5 cm) and the surface
     // kernel (13 cm) both reach across the walls and across the 5 cm gaps.
     const Cage cage;
-    const std::string json = closedBoxScene(cage, R"({"type": "point", "position": [0.1, 0.5, 0.05], "power": 10})", true, 20000);
+    const std::string json =
+        closedBoxScene(cage, R"({"type": "point", "position": [0.1, 0.5, 0.05], "power": 10})", true, 20000);
     const auto sc = sceneFrom(json);
     ASSERT_GT(sc.settings.beamRadius0, 0.05);
     ASSERT_GT(sc.settings.surfaceRadius0, 0.05);
@@ -269,7 +278,8 @@ TEST(ClosedBox, BouncesAtTheEdgesOfATiltedBoxLeaveFromInside) {
 TEST(SurfaceVisibility, PointsOnASphereSeeEachOtherFromOutsideAndInside) {
     // The straight chord between two points of a convex surface dips under it (a sphere would hide
     // its own photons); over the tangent planes' apex it does not. From inside the chord is free.
-    const auto sc = sceneFrom(R"({"version": 1, "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [4, 4]},
+    const auto sc =
+        sceneFrom(R"({"version": 1, "camera": {"position": [0, 0, 5], "look_at": [0, 0, 0], "resolution": [4, 4]},
       "materials": {"white": {"type": "diffuse"}},
       "shapes": [{"type": "sphere", "center": [0, 0, 0], "radius": 0.5, "material": "white"}],
       "lights": [{"type": "point", "position": [0, 2, 0]}]})");
@@ -291,7 +301,8 @@ TEST(SurfaceVisibility, PointsOnASphereSeeEachOtherFromOutsideAndInside) {
 }
 
 TEST(SurfaceVisibility, AWallStandingOnAFloorAndTheFacesOfABoxSeparatePoints) {
-    const auto sc = sceneFrom(R"({"version": 1, "camera": {"position": [0, 0.5, 5], "look_at": [0, 0, 0], "resolution": [4, 4]},
+    const auto sc =
+        sceneFrom(R"({"version": 1, "camera": {"position": [0, 0.5, 5], "look_at": [0, 0, 0], "resolution": [4, 4]},
       "materials": {"white": {"type": "diffuse"}},
       "shapes": [{"name": "floor", "type": "quad", "corner": [-2, 0, -2], "edge_u": [0, 0, 4], "edge_v": [4, 0, 0], "material": "white"},
                  {"name": "divider", "type": "quad", "corner": [0, 0, -2], "edge_u": [0, 1, 0], "edge_v": [0, 0, 4], "material": "white"},
@@ -331,15 +342,19 @@ std::string roomScene(bool fogInNullBox, uint64_t seed) {
   "camera": {"position": [0, -0.1, 0.9], "look_at": [0, -0.5, 0], "fov": 75, "resolution": [24, 24]},
   "film": {"start_m": 0, "bin_width_m": 0.2, "bins": 40},
   "media": {"fog": {"sigma_s": 0.6, "sigma_a": 0.1, "g": 0.3}},
-  )" + std::string(fogInNullBox ? "" : R"("global_medium": "fog",)") + R"(
+  )" + std::string(fogInNullBox ? "" : R"("global_medium": "fog",)") +
+           R"(
   "materials": {"container": {"type": "null"}},
   "shapes": [{"name": "room", "type": "box", "min": [-1, -1, -1], "max": [1, 1, 1]})" +
            std::string(fogInNullBox ? R"(,
              {"name": "fog box", "type": "box", "min": [-0.999, -0.999, -0.999], "max": [0.999, 0.999, 0.999],
-              "material": "container", "interior_medium": "fog"})" : "") + R"(],
+              "material": "container", "interior_medium": "fog"})"
+                                    : "") +
+           R"(],
   "lights": [{"type": "area", "corner": [-0.2, 0.5, -0.2], "edge_u": [0.4, 0, 0], "edge_v": [0, 0, 0.4], "power": 20}],
   "render": {"photons_per_pass": 6000, "radius": 0.04, "surface_radius": 0.05, "passes": 2, "max_depth": 12,
-             "seed": )" + std::to_string(seed) + R"(}
+             "seed": )" +
+           std::to_string(seed) + R"(}
 })";
 }
 
@@ -404,7 +419,8 @@ void expectSameImage(const std::vector<float>& a1, const std::vector<float>& a2,
 }  // namespace
 
 TEST(AreaLightRegions, FogInANullBoxAroundTheLightLooksLikeTheSameFogEverywhere) {
-    const auto a1 = sceneFrom(roomScene(false, 7)), a2 = sceneFrom(roomScene(false, 8)), b1 = sceneFrom(roomScene(true, 7));
+    const auto a1 = sceneFrom(roomScene(false, 7)), a2 = sceneFrom(roomScene(false, 8)),
+               b1 = sceneFrom(roomScene(true, 7));
     ASSERT_EQ(b1->lightPlacement[0].regions.top(), b1->shapes[1].interiorRegion);  // the light sits in the fog box
     int64_t beamsA = 0, beamsB = 0;
     const std::vector<float> ia1 = beamImage(a1, &beamsA), ia2 = beamImage(a2), ib1 = beamImage(b1, &beamsB);
@@ -418,7 +434,8 @@ TEST(AreaLightRegions, FogInANullBoxAroundTheLightLooksLikeTheSameFogEverywhere)
 TEST(AreaLightRegions, ALightAcrossAFogBoxFaceEmitsIntoItFromItsInsidePartOnly) {
     // The fog box's face x = 0 halves the light: photons leaving from x < 0 start in the fog (their
     // first beam starts at the light), those from x > 0 in vacuum (no beam until they enter).
-    const auto sc = sceneFrom(R"({"version": 1, "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "resolution": [4, 4]},
+    const auto sc =
+        sceneFrom(R"({"version": 1, "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "resolution": [4, 4]},
       "media": {"fog": {"sigma_s": 0.5, "sigma_a": 0.1}},
       "materials": {"container": {"type": "null"}},
       "shapes": [{"name": "fog box", "type": "box", "min": [-1, -1, -1], "max": [0, 1, 1], "material": "container", "interior_medium": "fog"}],
@@ -434,8 +451,10 @@ TEST(AreaLightRegions, ALightAcrossAFogBoxFaceEmitsIntoItFromItsInsidePartOnly) 
     for (const Beam& b : map.beams) {
         if (b.depth != 0 || b.origin.y < 0.5 - 1e-3) continue;  // first segments leaving the light
         EXPECT_EQ(b.region, sc->shapes[0].interiorRegion);
-        if (b.origin.x < -1e-6) ++atLightInside;
-        else if (b.origin.x > 1e-6) ++atLightOutside;
+        if (b.origin.x < -1e-6)
+            ++atLightInside;
+        else if (b.origin.x > 1e-6)
+            ++atLightOutside;
     }
     EXPECT_EQ(atLightOutside, 0);
     // Every photon from the inside half stores its first beam there: Binomial(20000, 1/2).
@@ -445,7 +464,8 @@ TEST(AreaLightRegions, ALightAcrossAFogBoxFaceEmitsIntoItFromItsInsidePartOnly) 
 TEST(AreaLightRegions, ALightOnTheInsideOfAFogBoxCeilingEmitsIntoTheBox) {
     // The light lies on the fog box's top face, facing down: every photon starts in the fog and
     // no beam lies outside the box.
-    const auto sc = sceneFrom(R"({"version": 1, "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "resolution": [4, 4]},
+    const auto sc =
+        sceneFrom(R"({"version": 1, "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "resolution": [4, 4]},
       "media": {"fog": {"sigma_s": 0.5, "sigma_a": 0.1}},
       "materials": {"container": {"type": "null"}},
       "shapes": [{"name": "fog box", "type": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "material": "container", "interior_medium": "fog"}],
@@ -488,7 +508,8 @@ std::string nestedSpheres(int count) {
                   R"(, "material": "container", "interior_medium": "fog"})";
     return R"({"version": 1, "camera": {"position": [0, 0, 0.5], "look_at": [0, 0, 0], "resolution": [4, 4]},
       "media": {"fog": {"sigma_s": 0.1}}, "materials": {"container": {"type": "null"}},
-      "shapes": [)" + shapes + R"(], "lights": [{"type": "point", "position": [0, 0.2, 0]}]})";
+      "shapes": [)" +
+           shapes + R"(], "lights": [{"type": "point", "position": [0, 0.2, 0]}]})";
 }
 
 }  // namespace
@@ -519,10 +540,13 @@ TEST(RegionStack, AnOverflowAtRunTimeEndsThePathAndIsCounted) {
     for (int k = 1; k <= 8; ++k)
         quads += R"({"type": "quad", "corner": [-0.1, -0.1, )" + std::to_string(-k) +
                  R"(], "edge_u": [0.2, 0, 0], "edge_v": [0, 0.2, 0], "material": "container"},)";
-    const auto sc = sceneFrom(R"({"version": 1, "camera": {"position": [0, 0, 0.5], "look_at": [0, 0, -1], "fov": 0.5, "resolution": [4, 4]},
+    const auto sc = sceneFrom(
+        R"({"version": 1, "camera": {"position": [0, 0, 0.5], "look_at": [0, 0, -1], "fov": 0.5, "resolution": [4, 4]},
       "film": {"start_m": 0, "bin_width_m": 1, "bins": 30},
       "materials": {"container": {"type": "null"}, "white": {"type": "diffuse"}},
-      "shapes": [)" + quads + R"({"name": "wall", "type": "quad", "corner": [-1, -1, -9], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}],
+      "shapes": [)" +
+        quads +
+        R"({"name": "wall", "type": "quad", "corner": [-1, -1, -9], "edge_u": [2, 0, 0], "edge_v": [0, 2, 0], "material": "white"}],
       "lights": [{"type": "laser", "position": [0, 0, 0], "direction": [0, 0, -1], "power": 1}]})");
     PhotonPassParams ts;
     ts.photons = 500;

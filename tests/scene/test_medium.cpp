@@ -68,7 +68,7 @@ INSTANTIATE_TEST_SUITE_P(G, HenyeyGreensteinChi2, ::testing::Range(0, kChi2Tests
                              std::string name = (g < 0.0 ? "minus" : "") + std::to_string(std::abs(g));
                              for (char& c : name) c = c == '.' ? 'p' : c;
                              name = name.substr(0, name.find_last_not_of('0') + 1);  // 0.500000 -> 0p5
-                             if (name.back() == 'p') name.pop_back();                 // 0.000000 -> 0
+                             if (name.back() == 'p') name.pop_back();                // 0.000000 -> 0
                              return "g_" + name;
                          });
 

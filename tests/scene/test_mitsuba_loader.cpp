@@ -34,7 +34,9 @@ std::string scene(const std::string& body, const std::string& sensor = "") {
     return "<scene version=\"3.0.0\">\n" + sensor + body + "\n</scene>\n";
 }
 
-SceneDesc load(const std::string& xml, const MitsubaOptions& o = {}) { return loadMitsubaSceneFromString(xml, "t.xml", o); }
+SceneDesc load(const std::string& xml, const MitsubaOptions& o = {}) {
+    return loadMitsubaSceneFromString(xml, "t.xml", o);
+}
 
 // Expects a UserError at t.xml:`line` whose message contains `fragment`.
 void expectError(const std::string& xml, int line, const std::string& fragment) {
@@ -170,19 +172,22 @@ void expectSameFilm(const std::vector<float>& a, const std::vector<float>& b) {
 // ---- the shipped twins ---------------------------------------------------------------------------
 
 TEST(MitsubaLoader, CornellMediumTwinRendersTheJsonFilm) {
-    const SceneDesc j = loadScene(kScenes + "cornell_medium.json"), x = loadScene(kScenes + "mitsuba/cornell_medium.xml");
+    const SceneDesc j = loadScene(kScenes + "cornell_medium.json"),
+                    x = loadScene(kScenes + "mitsuba/cornell_medium.xml");
     expectSameScene(j, x);
     expectSameFilm(renderSmall(j), renderSmall(x));
 }
 
 TEST(MitsubaLoader, CornellSpheresTwinRendersTheJsonFilm) {
-    const SceneDesc j = loadScene(kScenes + "cornell_spheres.json"), x = loadScene(kScenes + "mitsuba/cornell_spheres.xml");
+    const SceneDesc j = loadScene(kScenes + "cornell_spheres.json"),
+                    x = loadScene(kScenes + "mitsuba/cornell_spheres.xml");
     expectSameScene(j, x);
     // The conductor is announced as a mirror, with the file and line of its <bsdf>.
     bool warned = false;
     for (const std::string& w : x.warnings)
-        warned |= w.find("cornell_spheres.xml:43: <bsdf type=\"conductor\" id=\"chrome\">: imported as a perfect mirror") !=
-                  std::string::npos;
+        warned |=
+            w.find("cornell_spheres.xml:43: <bsdf type=\"conductor\" id=\"chrome\">: imported as a perfect mirror") !=
+            std::string::npos;
     EXPECT_TRUE(warned);
     expectSameFilm(renderSmall(j), renderSmall(x));
 }
@@ -193,7 +198,10 @@ TEST(MitsubaLoader, AFilmComparisonCanFail) {
     y.lights[0].power *= 1.01;
     const std::vector<float> a = renderSmall(x), b = renderSmall(y);
     double diff = 0.0, total = 0.0;
-    for (size_t i = 0; i < a.size(); ++i) { diff += std::fabs(double(a[i]) - b[i]); total += a[i]; }
+    for (size_t i = 0; i < a.size(); ++i) {
+        diff += std::fabs(double(a[i]) - b[i]);
+        total += a[i];
+    }
     EXPECT_GT(diff / total, 1e-3);
 }
 
@@ -241,43 +249,51 @@ TEST(MitsubaLoader, SphereToWorldAndDisk) {
     double area = 0.0;
     for (const glm::uvec3& t : disk.inlineTriangles) {
         const Vec3 a(disk.transform * glm::dvec4(disk.inlinePositions[t.x], 1)),
-            b(disk.transform * glm::dvec4(disk.inlinePositions[t.y], 1)), c(disk.transform * glm::dvec4(disk.inlinePositions[t.z], 1));
+            b(disk.transform * glm::dvec4(disk.inlinePositions[t.y], 1)),
+            c(disk.transform * glm::dvec4(disk.inlinePositions[t.z], 1));
         const Vec3 n = glm::cross(b - a, c - a);
         EXPECT_GT(n.z, 0.0);  // normal +z
         area += 0.5 * glm::length(n);
     }
     EXPECT_NEAR(area, 4.0 * kPi * 64.0 / kPi * std::sin(2.0 * kPi / 128.0), 1e-9);
     EXPECT_NEAR(area / (4.0 * kPi), 1.0, 5e-4);
-    expectError(scene(R"(<shape type="sphere"><transform name="to_world"><scale x="1" y="2" z="1"/></transform></shape>)"),
-                2, "rotation, a uniform scale and a translation");
+    expectError(
+        scene(R"(<shape type="sphere"><transform name="to_world"><scale x="1" y="2" z="1"/></transform></shape>)"), 2,
+        "rotation, a uniform scale and a translation");
 }
 
 TEST(MitsubaLoader, FovAxisConversions) {
     const auto fovY = [](const std::string& axis, int w, int h) {
-        const std::string s = "<sensor type=\"perspective\"><float name=\"fov\" value=\"60\"/><string name=\"fov_axis\" value=\"" +
-                              axis + "\"/><film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(w) +
-                              "\"/><integer name=\"height\" value=\"" + std::to_string(h) + "\"/></film></sensor>";
+        const std::string s =
+            "<sensor type=\"perspective\"><float name=\"fov\" value=\"60\"/><string name=\"fov_axis\" value=\"" + axis +
+            "\"/><film type=\"hdrfilm\"><integer name=\"width\" value=\"" + std::to_string(w) +
+            "\"/><integer name=\"height\" value=\"" + std::to_string(h) + "\"/></film></sensor>";
         return load(scene("", s)).camera.fovYDeg;
     };
     const double t = std::tan(kPi / 6), deg = 180.0 / kPi;
     EXPECT_NEAR(fovY("y", 200, 100), 60.0, 1e-12);
     EXPECT_NEAR(fovY("x", 200, 100), 2 * std::atan(t / 2) * deg, 1e-12);
     EXPECT_NEAR(fovY("diagonal", 200, 100), 2 * std::atan(t / std::sqrt(5.0)) * deg, 1e-12);
-    EXPECT_NEAR(fovY("smaller", 200, 100), 60.0, 1e-12);                          // the height
-    EXPECT_NEAR(fovY("larger", 200, 100), 2 * std::atan(t / 2) * deg, 1e-12);     // the width
-    EXPECT_NEAR(fovY("smaller", 100, 200), 2 * std::atan(t * 2) * deg, 1e-12);    // the width
+    EXPECT_NEAR(fovY("smaller", 200, 100), 60.0, 1e-12);                        // the height
+    EXPECT_NEAR(fovY("larger", 200, 100), 2 * std::atan(t / 2) * deg, 1e-12);   // the width
+    EXPECT_NEAR(fovY("smaller", 100, 200), 2 * std::atan(t * 2) * deg, 1e-12);  // the width
     // No fov: Mitsuba's 50 mm focal length on the 35 mm diagonal.
-    const SceneDesc d = load(scene("", "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"36\"/>"
-                                       "<integer name=\"height\" value=\"24\"/></film></sensor>"));
+    const SceneDesc d =
+        load(scene("",
+                   "<sensor type=\"perspective\"><film type=\"hdrfilm\"><integer name=\"width\" value=\"36\"/>"
+                   "<integer name=\"height\" value=\"24\"/></film></sensor>"));
     EXPECT_NEAR(std::tan(d.camera.fovYDeg / 2 / deg), 12.0 / 50.0, 1e-12);
-    expectError(scene("", "<sensor type=\"perspective\">\n<string name=\"fov_axis\" value=\"z\"/><float name=\"fov\" value=\"30\"/></sensor>"),
+    expectError(scene("",
+                      "<sensor type=\"perspective\">\n<string name=\"fov_axis\" value=\"z\"/><float name=\"fov\" "
+                      "value=\"30\"/></sensor>"),
                 3, "unknown fov_axis");
 }
 
 TEST(MitsubaLoader, SensorLookatFilmAndMedium) {
-    const SceneDesc d = load(scene(R"(<medium type="homogeneous" id="m"><float name="sigma_t" value="2"/>
+    const SceneDesc d = load(scene(
+        R"(<medium type="homogeneous" id="m"><float name="sigma_t" value="2"/>
         <rgb name="albedo" value="0.5, 0.25, 1"/><float name="scale" value="3"/></medium>)",
-                                   R"(<sensor type="perspective"><transform name="to_world"><lookat origin="1, 2, 3" target="1, 2, 0" up="0, 1, 0"/></transform>
+        R"(<sensor type="perspective"><transform name="to_world"><lookat origin="1, 2, 3" target="1, 2, 0" up="0, 1, 0"/></transform>
         <ref id="m"/><film type="transient_hdr_film"><integer name="width" value="40"/><integer name="height" value="30"/>
         <integer name="temporal_bins" value="50"/><float name="bin_width_opl" value="0.02"/><float name="start_opl" value="1.5"/></film></sensor>)"));
     expectNear(d.camera.position, Vec3(1, 2, 3));
@@ -309,10 +325,10 @@ TEST(MitsubaLoader, EmitterUnitConversions) {
           <float name="beam_width" value="30"/></emitter>
         <emitter type="spot"/>)"));
     ASSERT_EQ(d.lights.size(), 4u);
-    expectNear(d.lights[0].power, 4 * kPi * Vec3(1, 2, 3));            // flux = 4 pi I
+    expectNear(d.lights[0].power, 4 * kPi * Vec3(1, 2, 3));  // flux = 4 pi I
     EXPECT_EQ(d.lights[1].type, LightType::AreaQuad);
-    EXPECT_TRUE(d.shapes.empty());                                     // tpb draws the light's quad itself
-    expectNear(d.lights[1].power, Vec3(kPi * 5 * 24));                 // flux = pi L A, A = 4 x 6 m^2
+    EXPECT_TRUE(d.shapes.empty());                      // tpb draws the light's quad itself
+    expectNear(d.lights[1].power, Vec3(kPi * 5 * 24));  // flux = pi L A, A = 4 x 6 m^2
     expectNear(glm::normalize(glm::cross(d.lights[1].edgeU, d.lights[1].edgeV)), Vec3(0, 0, 1));  // emits along +z
     // A hard-edged spot: flux = I * 2 pi (1 - cos 30 deg), to the midpoint rule's accuracy.
     EXPECT_NEAR(d.lights[2].power.x, 2 * 2 * kPi * (1 - std::cos(kPi / 6)), 1e-6);
@@ -324,7 +340,8 @@ TEST(MitsubaLoader, EmitterUnitConversions) {
 }
 
 TEST(MitsubaLoader, BsdfsAndDefaults) {
-    const SceneDesc d = load(scene(R"(<bsdf type="twosided" id="w"><bsdf type="diffuse"><spectrum name="reflectance" value="0.3"/></bsdf></bsdf>
+    const SceneDesc d = load(scene(
+        R"(<bsdf type="twosided" id="w"><bsdf type="diffuse"><spectrum name="reflectance" value="0.3"/></bsdf></bsdf>
         <shape type="cube"><ref id="w"/></shape>
         <shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="water"/></bsdf></shape>
         <shape type="cube"/>
@@ -339,7 +356,7 @@ TEST(MitsubaLoader, BsdfsAndDefaults) {
     EXPECT_EQ(mat(1).ior, 1.3330);
     EXPECT_EQ(mat(2).type, MaterialType::Diffuse);  // Mitsuba's default bsdf
     expectNear(mat(2).albedo, Vec3(0.5));
-    EXPECT_EQ(mat(3).type, MaterialType::Null);     // a medium boundary without a bsdf
+    EXPECT_EQ(mat(3).type, MaterialType::Null);             // a medium boundary without a bsdf
     EXPECT_EQ(d.media[d.shapes[3].interiorMedium].g, 0.8);  // hg's default
     EXPECT_EQ(mat(4).type, MaterialType::Mirror);
     EXPECT_EQ(mat(5).type, MaterialType::Null);
@@ -351,7 +368,8 @@ TEST(MitsubaLoader, BsdfsAndDefaults) {
     EXPECT_EQ(mirrorWarnings, 1);
     EXPECT_EQ(thinWarnings, 1);
     double ior = 0;
-    for (const char* n : {"vacuum", "air", "water", "bk7", "diamond", "acrylic glass"}) EXPECT_TRUE(mitsubaNamedIor(n, ior)) << n;
+    for (const char* n : {"vacuum", "air", "water", "bk7", "diamond", "acrylic glass"})
+        EXPECT_TRUE(mitsubaNamedIor(n, ior)) << n;
     EXPECT_FALSE(mitsubaNamedIor("unobtainium", ior));
 }
 
@@ -360,7 +378,8 @@ TEST(MitsubaLoader, BsdfsAndDefaults) {
 TEST(MitsubaLoader, DefaultsParametersIncludesAndRefs) {
     test::TempDir tmp("test_mitsuba_loader");
     std::filesystem::create_directories(tmp.path() / "sub");
-    tmp.write("sub/walls.xml", R"(<scene version="3.0.0"><bsdf type="diffuse" id="grey"><float name="reflectance" value="$refl"/></bsdf>
+    tmp.write("sub/walls.xml",
+              R"(<scene version="3.0.0"><bsdf type="diffuse" id="grey"><float name="reflectance" value="$refl"/></bsdf>
         <shape type="cube" id="inc"><ref id="grey"/></shape></scene>)");
     tmp.write("main.xml", R"(<scene version="3.0.0">
     <default name="refl" value="0.25"/>
@@ -390,7 +409,9 @@ TEST(MitsubaLoader, DefaultsParametersIncludesAndRefs) {
     EXPECT_EQ(loadMitsubaScene((tmp.path() / "main.xml").string(), o).shapes[1].radius, 3.0);
     // A bad render setting is reported at its XML line by the render settings' own check
     // (RenderSettings::validate, when prepareRender checks the loaded file).
-    tmp.write("bad.xml", "<scene version=\"3.0.0\">\n<integrator type=\"path\">\n<float name=\"tpb_alpha\" value=\"7\"/></integrator></scene>");
+    tmp.write("bad.xml",
+              "<scene version=\"3.0.0\">\n<integrator type=\"path\">\n<float name=\"tpb_alpha\" "
+              "value=\"7\"/></integrator></scene>");
     try {
         PrepareOptions opt;
         opt.pilot.run = false;
@@ -404,16 +425,19 @@ TEST(MitsubaLoader, DefaultsParametersIncludesAndRefs) {
 // ---- PLY ---------------------------------------------------------------------------------------------
 
 TEST(MitsubaLoader, PlyAsciiAndBinary) {
-    const std::string header = "ply\nformat ascii 1.0\ncomment a quad and a triangle\nelement vertex 5\nproperty float x\n"
-                               "property float y\nproperty float z\nproperty uchar red\nelement face 2\n"
-                               "property list uchar int vertex_indices\nend_header\n";
-    const TriangleMesh a = parsePly(header + "0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n0 0 1 5\n4 0 1 2 3\n3 0 1 4\n", "a.ply");
+    const std::string header =
+        "ply\nformat ascii 1.0\ncomment a quad and a triangle\nelement vertex 5\nproperty float x\n"
+        "property float y\nproperty float z\nproperty uchar red\nelement face 2\n"
+        "property list uchar int vertex_indices\nend_header\n";
+    const TriangleMesh a =
+        parsePly(header + "0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n0 0 1 5\n4 0 1 2 3\n3 0 1 4\n", "a.ply");
     EXPECT_EQ(a.positions.size(), 5u);
     ASSERT_EQ(a.triangles.size(), 3u);
     EXPECT_EQ(a.triangles[1], glm::uvec3(0, 2, 3));
     // The same as binary_little_endian, with double coordinates and uint indices.
-    std::string b = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
-                    "property double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+    std::string b =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+        "property double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
     for (double v : {0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 3.0, 0.0}) b.append(reinterpret_cast<const char*>(&v), 8);
     b.push_back(3);
     for (uint32_t i : {0u, 1u, 2u}) b.append(reinterpret_cast<const char*>(&i), 4);
@@ -442,19 +466,25 @@ TEST(MitsubaLoader, ErrorsNameFileAndLine) {
     expectError("<scene version=\"3.0.0\">\n<shape type=\"sphere\">\n</scene>", 3, "XML parse error");
     expectError(scene("<shape type=\"cylinder\"/>"), 2, "unsupported shape type \"cylinder\"");
     expectError(scene("<shape type=\"cube\">\n<ref id=\"nope\"/></shape>"), 3, "no object has the id \"nope\"");
-    expectError(scene("<shape type=\"sphere\">\n<float name=\"radius\" value=\"1.5x\"/></shape>"), 3, "\"1.5x\" is not a finite number");
-    expectError(scene("<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"/></bsdf>"), 3, "textures are not supported");
+    expectError(scene("<shape type=\"sphere\">\n<float name=\"radius\" value=\"1.5x\"/></shape>"), 3,
+                "\"1.5x\" is not a finite number");
+    expectError(scene("<bsdf type=\"diffuse\">\n<texture name=\"reflectance\" type=\"bitmap\"/></bsdf>"), 3,
+                "textures are not supported");
     expectError(scene("<bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"400:0.1, 700:0.9\"/></bsdf>"), 3,
                 "wavelength-dependent spectrum");
-    expectError(scene("<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>"), 2, "undefined parameter $nope");
+    expectError(scene("<shape type=\"sphere\"><float name=\"radius\" value=\"$nope\"/></shape>"), 2,
+                "undefined parameter $nope");
     expectError(scene("\n<emitter type=\"directional\"/>"), 3, "directional emitters are not supported");
     expectError(scene("<bsdf type=\"plastic\"/>"), 2, "unsupported bsdf type \"plastic\"");
     expectError(scene("<medium type=\"heterogeneous\"/>"), 2, "unsupported medium type");
-    expectError(scene("<shape type=\"obj\"><string name=\"filename\" value=\"missing.obj\"/></shape>"), 2, "mesh file not found");
-    expectError(scene("<integrator type=\"path\"><integer name=\"max_depth\" value=\"1\"/></integrator>"), 2, "max_depth must be >= 2");
+    expectError(scene("<shape type=\"obj\"><string name=\"filename\" value=\"missing.obj\"/></shape>"), 2,
+                "mesh file not found");
+    expectError(scene("<integrator type=\"path\"><integer name=\"max_depth\" value=\"1\"/></integrator>"), 2,
+                "max_depth must be >= 2");
     expectError(scene("<shape type=\"rectangle\"><medium type=\"homogeneous\" name=\"interior\"/></shape>"), 2, "open");
     expectError(scene("<shape type=\"cube\" id=\"a\"/>\n<shape type=\"cube\" id=\"a\"/>"), 3, "already used");
-    expectError("<scene version=\"3.0.0\">\n<include filename=\"nowhere.xml\"/></scene>", 2, "cannot open the included file");
+    expectError("<scene version=\"3.0.0\">\n<include filename=\"nowhere.xml\"/></scene>", 2,
+                "cannot open the included file");
 }
 
 // Issue 33 item 8: XML nested 50,000 deep overflowed the stack (the importer walks elements
@@ -494,8 +524,9 @@ TEST(MitsubaLoader, DeepNestingIsRefusedWithoutRecursion) {
 TEST(MitsubaLoader, OpenMeshHoldingAMediumIsRefused) {
     test::TempDir tmp("test_mitsuba_open_mesh");
     // A unit cube without its y = 1 face: 10 triangles, that square's 4 edges open.
-    tmp.write("open.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-                          "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 1 5 8 4\n");
+    tmp.write("open.obj",
+              "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+              "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 1 5 8 4\n");
     const std::string body = R"(<medium type="homogeneous" id="fog"><rgb name="sigma_t" value="1"/></medium>
 <shape type="obj">
 <string name="filename" value="open.obj"/><ref name="interior" id="fog"/></shape>)";
@@ -510,12 +541,15 @@ TEST(MitsubaLoader, OpenMeshHoldingAMediumIsRefused) {
         EXPECT_THAT(msg, HasSubstr("holds a medium but is not closed: 4 edges of one triangle only"));
         EXPECT_THAT(msg, HasSubstr("Close the mesh"));
     }
-    tmp.write("glass.xml", scene(R"(<shape type="obj"><string name="filename" value="open.obj"/><bsdf type="dielectric"/></shape>)"));
+    tmp.write(
+        "glass.xml",
+        scene(R"(<shape type="obj"><string name="filename" value="open.obj"/><bsdf type="dielectric"/></shape>)"));
     EXPECT_NO_THROW(test::prepareTestScene(loadScene((tmp.path() / "glass.xml").string())));
 }
 
 TEST(MitsubaLoader, UnknownParametersAreWarnedAbout) {
     const SceneDesc d = load(scene("<shape type=\"sphere\">\n<float name=\"radious\" value=\"2\"/></shape>"));
     ASSERT_FALSE(d.warnings.empty());
-    EXPECT_THAT(d.warnings[0], HasSubstr("t.xml:3: <float name=\"radious\">: unknown or unsupported parameter \"radious\""));
+    EXPECT_THAT(d.warnings[0],
+                HasSubstr("t.xml:3: <float name=\"radious\">: unknown or unsupported parameter \"radious\""));
 }

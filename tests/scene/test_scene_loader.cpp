@@ -294,7 +294,8 @@ TEST(SceneLoader, RotationListAppliedInOrderAndRelativeRadii) {
                                                           {"axis": [1, 0, 0], "angle_deg": 90}]}}],
       "lights": [{"type": "spot", "cutoff_deg": 10, "emit_time_m": 1.5}],
       "render": {"radius_relative": 0.003, "surface_radius_relative": 0.004},
-      "film": {"range": "auto", "bins": 7}})", "s.json");
+      "film": {"range": "auto", "bins": 7}})",
+                                            "s.json");
     // (1,0,0) -> about z -> (0,1,0) -> about x -> (0,0,1).
     expectNear(apply(d.shapes[0].transform, Vec3(1, 0, 0)), Vec3(0, 0, 1));
     EXPECT_EQ(d.lights[0].spotFalloffDeg, 10.0);  // default clamped to the cutoff
@@ -310,7 +311,8 @@ TEST(SceneLoader, CommentKeysAreIgnoredEverywhere) {
     const SceneDesc d = loadSceneFromString(R"({"version": 1, "comment": "top", "_a": 1, "_a": 2,
       "camera": {"_note": [1, 2], "fov": 50},
       "media": {"_unused": {"sigma_s": -5}},
-      "lights": [{"type": "point", "comment": "key light"}]})", "s.json");
+      "lights": [{"type": "point", "comment": "key light"}]})",
+                                            "s.json");
     EXPECT_EQ(d.camera.fovYDeg, 50.0);
     EXPECT_TRUE(d.media.empty());
     EXPECT_EQ(d.lights.size(), 1u);
@@ -320,7 +322,9 @@ TEST(SceneLoader, FilmBytesAndLimit) {
     CameraDesc cam;
     cam.width = 10;
     cam.height = 20;
-    EXPECT_EQ(filmBytes(cam.width, cam.height, 5), 200u * (5 * 2 * 3 * 8 + (3 + 2 * 2 * 3) * 8));  // tests/film/test_transient_film.cpp: = what the film allocates
+    EXPECT_EQ(
+        filmBytes(cam.width, cam.height, 5),
+        200u * (5 * 2 * 3 * 8 + (3 + 2 * 2 * 3) * 8));  // tests/film/test_transient_film.cpp: = what the film allocates
     cam.width = cam.height = INT_MAX;
     EXPECT_EQ(filmBytes(cam.width, cam.height, INT_MAX), UINT64_MAX);  // saturates instead of wrapping
     EXPECT_GT(maxFilmBytes(), 0u);
@@ -356,7 +360,8 @@ TEST(SceneLoader, RefusesSpecialAndHugeFilesBeforeReading) {
         }
         return std::string("no error");
     };
-    EXPECT_THAT(error("/dev/zero"), HasSubstr("/dev/zero: cannot read scene file: it is not a regular file but a device"));
+    EXPECT_THAT(error("/dev/zero"),
+                HasSubstr("/dev/zero: cannot read scene file: it is not a regular file but a device"));
     test::TempDir tmp{"test_scene_file_kinds"};
     const std::string fifo = (tmp.path() / "pipe.json").string();
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
@@ -380,18 +385,22 @@ TEST(SceneLoader, RefusesSpecialAndHugeFilesBeforeReading) {
 // open edges and the fix; the closed mesh, and the open one as a plain dielectric, load.
 TEST(SceneLoader, OpenMeshHoldingAMediumIsRefused) {
     test::TempDir tmp{"test_scene_open_mesh"};
-    const std::string cube = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-                             "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 1 5 8 4\n";
+    const std::string cube =
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+        "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 1 5 8 4\n";
     tmp.write("closed.obj", cube + "f 4 8 7 3\n");
-    tmp.write("open.obj", cube);                      // no y = 1 face: its 4 edges are holes
+    tmp.write("open.obj", cube);                     // no y = 1 face: its 4 edges are holes
     tmp.write("flipped.obj", cube + "f 4 3 7 8\n");  // that face inside out: its 4 edges misfit
     const auto sceneWith = [&](const std::string& obj, const std::string& material, bool medium) {
-        return tmp.write("s.json", R"({"version": 1,
+        return tmp
+            .write("s.json", R"({"version": 1,
   "media": {"fog": {"sigma_s": 1}},
-  "materials": {"m": {"type": ")" + material + R"("}},
+  "materials": {"m": {"type": ")" +
+                                 material + R"("}},
   "shapes": [
-    {"type": "mesh", "file": ")" + obj + R"(", "material": "m")" +
-                                        (medium ? ",\n     \"interior_medium\": \"fog\"" : "") + R"(}],
+    {"type": "mesh", "file": ")" +
+                                 obj + R"(", "material": "m")" +
+                                 (medium ? ",\n     \"interior_medium\": \"fog\"" : "") + R"(}],
   "lights": [{"type": "point", "position": [0.5, 3, 0.5], "power": 1}]})")
             .string();
     };
@@ -445,10 +454,12 @@ TEST(SceneErrors, UnknownKeySuggestsClosest) {
 }
 
 TEST(SceneErrors, WrongType) {
-    expectError("{\"version\": 1,\n\"camera\": {\"fov\": \"wide\"}}", 2, "camera.fov", "expected a number, got a string");
+    expectError("{\"version\": 1,\n\"camera\": {\"fov\": \"wide\"}}", 2, "camera.fov",
+                "expected a number, got a string");
     expectError("{\"lights\": [{\"type\": \"point\",\n\"power\": [1, 2]}]}", 2, "lights[0].power",
                 "expected a number or an [r, g, b] array");
-    expectError("{\"version\": 1,\n\"camera\": {\"position\": 3}}", 2, "camera.position", "expected an [x, y, z] array");
+    expectError("{\"version\": 1,\n\"camera\": {\"position\": 3}}", 2, "camera.position",
+                "expected an [x, y, z] array");
     expectError("{\"version\": 1,\n\"render\": {\"unwarp\": 1}}", 2, "render.unwarp", "expected true or false");
     expectError("{\"version\": 1,\n\"shapes\": {}}", 2, "shapes", "expected an array");
     expectError("{\"version\": 1,\n\"render\": []}", 2, "render", "expected an object");
@@ -491,8 +502,8 @@ TEST(SceneErrors, OtherRanges) {
                 "render.surface_radius_relative", "must both be absolute");
     expectError("{\"version\": 1,\n\"lights\": [{\"type\": \"laser\", \"direction\": [0, 0, 0]}]}", 2,
                 "lights[0].direction", "must not be a zero vector");
-    expectError("{\"version\": 1,\n\"camera\": {\"position\": [0, 0, 0], \"look_at\": [0, 0, 0]}}", 2,
-                "camera.look_at", "look_at must differ from position");
+    expectError("{\"version\": 1,\n\"camera\": {\"position\": [0, 0, 0], \"look_at\": [0, 0, 0]}}", 2, "camera.look_at",
+                "look_at must differ from position");
     expectError("{\"version\": 1,\n\"lights\": [{\"type\": \"spot\", \"cutoff_deg\": 20, \"falloff_deg\": 30}]}", 2,
                 "lights[0].falloff_deg", "falloff_deg must be in [0, cutoff_deg]");
 }
@@ -502,8 +513,7 @@ TEST(SceneErrors, ZeroResolution) {
                 "resolution must be >= 1 (got 0)");
     expectError("{\"version\": 1, \"camera\": {\n\"resolution\": [1e12, 100]}}", 2, "camera.resolution",
                 "resolution must be <= 2147483647");
-    expectError("{\"version\": 1, \"camera\": {\n\"resolution\": [100000, 100000]}}", 2, "camera.resolution",
-                "pixels");
+    expectError("{\"version\": 1, \"camera\": {\n\"resolution\": [100000, 100000]}}", 2, "camera.resolution", "pixels");
 }
 
 TEST(SceneErrors, ZeroBins) {
@@ -524,12 +534,14 @@ TEST(SceneErrors, MissingMeshFile) {
     const std::string text = "{\"version\": 1, \"shapes\": [\n{\"type\": \"mesh\",\n\"file\": \"nope.obj\"}]}";
     const std::string resolved = (tmp.dir / "nope.obj").string();
     expectError(text, 3, "shapes[0].file", "mesh file not found: " + resolved, tmp.scene());
-    expectError("{\"version\": 1, \"shapes\": [\n{\"type\": \"mesh\"}]}", 2, "shapes[0].file", "required key is missing");
+    expectError("{\"version\": 1, \"shapes\": [\n{\"type\": \"mesh\"}]}", 2, "shapes[0].file",
+                "required key is missing");
 }
 
 TEST(SceneErrors, UndefinedMaterial) {
     expectError(
-        "{\"version\": 1, \"materials\": {\"glass\": {\"type\": \"dielectric\"}},\n\"shapes\": [{\"type\": \"sphere\",\n"
+        "{\"version\": 1, \"materials\": {\"glass\": {\"type\": \"dielectric\"}},\n\"shapes\": [{\"type\": "
+        "\"sphere\",\n"
         "\"material\": \"glas\"}]}",
         3, "shapes[0].material", "undefined material \"glas\" (did you mean \"glass\"?); defined materials: \"glass\"");
 }
@@ -537,8 +549,9 @@ TEST(SceneErrors, UndefinedMaterial) {
 TEST(SceneErrors, UndefinedMedium) {
     expectError("{\"version\": 1,\n\"global_medium\": \"smoke\"}", 2, "global_medium",
                 "undefined medium \"smoke\"; no media are defined");
-    expectError("{\"version\": 1, \"media\": {\"fog\": {}},\n\"shapes\": [{\"type\": \"box\", \"interior_medium\": \"fgo\"}]}",
-                2, "shapes[0].interior_medium", "defined media: \"fog\"");
+    expectError(
+        "{\"version\": 1, \"media\": {\"fog\": {}},\n\"shapes\": [{\"type\": \"box\", \"interior_medium\": \"fgo\"}]}",
+        2, "shapes[0].interior_medium", "defined media: \"fog\"");
 }
 
 TEST(SceneErrors, BadEnum) {
@@ -546,7 +559,8 @@ TEST(SceneErrors, BadEnum) {
                 "unknown emission \"pulsed\"; allowed: \"delta\", \"continuous\"");
     expectError("{\"version\": 1, \"lights\": [{\n\"type\": \"sun\"}]}", 2, "lights[0].type",
                 "unknown light type \"sun\"; allowed: \"point\", \"spot\", \"area\", \"laser\"");
-    expectError("{\"version\": 1, \"shapes\": [{\n\"type\": \"spere\"}]}", 2, "shapes[0].type", "did you mean \"sphere\"");
+    expectError("{\"version\": 1, \"shapes\": [{\n\"type\": \"spere\"}]}", 2, "shapes[0].type",
+                "did you mean \"sphere\"");
     expectError("{\"version\": 1, \"film\": {\n\"range\": \"manual\"}}", 2, "film.range", "allowed: \"auto\"");
     expectError("{\"version\": 1, \"lights\": [\n{\"power\": 1}]}", 2, "lights[0].type", "required key is missing");
 }
@@ -600,8 +614,9 @@ TEST(SceneErrors, BadTransform) {
                 "last row must be 0, 0, 0, 1");
     expectError(box("{\"matrix\": [1,0,0,0, 0,1,0,0, 0,0,0,0, 0,0,0,1]}"), 2, "shapes[0].transform.matrix",
                 "determinant");
-    expectError(box("{\"rotate\": [{\"axis\": [0, 1, 0], \"angle_deg\": 10}, {\"axis\": [0, 0, 0], \"angle_deg\": 5}]}"),
-                2, "shapes[0].transform.rotate[1].axis", "must not be a zero vector");
+    expectError(
+        box("{\"rotate\": [{\"axis\": [0, 1, 0], \"angle_deg\": 10}, {\"axis\": [0, 0, 0], \"angle_deg\": 5}]}"), 2,
+        "shapes[0].transform.rotate[1].axis", "must not be a zero vector");
     expectError(box("{\"rotate\": {\"axis\": [0, 1, 0]}}"), 2, "shapes[0].transform.rotate.angle_deg",
                 "required key is missing");
     expectError(box("{\"rotate\": {\"axis\": [0, 1, 0], \"angel_deg\": 3}}"), 2, "shapes[0].transform.rotate.angel_deg",
@@ -625,9 +640,10 @@ TEST(SceneErrors, HugeCameraPositionNamesThePositionNotUp) {
                 "lights[0].position", "within +-1e9 m");
     expectError("{\"version\": 1, \"shapes\": [{\"type\": \"box\",\n\"transform\": {\"translate\": [1e20, 0, 0]}}]}", 2,
                 "shapes[0].transform.translate", "within +-1e9 m");
-    expectError("{\"version\": 1, \"shapes\": [{\"type\": \"box\", \"max\": [1, 1, 1],\n\"transform\": {\"scale\": 1e9, "
-                "\"translate\": [1e9, 0, 0]}}]}",
-                2, "shapes[0].transform", "the transformed box reaches beyond +-1e9 m");
+    expectError(
+        "{\"version\": 1, \"shapes\": [{\"type\": \"box\", \"max\": [1, 1, 1],\n\"transform\": {\"scale\": 1e9, "
+        "\"translate\": [1e9, 0, 0]}}]}",
+        2, "shapes[0].transform", "the transformed box reaches beyond +-1e9 m");
     // A huge but finite direction is a direction, not an overflow to a "zero vector".
     const SceneDesc d = loadSceneFromString("{\"version\": 1, \"camera\": {\"up\": [1e308, 1e308, 0]}}", "scene.json");
     expectNear(d.camera.up, glm::normalize(Vec3(1, 1, 0)));
@@ -641,8 +657,9 @@ TEST(SceneErrors, MeshPathThatIsAFolder) {
     std::ofstream(tmp.dir / "bunny" / "bunny.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     const std::string text = "{\"version\": 1, \"shapes\": [\n{\"type\": \"mesh\",\n\"file\": \"bunny\"}]}";
     expectError(text, 3, "shapes[0].file",
-                "mesh file " + (tmp.dir / "bunny").string() + " is a folder, not a file (\"bunny\" resolved against the "
-                "scene's folder); \"file\" must name the OBJ file itself, e.g. \"bunny/bunny.obj\"",
+                "mesh file " + (tmp.dir / "bunny").string() +
+                    " is a folder, not a file (\"bunny\" resolved against the "
+                    "scene's folder); \"file\" must name the OBJ file itself, e.g. \"bunny/bunny.obj\"",
                 tmp.scene());
     fs::create_directories(tmp.dir / "empty");
     expectError("{\"version\": 1, \"shapes\": [{\"type\": \"mesh\",\n\"file\": \"empty\"}]}", 2, "shapes[0].file",
@@ -664,19 +681,23 @@ TEST(SceneErrors, NanAndHugeMeshVerticesNameTheObjLine) {
     };
     const std::string obj = (tmp.dir / "m.obj").string();
     EXPECT_EQ(objError("v 0 0 0\nv nan nan nan\nv 0 1 0\nf 1 2 3\n"),
-              obj + ":2: vertex 2 (\"v\" line 2) has a non-finite coordinate (nan); coordinates must be finite and "
-                    "within +-1e9 m");
+              obj +
+                  ":2: vertex 2 (\"v\" line 2) has a non-finite coordinate (nan); coordinates must be finite and "
+                  "within +-1e9 m");
     EXPECT_EQ(objError("# a comment\nv 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n"),
-              obj + ":3: vertex 2 (\"v\" line 3) has a non-finite coordinate (inf); coordinates must be finite and "
-                    "within +-1e9 m");
-    EXPECT_THAT(objError("v 1e30 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
-                HasSubstr(obj + ":1: vertex 1 (\"v\" line 1) coordinate 1e30 is beyond +-1e9 m, the limit of scene "
-                                "coordinates; check the file's units, or scale the mesh with the shape's \"transform\""));
+              obj +
+                  ":3: vertex 2 (\"v\" line 3) has a non-finite coordinate (inf); coordinates must be finite and "
+                  "within +-1e9 m");
+    EXPECT_THAT(
+        objError("v 1e30 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+        HasSubstr(obj + ":1: vertex 1 (\"v\" line 1) coordinate 1e30 is beyond +-1e9 m, the limit of scene "
+                        "coordinates; check the file's units, or scale the mesh with the shape's \"transform\""));
     EXPECT_THAT(objError("v 1e999 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
                 HasSubstr("non-finite coordinate (1e999, beyond the range of a double)"));
     EXPECT_EQ(objError("v 0 0 0\nv 1,5 0 0\nv 0 1 0\nf 1 2 3\n"),
               obj + ":2: vertex 2 (\"v\" line 2) coordinate \"1,5\" is not a number");
-    EXPECT_EQ(objError("v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), obj + ":1: vertex 1 (\"v\" line 1) has 2 coordinates, expected x y z");
+    EXPECT_EQ(objError("v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+              obj + ":1: vertex 1 (\"v\" line 1) has 2 coordinates, expected x y z");
     // Vertex colours after x y z, normals ("vn") and texture coordinates ("vt") are not vertices.
     EXPECT_EQ(objError("v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nvn nan 0 1\nvt 0.5 0.5\nf 1 2 3\n"), "");
     // A transform that moves a vertex beyond the limit.
@@ -760,8 +781,8 @@ TEST(Json, LineNumbersOfNestedValuesAndKeys) {
 TEST(Json, Escapes) {
     const JsonValue v = parseJson(R"(["a\"b\\c\/d\b\f\n\r\t", "\u00e9\u20AC", "\ud83d\ude00", "\u0000x"])", "t.json");
     EXPECT_EQ(v.items[0].text, "a\"b\\c/d\b\f\n\r\t");
-    EXPECT_EQ(v.items[1].text, "\xC3\xA9\xE2\x82\xAC");     // é €
-    EXPECT_EQ(v.items[2].text, "\xF0\x9F\x98\x80");         // U+1F600 from a surrogate pair
+    EXPECT_EQ(v.items[1].text, "\xC3\xA9\xE2\x82\xAC");  // é €
+    EXPECT_EQ(v.items[2].text, "\xF0\x9F\x98\x80");      // U+1F600 from a surrogate pair
     EXPECT_EQ(v.items[3].text, std::string("\0x", 2));
     EXPECT_THAT(jsonError(R"(["\x"])"), HasSubstr("invalid escape"));
     EXPECT_THAT(jsonError(R"(["\u12"])"), HasSubstr("4 hexadecimal digits"));
@@ -773,10 +794,10 @@ TEST(Json, Escapes) {
 
 TEST(Json, Utf8) {
     EXPECT_EQ(parseJson("\xEF\xBB\xBF[\"\xC3\xA9\xF0\x9F\x98\x80\"]", "t.json").items[0].text,
-              "\xC3\xA9\xF0\x9F\x98\x80");  // BOM skipped, raw UTF-8 kept
-    EXPECT_THAT(jsonError("[\"\xC3\"]"), HasSubstr("invalid UTF-8"));          // truncated sequence
-    EXPECT_THAT(jsonError("[\"\xC0\xAF\"]"), HasSubstr("invalid UTF-8"));      // overlong
-    EXPECT_THAT(jsonError("[\"\xED\xA0\x80\"]"), HasSubstr("invalid UTF-8"));  // encoded surrogate
+              "\xC3\xA9\xF0\x9F\x98\x80");                                         // BOM skipped, raw UTF-8 kept
+    EXPECT_THAT(jsonError("[\"\xC3\"]"), HasSubstr("invalid UTF-8"));              // truncated sequence
+    EXPECT_THAT(jsonError("[\"\xC0\xAF\"]"), HasSubstr("invalid UTF-8"));          // overlong
+    EXPECT_THAT(jsonError("[\"\xED\xA0\x80\"]"), HasSubstr("invalid UTF-8"));      // encoded surrogate
     EXPECT_THAT(jsonError("[\"\xF4\x90\x80\x80\"]"), HasSubstr("invalid UTF-8"));  // > U+10FFFF
     EXPECT_THAT(jsonError("[\"\xFF\"]"), HasSubstr("invalid UTF-8"));
     EXPECT_THAT(jsonError("[\"a\tb\"]"), HasSubstr("control character U+0009"));
@@ -784,7 +805,8 @@ TEST(Json, Utf8) {
 }
 
 TEST(Json, Numbers) {
-    const JsonValue v = parseJson("[0, -0, 12, -3.5, 1e3, 2.5E-2, 1E+2, 123456789012345678901234567890, 1e-400]", "t.json");
+    const JsonValue v =
+        parseJson("[0, -0, 12, -3.5, 1e3, 2.5E-2, 1E+2, 123456789012345678901234567890, 1e-400]", "t.json");
     const double expected[] = {0, 0, 12, -3.5, 1000, 0.025, 100, 1.2345678901234568e29, 0};
     ASSERT_EQ(v.items.size(), 9u);
     for (size_t i = 0; i < 9; ++i) EXPECT_DOUBLE_EQ(v.items[i].number, expected[i]) << i;
@@ -856,12 +878,10 @@ TEST(Json, MutatedInputNeverCrashes) {
     for (int iter = 0; iter < 3000; ++iter) {
         std::string s = base.substr(0, rng() % (base.size() + 1));
         const int edits = 1 + static_cast<int>(rng() % 4);
-        for (int e = 0; e < edits && !s.empty(); ++e)
-            s[rng() % s.size()] = alphabet[rng() % (sizeof(alphabet) - 1)];
+        for (int e = 0; e < edits && !s.empty(); ++e) s[rng() % s.size()] = alphabet[rng() % (sizeof(alphabet) - 1)];
         try {
             parseJson(s, "fuzz.json");
             loadSceneFromString(s, "fuzz.json");
-        } catch (const UserError&) {
-        }
+        } catch (const UserError&) {}
     }
 }

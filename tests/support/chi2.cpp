@@ -190,11 +190,14 @@ Chi2Result chi2Test2D(const Sampler2D& sample, const Pdf2D& pdf, const Domain2D&
     return r;
 }
 
-Chi2Result chi2Test1D(const std::function<double(Rng&)>& sample, const std::function<double(double)>& pdf,
-                      double x0, double x1, Chi2Settings s) {
+Chi2Result chi2Test1D(const std::function<double(Rng&)>& sample, const std::function<double(double)>& pdf, double x0,
+                      double x1, Chi2Settings s) {
     s.binsY = 1;
-    return chi2Test2D([&](Rng& rng) { return Point2D{sample(rng), 0.5}; },
-                      [&](double x, double) { return pdf(x); }, Domain2D{x0, x1, 0.0, 1.0}, s);
+    return chi2Test2D(
+        [&](Rng& rng) {
+            return Point2D{sample(rng), 0.5};
+        },
+        [&](double x, double) { return pdf(x); }, Domain2D{x0, x1, 0.0, 1.0}, s);
 }
 
 DirectionFrame::DirectionFrame(const Vec3& axis) {

@@ -46,9 +46,9 @@ struct Chi2Settings {
     int binsX = 32, binsY = 32;
     int64_t samples = 500000;
     uint64_t seed = 1;
-    double minExpected = 5.0;  // cells expecting fewer samples are pooled
-    double alpha = 0.01;       // overall significance ...
-    int testCount = 1;         // ... shared by this many tests (Sidak)
+    double minExpected = 5.0;       // cells expecting fewer samples are pooled
+    double alpha = 0.01;            // overall significance ...
+    int testCount = 1;              // ... shared by this many tests (Sidak)
     double integrationTol = 1e-10;  // absolute tolerance of the per-cell adaptive Simpson
 };
 
@@ -58,10 +58,10 @@ struct Chi2Result {
     double pValue = 0.0;
     double significance = 0.0;  // the per-test threshold used
     bool rejected = true;
-    double pdfIntegral = 0.0;   // integral of the pdf over the domain (1 for a normalised pdf)
-    int64_t outside = 0;        // samples outside the domain or NaN (any rejects)
-    int64_t impossible = 0;     // samples in cells where the pdf integrates to 0 (any rejects)
-    int pooledCells = 0;        // cells pooled because they expected < minExpected
+    double pdfIntegral = 0.0;  // integral of the pdf over the domain (1 for a normalised pdf)
+    int64_t outside = 0;       // samples outside the domain or NaN (any rejects)
+    int64_t impossible = 0;    // samples in cells where the pdf integrates to 0 (any rejects)
+    int pooledCells = 0;       // cells pooled because they expected < minExpected
     std::string summary() const;
 };
 
@@ -77,8 +77,8 @@ double integrate1D(const std::function<double(double)>& f, double a, double b, d
 Chi2Result chi2Test2D(const Sampler2D& sample, const Pdf2D& pdf, const Domain2D& domain, const Chi2Settings& s);
 
 // A 1D sampler on [x0, x1] with pdf(x): chi2Test2D with one bin in y.
-Chi2Result chi2Test1D(const std::function<double(Rng&)>& sample, const std::function<double(double)>& pdf,
-                      double x0, double x1, Chi2Settings s);
+Chi2Result chi2Test1D(const std::function<double(Rng&)>& sample, const std::function<double(double)>& pdf, double x0,
+                      double x1, Chi2Settings s);
 
 // Directions around the unit axis `n`: each sample is mapped to (cos theta, phi) in a frame of
 // the test's own (not the renderer's coordinateSystem), pdfW(w) is the solid-angle density.

@@ -32,9 +32,9 @@ namespace tpb::test {
 // Per-cell sums of X_i and X_i^2 over the passes, for one (axis, emission mode).
 struct CellMoments {
     std::vector<double> sum, sum2;
-    std::vector<int> hits;        // passes with a non-zero sample
-    std::vector<Color> totals;   // per pass and channel: the sum of X_i over the cells (for zTotal)
-    size_t bins = 1;              // the film's bins (cell index = (pixel * bins + bin) * 3 + channel)
+    std::vector<int> hits;      // passes with a non-zero sample
+    std::vector<Color> totals;  // per pass and channel: the sum of X_i over the cells (for zTotal)
+    size_t bins = 1;            // the film's bins (cell index = (pixel * bins + bin) * 3 + channel)
 };
 
 struct PassMoments {
@@ -47,7 +47,8 @@ struct PassMoments {
 };
 
 // Renders passes 1..passes, each alone (its own Driver and film), and collects the moments.
-inline PassMoments renderPassMoments(const Scene& scene, const RenderSettings& settings, const TimeBins& time, int passes) {
+inline PassMoments renderPassMoments(const Scene& scene, const RenderSettings& settings, const TimeBins& time,
+                                     int passes) {
     PassMoments pm;
     pm.passes = passes;
     std::vector<double> v;
@@ -91,11 +92,11 @@ inline std::vector<double> referenceCells(const ReferenceVolume& ref, TimeAxis a
 }
 
 struct CellTest {
-    int cells = 0;             // cells compared (see compareCells)
-    double chi2PerDof = 0.0;   // mean z^2
+    int cells = 0;            // cells compared (see compareCells)
+    double chi2PerDof = 0.0;  // mean z^2
     double maxAbsZ = 0.0;
-    double zTotal = 0.0;       // of the sum over all cells
-    double totalRatio = 0.0;   // sum of the means / sum of the refs
+    double zTotal = 0.0;         // of the sum over all cells
+    double totalRatio = 0.0;     // sum of the means / sum of the refs
     double totalRelError = 0.0;  // se of the total / the reference total: what a normalisation error must exceed
 };
 
@@ -120,7 +121,8 @@ inline CellTest compareCells(const CellMoments& m, int passes, const std::vector
     for (size_t p = 0; p < pixels; ++p) {
         size_t firstLit = B;
         for (size_t k = 0; k < B && firstLit == B; ++k)
-            if (ref[(p * B + k) * 3] > 0.0 || ref[(p * B + k) * 3 + 1] > 0.0 || ref[(p * B + k) * 3 + 2] > 0.0) firstLit = k;
+            if (ref[(p * B + k) * 3] > 0.0 || ref[(p * B + k) * 3 + 1] > 0.0 || ref[(p * B + k) * 3 + 2] > 0.0)
+                firstLit = k;
         for (size_t k = firstLit + static_cast<size_t>(edgeBins); k < B; ++k)
             for (int c = 0; c < 3; ++c) {
                 const size_t i = (p * B + k) * 3 + static_cast<size_t>(c);
@@ -185,14 +187,15 @@ inline void expectSingleScatteringMatches(const std::string& json, const std::st
     const ReferenceVolume ref = singleScatteringReference(*sc, sc.time, sc.source.path, sc.settings, 8, 2);
     const ReferenceVolume refSlow = singleScatteringReference(*slow, slow.time, slow.source.path, slow.settings, 8, 2);
     // Whether a comparison fails the thresholds: the cells' mean z^2, or one channel's total.
-    const auto rejects = [&](const CellMoments& cm, const std::vector<double>& cells, double scale, const std::string& what,
-                             bool expectPass) {
+    const auto rejects = [&](const CellMoments& cm, const std::vector<double>& cells, double scale,
+                             const std::string& what, bool expectPass) {
         const CellTest all = compareCells(cm, passes, cells, scale);
         printCellTest((what + ":").c_str(), all);
         bool rejected = all.chi2PerDof > 1.3;
         for (int c = 0; c < 3; ++c) {
             const CellTest ch = compareCells(cm, passes, cells, scale, c);
-            std::printf("    channel %d: total ratio %.4f (se %.4f, z %.2f)\n", c, ch.totalRatio, ch.totalRelError, ch.zTotal);
+            std::printf("    channel %d: total ratio %.4f (se %.4f, z %.2f)\n", c, ch.totalRatio, ch.totalRelError,
+                        ch.zTotal);
             rejected = rejected || std::abs(ch.zTotal) > 4.0;
             if (expectPass) {
                 EXPECT_LT(std::abs(ch.zTotal), 4.0) << what << " channel " << c;
@@ -212,8 +215,10 @@ inline void expectSingleScatteringMatches(const std::string& json, const std::st
             const std::string what = axisName + (mode == EmissionMode::Delta ? " delta" : " continuous");
             const CellMoments& cm = pm.at(axis, mode);
             rejects(cm, referenceCells(ref, axis, mode, B), 1.0, what, true);
-            brightRejected = rejects(cm, referenceCells(ref, axis, mode, B), 1.04, what + ", film x 1.04", false) || brightRejected;
-            lateRejected = rejects(cm, referenceCells(refSlow, axis, mode, B), 1.0, what + ", time x 1.03", false) || lateRejected;
+            brightRejected =
+                rejects(cm, referenceCells(ref, axis, mode, B), 1.04, what + ", film x 1.04", false) || brightRejected;
+            lateRejected =
+                rejects(cm, referenceCells(refSlow, axis, mode, B), 1.0, what + ", time x 1.03", false) || lateRejected;
         }
         EXPECT_TRUE(brightRejected) << axisName << ": a film 4% too bright passes";
         EXPECT_TRUE(lateRejected) << axisName << ": a time axis 3% slow passes";

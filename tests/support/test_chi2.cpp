@@ -51,8 +51,8 @@ TEST(Chi2Helper, PValueMatchesTabulatedCriticalValues) {
         int dof;
         double x;
     };
-    const Row rows[] = {{0.05, 1, 3.841},    {0.01, 1, 6.635},    {0.05, 5, 11.070},  {0.01, 5, 15.086},
-                        {0.99, 5, 0.554},    {0.05, 10, 18.307},  {0.01, 30, 50.892}, {0.95, 30, 18.493},
+    const Row rows[] = {{0.05, 1, 3.841},     {0.01, 1, 6.635},     {0.05, 5, 11.070},  {0.01, 5, 15.086},
+                        {0.99, 5, 0.554},     {0.05, 10, 18.307},   {0.01, 30, 50.892}, {0.95, 30, 18.493},
                         {0.05, 100, 124.342}, {0.01, 100, 135.807}, {0.50, 100, 99.334}};
     // The true critical value lies within the rounding (+-0.0005) of the printed one.
     for (const Row& r : rows) {
@@ -92,7 +92,9 @@ TEST(Chi2Helper, AcceptsACorrectSampler) {
     EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-9);
     // ... and so does Henyey-Greenstein at g = 0.8.
     const Chi2Result hg = chi2Test2D(
-        [](Rng& rng) { return Point2D{hgSampleMu(0.8, rng.uniform()), 2.0 * kPi * rng.uniform()}; },
+        [](Rng& rng) {
+            return Point2D{hgSampleMu(0.8, rng.uniform()), 2.0 * kPi * rng.uniform()};
+        },
         [](double mu, double) { return hgPdf(0.8, mu); }, sphericalDomain(), s);
     EXPECT_FALSE(hg.rejected) << hg.summary();
 }
@@ -103,22 +105,30 @@ TEST(Chi2Helper, RejectsWrongSamplers) {
     Chi2Settings s;
     s.testCount = 4;
     const Chi2Result uniform = chi2Test2D(
-        [](Rng& rng) { return Point2D{rng.uniform(), 2.0 * kPi * rng.uniform()}; },
+        [](Rng& rng) {
+            return Point2D{rng.uniform(), 2.0 * kPi * rng.uniform()};
+        },
         [](double mu, double) { return mu / kPi; }, sphericalDomain(0.0), s);
     EXPECT_TRUE(uniform.rejected) << uniform.summary();
     EXPECT_LT(uniform.pValue, 1e-100);
     const Chi2Result hg = chi2Test2D(
-        [](Rng& rng) { return Point2D{hgSampleMu(0.75, rng.uniform()), 2.0 * kPi * rng.uniform()}; },
+        [](Rng& rng) {
+            return Point2D{hgSampleMu(0.75, rng.uniform()), 2.0 * kPi * rng.uniform()};
+        },
         [](double mu, double) { return hgPdf(0.8, mu); }, sphericalDomain(), s);
     EXPECT_TRUE(hg.rejected) << hg.summary();
     EXPECT_EQ(hg.outside, 0);
     const Chi2Result phi = chi2Test2D(
-        [](Rng& rng) { return Point2D{1.0 - 2.0 * rng.uniform(), 1.9 * kPi * rng.uniform()}; },
+        [](Rng& rng) {
+            return Point2D{1.0 - 2.0 * rng.uniform(), 1.9 * kPi * rng.uniform()};
+        },
         [](double, double) { return 1.0 / (4.0 * kPi); }, sphericalDomain(), s);
     EXPECT_TRUE(phi.rejected) << phi.summary();
     const Chi2Result outside = chi2Test2D(
-        [](Rng& rng) { return Point2D{rng.uniform() * 1.01, rng.uniform()}; }, [](double, double) { return 1.0; },
-        Domain2D{}, s);
+        [](Rng& rng) {
+            return Point2D{rng.uniform() * 1.01, rng.uniform()};
+        },
+        [](double, double) { return 1.0; }, Domain2D{}, s);
     EXPECT_TRUE(outside.rejected) << outside.summary();
     EXPECT_GT(outside.outside, 0);
 }
@@ -142,9 +152,8 @@ TEST(Chi2Helper, PoolsCellsWithSmallExpectedCounts) {
     s.binsX = 50;
     s.samples = 20000;
     const double lambda = 8.0, norm = 1.0 - std::exp(-lambda);
-    const Chi2Result r = chi2Test1D(
-        [&](Rng& rng) { return -std::log(1.0 - rng.uniform() * norm) / lambda; },
-        [&](double x) { return lambda * std::exp(-lambda * x) / norm; }, 0.0, 1.0, s);
+    const Chi2Result r = chi2Test1D([&](Rng& rng) { return -std::log(1.0 - rng.uniform() * norm) / lambda; },
+                                    [&](double x) { return lambda * std::exp(-lambda * x) / norm; }, 0.0, 1.0, s);
     EXPECT_FALSE(r.rejected) << r.summary();
     EXPECT_GT(r.pooledCells, 0);
     EXPECT_LT(r.dof, 49);

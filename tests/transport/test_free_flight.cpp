@@ -34,7 +34,11 @@ const Ray kRay{Vec3(0.0), Vec3(0.0, 0.0, 1.0)};
 // Mean and standard error of a running sample.
 struct Moments {
     double n = 0, sum = 0, sum2 = 0;
-    void add(double x) { n += 1; sum += x; sum2 += x * x; }
+    void add(double x) {
+        n += 1;
+        sum += x;
+        sum2 += x * x;
+    }
     double mean() const { return sum / n; }
     double stderrOfMean() const { return std::sqrt(std::max(0.0, sum2 / n - mean() * mean()) / n); }
 };
@@ -101,8 +105,10 @@ TEST(FreeFlight, ChromaticWeightsAreUnbiasedPerChannel) {
         // Surface: the transmittance; volume: the scattered fraction int_0^D sigma_s e^{-sigma_t s} ds.
         const double surfRef = std::exp(-sigma_t[c] * tMax);
         const double volRef = sigma_s[c] * (1.0 - std::exp(-sigma_t[c] * tMax)) / sigma_t[c];
-        EXPECT_LT(std::abs(surf[c].mean() - surfRef) / surf[c].stderrOfMean(), 4.0) << c << " " << surf[c].mean() << " vs " << surfRef;
-        EXPECT_LT(std::abs(vol[c].mean() - volRef) / vol[c].stderrOfMean(), 4.0) << c << " " << vol[c].mean() << " vs " << volRef;
+        EXPECT_LT(std::abs(surf[c].mean() - surfRef) / surf[c].stderrOfMean(), 4.0)
+            << c << " " << surf[c].mean() << " vs " << surfRef;
+        EXPECT_LT(std::abs(vol[c].mean() - volRef) / vol[c].stderrOfMean(), 4.0)
+            << c << " " << vol[c].mean() << " vs " << volRef;
     }
 }
 

@@ -201,7 +201,8 @@ TEST(Interaction, RegionStackPushedEnteringAndPoppedLeavingAGlassSphere) {
     RegionStack regions = scene->cameraRegions;
     ASSERT_EQ(regions.size, 1);
     Shot s = shoot(*scene, 0.3);
-    const SpecularContinuation in = followInterface(*scene, s.ray, s.hit, interact(*scene, s.ray, s.hit), regions, 0.99);
+    const SpecularContinuation in =
+        followInterface(*scene, s.ray, s.hit, interact(*scene, s.ray, s.hit), regions, 0.99);
     ASSERT_TRUE(in.transmitted);
     EXPECT_EQ(regions.size, 2);
     EXPECT_EQ(regions.top(), inside);
@@ -213,7 +214,8 @@ TEST(Interaction, RegionStackPushedEnteringAndPoppedLeavingAGlassSphere) {
     ASSERT_TRUE(exitHit);
     EXPECT_NEAR(glm::length(exitHit->p), 1.0, 1e-9);
     EXPECT_GT(exitHit->t, 0.5);  // the far side, not the entry point again
-    const SpecularContinuation out = followInterface(*scene, in.ray, *exitHit, interact(*scene, in.ray, *exitHit), regions, 0.99);
+    const SpecularContinuation out =
+        followInterface(*scene, in.ray, *exitHit, interact(*scene, in.ray, *exitHit), regions, 0.99);
     ASSERT_TRUE(out.transmitted);
     EXPECT_EQ(regions.size, 1);
     EXPECT_EQ(regions.top(), 0);
@@ -240,7 +242,8 @@ TEST(Interaction, FullRegionStackIsReportedNotThrown) {
     // The straight null crossing reports it the same way.
     const auto nullScene = sphereScene(MaterialType::Null);
     const Shot ns = shoot(*nullScene, 0.1);
-    const SpecularContinuation cn = crossNull(*nullScene, ns.ray, ns.hit, interact(*nullScene, ns.ray, ns.hit), regions);
+    const SpecularContinuation cn =
+        crossNull(*nullScene, ns.ray, ns.hit, interact(*nullScene, ns.ray, ns.hit), regions);
     EXPECT_TRUE(cn.regionOverflow);
     EXPECT_EQ(regions.size, RegionStack::kCapacity);
 }

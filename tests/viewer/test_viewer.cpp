@@ -202,7 +202,8 @@ ToneMatch matchToneMap(const Image8& shot, const Area& a, const Exr& film, bool 
         for (int x = 0; x < kFilm; ++x) {
             if (std::abs(x - kFilm / 2) <= 1 && std::abs(y - kFilm / 2) <= 1) continue;  // selection marker
             const unsigned char* p = cell(shot, a, x, y);
-            const std::array<int, 3> want = cpuToneMap(&film.rgb[(static_cast<size_t>(y) * kFilm + x) * 3], a.ev, falseColor);
+            const std::array<int, 3> want =
+                cpuToneMap(&film.rgb[(static_cast<size_t>(y) * kFilm + x) * 3], a.ev, falseColor);
             colours.insert(want);
             bool ok = true;
             for (int c = 0; c < 3; ++c) ok &= std::abs(static_cast<int>(p[c]) - want[c]) <= 3;
@@ -323,9 +324,10 @@ protected:
         const fs::path out = dir_ / ("ref_" + m.name);
         if (!refs_.count(m.name)) {
             // With the viewer's warm-up (render_settings.h kViewerWarmupPasses): the same passes.
-            refs_[m.name] = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs +
-                                         m.flags + " --warmup " + std::to_string(tpb::kViewerWarmupPasses) + " -q -o " + q(out),
-                                     out);
+            refs_[m.name] =
+                runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs + m.flags +
+                             " --warmup " + std::to_string(tpb::kViewerWarmupPasses) + " -q -o " + q(out),
+                         out);
         }
         EXPECT_EQ(refs_[m.name].code, 0) << "tpb render failed: " << refs_[m.name].err;
         return out;
@@ -348,10 +350,11 @@ protected:
     static const Proc& view(const Mode& m) {
         if (!views_.count(m.name)) {
             const fs::path base = dir_ / ("view_" + m.name);
-            views_[m.name] = runXvfb(std::string(TPB_BINARY) + " view " + q(dir_ / "scene.json") + kRenderArgs + m.flags +
-                                         " --bin " + std::to_string(bin()) + " --after-passes 2 --window-size 1280 800" +
-                                         " --screenshot " + q(base.string() + ".png") + " --export " + q(base),
-                                     base);
+            views_[m.name] =
+                runXvfb(std::string(TPB_BINARY) + " view " + q(dir_ / "scene.json") + kRenderArgs + m.flags +
+                            " --bin " + std::to_string(bin()) + " --after-passes 2 --window-size 1280 800" +
+                            " --screenshot " + q(base.string() + ".png") + " --export " + q(base),
+                        base);
         }
         return views_[m.name];
     }
@@ -479,9 +482,9 @@ TEST_F(ViewerTest, ExportEqualsIndependentRender) {
 // ignored --method (the beams' film differs) or the path tracer's passes differed between the two.
 TEST_F(ViewerTest, PathTracerRunsLiveInTheViewer) {
     const fs::path out = dir_ / "ref_pt";
-    const Proc ref = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs +
-                                  " --method pt -q -o " + q(out),
-                              out);
+    const Proc ref = runShell(
+        std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs + " --method pt -q -o " + q(out),
+        out);
     ASSERT_EQ(ref.code, 0) << ref.err;
     const fs::path base = dir_ / "view_pt";
     const Proc r = runXvfb(std::string(TPB_BINARY) + " view " + q(dir_ / "scene.json") + kRenderArgs + " --method pt" +
@@ -578,8 +581,9 @@ TEST_F(ViewerTest, SteadyStateExportButtonWritesSteadyExr) {
 // render settings open, false colour on, playback running (its button then reads "Pause", as the
 // render's Pause button does) - no two controls share an ID.
 TEST_F(ViewerTest, NoTwoControlsShareAnImGuiId) {
-    const Proc r = viewRun("ids", kRenderArgs + " --after-passes 1 --bin 3 --click 'Render settings' --click "
-                                                "'Display/False colour' --click 'Time/Play'");
+    const Proc r = viewRun("ids", kRenderArgs +
+                                      " --after-passes 1 --bin 3 --click 'Render settings' --click "
+                                      "'Display/False colour' --click 'Time/Play'");
     EXPECT_EQ(r.code, 0) << r.out << r.err;
     EXPECT_EQ(r.err.find("share an ImGui ID"), std::string::npos) << r.err;
     const std::map<std::string, Rect> controls = parseControls(r.out, "control");
@@ -647,8 +651,9 @@ TEST_F(ViewerTest, AutoExposureFitsTheTilesFinishedDuringTheFirstPass) {
         size_t lit = 0;
         unsigned long long passes = 0;
         int complete = 0, fin = 0, bin = 0, steady = 0;
-        if (std::sscanf(line.c_str(), "auto_exposure ev %lf lit_pixels %zu passes %llu complete %d final %d bin %d steady %d",
-                        &ev, &lit, &passes, &complete, &fin, &bin, &steady) != 7)
+        if (std::sscanf(line.c_str(),
+                        "auto_exposure ev %lf lit_pixels %zu passes %llu complete %d final %d bin %d steady %d", &ev,
+                        &lit, &passes, &complete, &fin, &bin, &steady) != 7)
             continue;
         EXPECT_GT(lit, 0u);
         during += passes == 0;
@@ -682,7 +687,8 @@ TEST_F(ViewerTest, ControlsKeepTheirPlaceWhenTheRenderFinishes) {
 // A long status line wraps inside the controls panel (it was cut off at the panel's edge).
 TEST_F(ViewerTest, LongStatusLinesWrap) {
     const fs::path out = dir_ / ("a_folder_with_a_long_name_so_that_the_status_line_is_longer_than_the_panel_"
-                                 "is_wide_" + std::string(40, 'x'));
+                                 "is_wide_" +
+                                 std::string(40, 'x'));
     const Proc r = viewRun("status", kRenderArgs + " --after-passes 1 --export-folder " + q(out) +
                                          " --click 'Export/Window screenshot (F12)'");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
@@ -695,8 +701,8 @@ TEST_F(ViewerTest, LongStatusLinesWrap) {
     ASSERT_NE(pos, std::string::npos);
     ASSERT_EQ(std::sscanf(r.out.c_str() + pos, "messages_area %lf %lf", &left, &right), 2);
     EXPECT_LE(st.x + st.w, right + 1.0) << "the status line runs past the panel";
-    EXPECT_GE(st.h, 3 * 13.0) << "a " << ("saved " + out.string()).size() << "-character status line on "
-                              << st.h / 13.0 << " lines";
+    EXPECT_GE(st.h, 3 * 13.0) << "a " << ("saved " + out.string()).size() << "-character status line on " << st.h / 13.0
+                              << " lines";
 }
 
 // Issue 33 item 11: the first picture of the default scene (the one tools/run opens) shows the
@@ -737,14 +743,15 @@ TEST_F(ViewerTest, FirstPictureOfTheDefaultSceneLightsMostOfIt) {
     ASSERT_NE(at, std::string::npos) << r.out;
     ASSERT_EQ(std::sscanf(r.out.c_str() + at, "image_panel %lf %lf %lf %lf fit %d", &px, &py, &pw, &ph, &fit), 5);
     EXPECT_EQ(fit, 1);
-    EXPECT_TRUE(a.h >= ph - 2.0 || a.w >= pw - 2.0 * 12.0 - 2.0) << "image " << a.w << " x " << a.h << " in a panel of "
-                                                                   << pw << " x " << ph;
+    EXPECT_TRUE(a.h >= ph - 2.0 || a.w >= pw - 2.0 * 12.0 - 2.0)
+        << "image " << a.w << " x " << a.h << " in a panel of " << pw << " x " << ph;
     EXPECT_GE(a.x, px);
     EXPECT_LE(a.x + a.w, px + pw + 1e-3);
 
     // The frame of the peak bin, as the viewer opened before (and opens with --frame): discs.
     const fs::path frame = dir_ / "default_frame.png";
-    const Proc f = runXvfb(std::string(TPB_BINARY) + " view " + scene + " --frame" + args + q(frame), dir_ / "default_frame");
+    const Proc f =
+        runXvfb(std::string(TPB_BINARY) + " view " + scene + " --frame" + args + q(frame), dir_ / "default_frame");
     ASSERT_EQ(f.code, 0) << f.out << f.err;
     const Area fa = parseArea(f.out);
     ASSERT_TRUE(fa.ok) << f.out;
@@ -771,8 +778,8 @@ std::vector<std::string> reportWords(const std::string& out, const std::string& 
 // profile a log scale, false colour a colour bar whose labels are the film luminance of each
 // decade below the white point (2^-EV), as drawn.
 TEST_F(ViewerTest, TimeTicksLogScaleAndColourBarAreDrawn) {
-    const Proc r = viewRun("instrument", kRenderArgs + " --after-passes 2 --false-color --bin " + std::to_string(bin()) +
-                                             " --click 'Streak and pixel profile/log scale'");
+    const Proc r = viewRun("instrument", kRenderArgs + " --after-passes 2 --false-color --bin " +
+                                             std::to_string(bin()) + " --click 'Streak and pixel profile/log scale'");
     ASSERT_EQ(r.code, 0) << r.out << r.err;
     const Area a = parseArea(r.out);
     ASSERT_TRUE(a.ok) << r.out;
@@ -798,8 +805,9 @@ TEST_F(ViewerTest, TimeTicksLogScaleAndColourBarAreDrawn) {
 // accumulation" keeps the passes, "Restart" restarts. Sections are folded so that the Render
 // settings' "auto radius" button is in view of an 800-pixel window.
 TEST_F(ViewerTest, SettingsThatDiscardTheAccumulationAskFirst) {
-    const std::string fold = kRenderArgs + " --after-passes 2 --bin 3 --click Time --click View --click Display "
-                                           "--click 'Render settings' --click 'Render settings/auto radius'";
+    const std::string fold = kRenderArgs +
+                             " --after-passes 2 --bin 3 --click Time --click View --click Display "
+                             "--click 'Render settings' --click 'Render settings/auto radius'";
     const Proc asked = viewRun("ask_restart", fold);
     ASSERT_EQ(asked.code, 0) << asked.out << asked.err;
     const std::map<std::string, Rect> controls = parseControls(asked.out, "control");
@@ -851,18 +859,19 @@ TEST(ViewerCli, NoDisplayExitsWithCode2) {
     const fs::path dir = makeTempDir("nodisplay");
     std::ofstream(dir / "scene.json") << kScene;
     const Proc r = runShell("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(TPB_BINARY) + " view " +
-                               q(dir / "scene.json") + " --screenshot " + q(dir / "x.png"),
-                           dir / "run");
+                                q(dir / "scene.json") + " --screenshot " + q(dir / "x.png"),
+                            dir / "run");
     EXPECT_EQ(r.code, 2) << r.out << r.err;
     EXPECT_NE(r.err.find("cannot open a window"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("xvfb-run"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "x.png"));
 
     // Flag mistakes are user errors too.
-    const Proc bad1 = runShell(std::string(TPB_BINARY) + " view " + q(dir / "scene.json") + " --export out", dir / "bad1");
+    const Proc bad1 =
+        runShell(std::string(TPB_BINARY) + " view " + q(dir / "scene.json") + " --export out", dir / "bad1");
     EXPECT_EQ(bad1.code, 2) << bad1.err;
-    const Proc bad2 = runShell(std::string(TPB_BINARY) + " view " + q(dir / "scene.json") + " --bin 3 --time 2",
-                              dir / "bad2");
+    const Proc bad2 =
+        runShell(std::string(TPB_BINARY) + " view " + q(dir / "scene.json") + " --bin 3 --time 2", dir / "bad2");
     EXPECT_EQ(bad2.code, 2) << bad2.err;
     fs::remove_all(dir);
 }
@@ -940,7 +949,8 @@ TEST_F(ViewerTest, TimelineReportsFirstLightAndTheWarmup) {
         if (at == std::string::npos) return -2.0;
         double first = -2.0;
         int used = 0;
-        if (std::sscanf(out.c_str() + at, "timeline first_light_s %lf warmup %d pass_end_s%n", &first, &warmup, &used) < 2)
+        if (std::sscanf(out.c_str() + at, "timeline first_light_s %lf warmup %d pass_end_s%n", &first, &warmup, &used) <
+            2)
             return -2.0;
         std::istringstream rest(out.substr(at + static_cast<size_t>(used), out.find('\n', at) - at - used));
         for (double t; rest >> t;) ends.push_back(t);
@@ -970,14 +980,15 @@ using tpb::test::checkpointPayload;
 // and `tpb view --resume` opens it and refines it further.
 TEST_F(ViewerTest, SavedCheckpointResumesToTheFilmOfOneUninterruptedRender) {
     const fs::path out = dir_ / "ckpt";
-    const Proc r = viewRun("ckpt", kRenderArgs + " --after-passes 2 --export-folder " + q(out) +
-                                       " --click 'Progress/Save checkpoint'");
+    const Proc r = viewRun(
+        "ckpt", kRenderArgs + " --after-passes 2 --export-folder " + q(out) + " --click 'Progress/Save checkpoint'");
     EXPECT_EQ(r.code, 0) << r.out << r.err;
     ASSERT_TRUE(fs::exists(out / "checkpoint.tpbck")) << r.out << r.err;
     EXPECT_NE(r.out.find("checkpoint of 2 passes written to "), std::string::npos) << r.out;
 
-    const Proc resumed = runShell(std::string(TPB_BINARY) + " render --resume " + q(out) +
-                                      " --passes 4 --no-frames --strip 0 -q", out / "resume");
+    const Proc resumed =
+        runShell(std::string(TPB_BINARY) + " render --resume " + q(out) + " --passes 4 --no-frames --strip 0 -q",
+                 out / "resume");
     ASSERT_EQ(resumed.code, 0) << resumed.err;
     const fs::path whole = dir_ / "ckpt_whole";
     const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") +
@@ -987,7 +998,8 @@ TEST_F(ViewerTest, SavedCheckpointResumesToTheFilmOfOneUninterruptedRender) {
     ASSERT_EQ(w.code, 0) << w.err;
     const std::string a = checkpointPayload(out / "checkpoint.tpbck");
     ASSERT_FALSE(a.empty());
-    EXPECT_TRUE(a == checkpointPayload(whole / "checkpoint.tpbck")) << "resumed film differs from the uninterrupted one";
+    EXPECT_TRUE(a == checkpointPayload(whole / "checkpoint.tpbck"))
+        << "resumed film differs from the uninterrupted one";
 
     const Proc v = runXvfb(std::string(TPB_BINARY) + " view --resume " + q(out) +
                                " --after-passes 1 --window-size 1280 800 --screenshot " + q(dir_ / "ckpt_view.png"),
@@ -1010,7 +1022,8 @@ TEST_F(ViewerTest, ExportButtonsWriteTheVolumeTheMp4AndTheContactSheet) {
     ASSERT_EQ(r.code, 0) << r.out << r.err;
     const fs::path vol = out / "volume_unwarped_delta";
     ASSERT_TRUE(fs::exists(vol / "transient.npy")) << r.out << r.err;
-    for (const char* f : {"transient.json", "steady.npy", "before.npy", "after.npy"}) EXPECT_TRUE(fs::exists(vol / f)) << f;
+    for (const char* f : {"transient.json", "steady.npy", "before.npy", "after.npy"})
+        EXPECT_TRUE(fs::exists(vol / f)) << f;
     std::ifstream f(vol / "transient.npy", std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
     ASSERT_GT(bytes.size(), 10u);
@@ -1025,7 +1038,8 @@ TEST_F(ViewerTest, ExportButtonsWriteTheVolumeTheMp4AndTheContactSheet) {
             for (int x = 0; x < kFilm; ++x)
                 for (int c = 0; c < 3; ++c) {
                     float v = 0.0f;
-                    std::memcpy(&v, bytes.data() + header + ((static_cast<size_t>(y) * kFilm + x) * kBins + k) * 12 + c * 4, 4);
+                    std::memcpy(
+                        &v, bytes.data() + header + ((static_cast<size_t>(y) * kFilm + x) * kBins + k) * 12 + c * 4, 4);
                     const float want = frame.rgb[(static_cast<size_t>(y) * kFilm + x) * 3 + c];
                     worst = std::max(worst, std::abs(double(v) - want) / std::max(1e-20, std::abs(double(want))));
                 }
@@ -1041,8 +1055,10 @@ TEST_F(ViewerTest, ExportButtonsWriteTheVolumeTheMp4AndTheContactSheet) {
     if (ffmpeg) {
         const fs::path mp4 = out / "transient_unwarped_delta.mp4";
         ASSERT_TRUE(fs::exists(mp4)) << r.out << r.err;
-        const std::string cmd = "ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames "
-                                "-of csv=p=0 " + q(mp4) + " > " + q(out / "probe.txt");
+        const std::string cmd =
+            "ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames "
+            "-of csv=p=0 " +
+            q(mp4) + " > " + q(out / "probe.txt");
         ASSERT_EQ(std::system(cmd.c_str()), 0);
         std::ifstream p(out / "probe.txt");
         int frames = 0;
@@ -1066,9 +1082,10 @@ TEST_F(ViewerTest, PulseShapeAndSensorResponseAreAppliedToTheShownAndExportedFra
         const fs::path frame = out / viewerFrameName(bin(), m.tag + "_pulse-gaussian0.4_sensor-exp0.3");
         ASSERT_TRUE(fs::exists(frame)) << r.out;
         const fs::path ref = dir_ / ("pulse_ref_" + m.name);
-        const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs + m.flags +
-                                    resp + " --warmup " + std::to_string(tpb::kViewerWarmupPasses) + " --strip 0 -q -o " + q(ref),
-                                ref);
+        const Proc w =
+            runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") + kRenderArgs + m.flags + resp +
+                         " --warmup " + std::to_string(tpb::kViewerWarmupPasses) + " --strip 0 -q -o " + q(ref),
+                     ref);
         ASSERT_EQ(w.code, 0) << w.err;
         const Exr got = readExrFile(frame), want = readExrFile(ref / "frames" / frameName(bin()));
         ASSERT_EQ(got.rgb.size(), want.rgb.size());
@@ -1076,8 +1093,7 @@ TEST_F(ViewerTest, PulseShapeAndSensorResponseAreAppliedToTheShownAndExportedFra
         const Exr sharp = readExrFile(reference(m) / "frames" / frameName(bin()));
         EXPECT_GT(maxRelDiff(got, sharp), 0.05) << "the pulse shape changed nothing";
         const nlohmann::json summary = nlohmann::json::parse(slurp(ref / "summary.json"));
-        EXPECT_EQ(summary["frames"]["time_response"],
-                  "gaussian pulse, FWHM 0.4 ns; exponential sensor decay, 0.3 ns");
+        EXPECT_EQ(summary["frames"]["time_response"], "gaussian pulse, FWHM 0.4 ns; exponential sensor decay, 0.3 ns");
     }
 }
 
@@ -1170,13 +1186,14 @@ TEST_F(ViewerTest, ExportsAndSaveCheckpointRespectTheFolderLockAndOtherCheckpoin
 
     // Another render's checkpoint in the export folder (no render runs now): kept, not replaced.
     const fs::path other = dir_ / "other_ckpt";
-    const Proc w = runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") +
-                                " --width 16 --height 16 --passes 1 --checkpoint --no-frames --strip 0 -q -o " + q(other),
-                            dir_ / "other_ckpt");
+    const Proc w =
+        runShell(std::string(TPB_BINARY) + " render " + q(dir_ / "scene.json") +
+                     " --width 16 --height 16 --passes 1 --checkpoint --no-frames --strip 0 -q -o " + q(other),
+                 dir_ / "other_ckpt");
     ASSERT_EQ(w.code, 0) << w.err;
     const std::string before = slurp(other / "checkpoint.tpbck");
-    r = viewRun("other_ckpt_view", kRenderArgs + " --after-passes 1 --export-folder " + q(other) +
-                                       " --click 'Progress/Save checkpoint'");
+    r = viewRun("other_ckpt_view",
+                kRenderArgs + " --after-passes 1 --export-folder " + q(other) + " --click 'Progress/Save checkpoint'");
     EXPECT_EQ(r.code, 2) << r.out << r.err;
     EXPECT_NE(r.err.find("error: checkpoint not written: " + (other / "checkpoint.tpbck").string() +
                          ": holds the checkpoint of another render (1 passes of "),
