@@ -37,7 +37,13 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
     j["camera"] = {{"width", cam.width},
                    {"height", cam.height},
                    {"fov_y_deg", 2.0 * std::atan(cam.tanHalfFovY) * 180.0 / kPi},
-                   {"position", vec3(cam.position)}};
+                   {"position", vec3(cam.position)},
+                   {"type", cam.relayWall ? "relay_wall" : "pinhole"}};
+    if (cam.relayWall)
+        j["camera"]["relay_wall"] = {{"corner", vec3(cam.wallCorner)},
+                                     {"edge_u", vec3(cam.wallU)},
+                                     {"edge_v", vec3(cam.wallV)},
+                                     {"time_origin", cam.timeFromWall ? "wall" : "sensor"}};
     j["bounds"] = {{"min", vec3(s->bounds.lo)}, {"max", vec3(s->bounds.hi)}, {"diagonal_m", s->bounds.diagonal()}};
     j["geometry"] = {{"triangles", s->geometry.triangleCount()},
                      {"spheres", s->geometry.sphereCount()},
@@ -105,8 +111,13 @@ void printText(const nlohmann::json& j) {
     const auto pos = v3(cam["position"]);
     std::printf("scene      %s (version %d)\n", j["scene"]["path"].get<std::string>().c_str(),
                 j["scene"]["version"].get<int>());
-    std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam["width"].get<int>(),
-                cam["height"].get<int>(), cam["fov_y_deg"].get<double>(), pos[0], pos[1], pos[2]);
+    if (cam.contains("relay_wall"))
+        std::printf("camera     relay wall: %dx%d grid, sensor at (%.3g, %.3g, %.3g), time from the %s\n",
+                    cam["width"].get<int>(), cam["height"].get<int>(), pos[0], pos[1], pos[2],
+                    cam["relay_wall"]["time_origin"].get<std::string>().c_str());
+    else
+        std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam["width"].get<int>(),
+                    cam["height"].get<int>(), cam["fov_y_deg"].get<double>(), pos[0], pos[1], pos[2]);
     const auto lo = v3(j["bounds"]["min"]), hi = v3(j["bounds"]["max"]);
     std::printf("bounds     (%.3g, %.3g, %.3g) - (%.3g, %.3g, %.3g), diagonal %.4g m\n", lo[0], lo[1], lo[2], hi[0],
                 hi[1], hi[2], j["bounds"]["diagonal_m"].get<double>());

@@ -29,6 +29,7 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
     Rng rng(s.seed, Stream::Camera, s.pass, pixelIndex);
     Ray ray = scene.camera.generate(x + rng.uniform(), y + rng.uniform());
     PathState path;
+    path.oplCam = scene.camera.startOpl(ray);  // 0 but for a relay wall timed from the wall
     PixelSink volumeSink{time, scratch.acc, stats, est.volumeKernel};
     PixelSink surfaceSink{time, scratch.acc, stats, est.surfaceKernel};
     RegionStack regions = scene.cameraRegions;

@@ -203,8 +203,8 @@ bool roulette(Rng& rng, Color& beta, int depth) {
 void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
     const Scene& scene = ctx.scene;
     Color beta(1.0);
-    double oplCam = 0.0, oplUnw = 0.0;
-    bool nonSpecular = false;                   // the path has reached its first non-specular vertex
+    double oplCam = scene.camera.startOpl(ray), oplUnw = 0.0;  // 0 but for a relay wall timed from the wall
+    bool nonSpecular = false;                                  // the path has reached its first non-specular vertex
     bool emitterVisible = true;                 // previous vertex is the sensor or specular: emitter hits count
     RegionStack regions = scene.cameraRegions;  // where the camera sits (usually the outside)
     int depth = 0;

@@ -71,6 +71,11 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
     w("camera.fov_y_deg", d.camera.fovYDeg);
     w("camera.width", d.camera.width);
     w("camera.height", d.camera.height);
+    if (d.camera.type == CameraType::RelayWall) {  // (absent for a pinhole: older checkpoints still resume)
+        w.text("camera.type", "relay_wall");
+        w("camera.wall", d.camera.wallShape);
+        w.text("camera.time_origin", d.camera.timeOrigin == WallTimeOrigin::Wall ? "wall" : "sensor");
+    }
     w("film.auto_range", d.film.autoRange);
     w("film.bins", d.film.bins);
     if (!d.film.autoRange) {

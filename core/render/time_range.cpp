@@ -22,6 +22,16 @@ OplRange autoTimeRange(const Scene& s) {
     OplRange w;
     w.startOpl = emit;
     w.endOpl = emit + maxIor * (2.5 * diag) + camDist;
+    // A relay wall timed from the wall subtracts the wall -> sensor leg from every time: what the
+    // sensor sees in a medium before the wall arrives up to the longest leg (a corner) early.
+    if (s.camera.relayWall && s.camera.timeFromWall) {
+        const Camera& c = s.camera;
+        double leg = 0.0;
+        for (const Vec3& p :
+             {c.wallCorner, c.wallCorner + c.wallU, c.wallCorner + c.wallV, c.wallCorner + c.wallU + c.wallV})
+            leg = std::max(leg, glm::length(p - c.position));
+        w.startOpl -= c.legIor * leg;
+    }
     return w;
 }
 

@@ -220,6 +220,23 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d, StageAnalysis anal
         for (double& c : s->lightCdf) c /= total;
 
     s->camera = Camera::fromDesc(d.camera);
+    if (d.camera.type == CameraType::RelayWall) {
+        // The relay wall: the grid on its quad; the sensor must see the wall's plane.
+        const ShapeDesc& w = d.shapes.at(static_cast<size_t>(d.camera.wallShape));
+        Camera& c = s->camera;
+        c.relayWall = true;
+        c.timeFromWall = d.camera.timeOrigin == WallTimeOrigin::Wall;
+        c.wallCorner = w.corner;
+        c.wallU = w.edgeU;
+        c.wallV = w.edgeV;
+        c.wallN = glm::normalize(glm::cross(w.edgeU, w.edgeV));
+        const double size = std::max(glm::length(w.edgeU), glm::length(w.edgeV));
+        if (!(std::abs(glm::dot(c.position - c.wallCorner, c.wallN)) > 1e-9 * size))
+            throw UserError(d.where("camera.position") +
+                            "camera.position: the sensor's origin lies in the plane of the "
+                            "relay wall \"" +
+                            w.name + "\": it cannot see the wall; move it in front of the wall");
+    }
 
     s->bounds = s->geometry.bounds();
     for (const Light& l : s->lights) {
@@ -238,6 +255,7 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d, StageAnalysis anal
     // Where the camera and the lights sit (inside glass or a medium container, or outside).
     checkNesting(*s, d, probes);
     s->cameraRegions = s->regionsAt(s->camera.position);
+    s->camera.legIor = s->regions[static_cast<size_t>(s->cameraRegions.top())].ior;
     for (const Light& l : s->lights) s->lightPlacement.push_back(placeLight(*s, l));
 
     // Stages this scene needs (decided by the floor that traces rays: transport/stages.h).

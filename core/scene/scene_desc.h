@@ -33,13 +33,27 @@ struct SourceLoc {
     int line = 0;
 };
 
+// A pinhole camera, or a relay-wall sensor for non-line-of-sight captures ("type": "relay_wall"):
+// its pixels are a width x height grid on a quad shape (the relay wall), pixel (i, j) covering
+// corner + [i, i + 1) / width edge_u + [j, j + 1) / height edge_v, and each measures the radiance
+// leaving its patch of the wall towards `position`, the sensor's origin (a focused SPAD).
+enum class CameraType { Pinhole, RelayWall };
+// Where a relay wall's time starts: Sensor counts the wall -> sensor leg (the real time axis as
+// for a camera), Wall leaves it out (the NLOS toolkit's t_accounts_first_and_last_bounces false,
+// on the sensor side): time is measured at the wall point.
+enum class WallTimeOrigin { Sensor, Wall };
+
 struct CameraDesc {
+    CameraType type = CameraType::Pinhole;
     Vec3 position{0.0, 0.0, 3.0};
     Vec3 lookAt{0.0, 0.0, 0.0};
     Vec3 up{0.0, 1.0, 0.0};
     double fovYDeg = 40.0;  // vertical field of view, degrees
     int width = 256;
     int height = 256;
+    // Relay wall: the quad shape holding the grid (index into SceneDesc::shapes), and the time origin.
+    int wallShape = -1;
+    WallTimeOrigin timeOrigin = WallTimeOrigin::Sensor;
 };
 
 // Time axis of the transient film, always optical path length in meters internally.

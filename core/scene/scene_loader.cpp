@@ -18,7 +18,12 @@
 //     "position": [0, 0, 3], "look_at": [0, 0, 0], "up": [0, 1, 0],
 //     "fov": 40,                         // vertical field of view, degrees, in (0, 180)
 //     "resolution": [256, 256]           // [width, height], integers >= 1
-//   },
+//   },                                   // or a relay-wall sensor (NLOS captures):
+//   // "camera": {"type": "relay_wall",  // ["pinhole"]
+//   //   "position": [-0.5, 0, 0.25],    // the sensor's origin
+//   //   "wall": "relay",                // name of the quad shape the grid lies on
+//   //   "resolution": [32, 32],         // the grid: pixel (i, j) = corner + [i, i+1)/W edge_u + [j, j+1)/H edge_v
+//   //   "time_origin": "sensor"},       // "sensor": the wall -> sensor leg counted ["sensor"]; "wall": not
 //   "film": {
 //     "bins": 256,                       // time bins, integer >= 1
 //     "range": "auto",                   // fit the time range to the scene [default] ...
@@ -377,14 +382,36 @@ bool nonNegative(const Color& c) { return c.x >= 0 && c.y >= 0 && c.z >= 0; }
 
 // ---- sections ------------------------------------------------------------------------------------
 
-void readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
+// Returns the relay wall's shape name ("" for a pinhole camera), resolved once the shapes are read.
+std::string readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
     Bag b(ctx, obj, "camera", "the camera");
+    cam.type =
+        b.choice<CameraType>("type", {{"pinhole", CameraType::Pinhole}, {"relay_wall", CameraType::RelayWall}}, "type")
+            .value_or(cam.type);
+    const bool wall = cam.type == CameraType::RelayWall;
     cam.position = b.point("position", cam.position);
-    cam.lookAt = b.point("look_at", cam.lookAt);
-    if (auto up = b.direction("up")) cam.up = *up;
-    if (auto fov = b.number("fov")) {
-        cam.fovYDeg = *fov;
-        b.check(*fov > 0.0 && *fov < 180.0, "fov", "must be in (0, 180) degrees");
+    std::string wallName;
+    if (wall) {
+        b.setWhat("a relay-wall sensor");
+        for (const char* pinholeOnly : {"look_at", "up", "fov"})
+            if (b.has(pinholeOnly))
+                b.fail(pinholeOnly, std::string(pinholeOnly) +
+                                        " is a pinhole camera's; a relay wall looks at its wall (remove it, or use "
+                                        "\"type\": \"pinhole\")");
+        if (!b.has("wall"))
+            b.fail("wall", "a relay-wall sensor needs \"wall\": the name of the quad shape its grid lies on");
+        wallName = b.string("wall").value_or("");
+        cam.timeOrigin =
+            b.choice<WallTimeOrigin>(
+                 "time_origin", {{"sensor", WallTimeOrigin::Sensor}, {"wall", WallTimeOrigin::Wall}}, "time_origin")
+                .value_or(cam.timeOrigin);
+    } else {
+        cam.lookAt = b.point("look_at", cam.lookAt);
+        if (auto up = b.direction("up")) cam.up = *up;
+        if (auto fov = b.number("fov")) {
+            cam.fovYDeg = *fov;
+            b.check(*fov > 0.0 && *fov < 180.0, "fov", "must be in (0, 180) degrees");
+        }
     }
     if (const JsonValue* r = b.get("resolution")) {
         if (!r->isArray() || r->items.size() != 2) b.wrongType("resolution", "a [width, height] array");
@@ -395,10 +422,12 @@ void readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
                                      " has more than " + std::to_string(INT_MAX) + " pixels");
     }
     b.finish();
+    if (wall) return wallName;
     const Vec3 view = cam.lookAt - cam.position;
     if (glm::length(view) == 0.0) b.fail("look_at", "look_at must differ from position");
     if (glm::length(glm::cross(glm::normalize(view), glm::normalize(cam.up))) < 1e-6)
         b.fail("up", "up must not be parallel to the viewing direction (look_at - position)");
+    return "";
 }
 
 void readFilm(Context& ctx, const JsonValue& obj, FilmDesc& film) {
@@ -858,7 +887,8 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
         warn(desc, "version", "\"version\" is missing; version 1 is assumed (add \"version\": 1)");
     }
 
-    if (const JsonValue* c = objectAt(b, "camera")) readCamera(ctx, *c, desc.camera);
+    std::string wallName;
+    if (const JsonValue* c = objectAt(b, "camera")) wallName = readCamera(ctx, *c, desc.camera);
     if (const JsonValue* f = objectAt(b, "film")) readFilm(ctx, *f, desc.film);
 
     // The film must fit in memory.
@@ -908,6 +938,20 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
             warn(desc, path + ".interior_medium",
                  "interior_medium has no effect: the shape's material is not \"dielectric\" or \"null\"");
     });
+    // A relay wall's grid lies on a quad shape, named.
+    if (desc.camera.type == CameraType::RelayWall) {
+        for (size_t i = 0; i < desc.shapes.size(); ++i)
+            if (desc.shapes[i].name == wallName) desc.camera.wallShape = static_cast<int>(i);
+        const SourceLoc at = desc.locs.count("camera.wall") ? desc.locs["camera.wall"] : SourceLoc{virtualPath, 0};
+        if (desc.camera.wallShape < 0)
+            throw UserError(at.file, at.line, "camera.wall",
+                            "no shape is named \"" + wallName + "\" (give the relay wall's quad a \"name\")");
+        if (desc.shapes[static_cast<size_t>(desc.camera.wallShape)].type != ShapeType::Quad)
+            throw UserError(at.file, at.line, "camera.wall",
+                            "the relay wall \"" + wallName +
+                                "\" must be a quad (its grid is the quad's corner + "
+                                "edge_u, edge_v)");
+    }
     readList(ctx, b, "lights", [&](const JsonValue& e, const std::string& path) {
         LightDesc l;
         readLight(ctx, e, path, l);

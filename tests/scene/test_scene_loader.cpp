@@ -444,7 +444,7 @@ TEST(SceneErrors, UnknownKeySuggestsClosest) {
     expectError("{\"version\": 1,\n\"lights\": [\n {\"type\": \"point\",\n  \"powr\": 3}]}", 4, "lights[0].powr",
                 "unknown key for a point light (did you mean \"power\"?); allowed: type, name, power");
     expectError("{\"version\": 1,\n\"shape\": []}", 2, "shape", "(did you mean \"shapes\"?)");
-    expectError("{\"version\": 1,\n\"camera\": {\"zoom\": 2}}", 2, "camera.zoom", "allowed: position, look_at, up");
+    expectError("{\"version\": 1,\n\"camera\": {\"zoom\": 2}}", 2, "camera.zoom", "allowed: type, position, look_at, up");
     // A misspelt required key is reported as such, not as missing.
     expectError("{\"version\": 1, \"lights\": [{\n\"tpye\": \"point\"}]}", 2, "lights[0].tpye",
                 "(did you mean \"type\"?)");
