@@ -5,7 +5,7 @@
 // beams.
 #include "film/film_view.h"
 #include "render/driver.h"
-#include "render/prepare.h"
+#include "support/test_scene.h"
 #include "render/time_range.h"
 #include "scene/scene_loader.h"
 #include "base/error.h"
@@ -43,10 +43,9 @@ std::string wallScene(const std::string& cameraExtra,
 })";
 }
 
-PreparedRender prepare(const std::string& json, const SettingsOverrides& o = {}) {
-    PrepareOptions opt;
-    opt.pilot.run = false;
-    return prepareRender(loadSceneFromString(json, "wall.json"), o, opt);
+// As the CLI prepares it, without the pilot (tests/support/test_scene.h).
+test::TestScene prepare(const std::string& json, const SettingsOverrides& o = {}) {
+    return test::prepareTestScene(loadSceneFromString(json, "wall.json"), o);
 }
 
 std::string errorOf(const std::string& json) {
@@ -75,7 +74,7 @@ std::pair<double, double> patchTimes(int i, int j, bool fromSensor) {
 }  // namespace
 
 TEST(RelayWall, RaysLeaveTheSensorForTheirWallPoint) {
-    const PreparedRender p = prepare(wallScene(""));
+    const test::TestScene p = prepare(wallScene(""));
     const Camera& c = p.scene->camera;
     ASSERT_TRUE(c.relayWall);
     for (double px : {0.0, 0.5, 1.75, 4.0})
@@ -92,7 +91,7 @@ TEST(RelayWall, RaysLeaveTheSensorForTheirWallPoint) {
             EXPECT_NEAR(qy, py, 1e-9);
             EXPECT_EQ(c.startOpl(r), 0.0);  // timed from the sensor
         }
-    const PreparedRender w = prepare(wallScene(R"(, "time_origin": "wall")"));
+    const test::TestScene w = prepare(wallScene(R"(, "time_origin": "wall")"));
     const Ray r = w.scene->camera.generate(1.0, 3.0);
     EXPECT_NEAR(w.scene->camera.startOpl(r), -glm::length(Vec3(-0.25, 0.25, 0.0) - kSensor), 1e-12);
 }
@@ -100,7 +99,7 @@ TEST(RelayWall, RaysLeaveTheSensorForTheirWallPoint) {
 // Timed from the wall, what the sensor sees before the wall (a medium) arrives up to the longest
 // wall -> sensor leg early: the automatic range starts that much before the pulse.
 TEST(RelayWall, AutomaticRangeStartsBeforeThePulseByTheLongestLeg) {
-    const PreparedRender sensor = prepare(wallScene("")), wall = prepare(wallScene(R"(, "time_origin": "wall")"));
+    const test::TestScene sensor = prepare(wallScene("")), wall = prepare(wallScene(R"(, "time_origin": "wall")"));
     EXPECT_EQ(autoTimeRange(*sensor.scene).startOpl, 0.0);
     double leg = 0.0;
     for (const Vec3& c : {Vec3(-0.5, -0.5, 0), Vec3(0.5, -0.5, 0), Vec3(-0.5, 0.5, 0), Vec3(0.5, 0.5, 0)})
@@ -143,7 +142,7 @@ TEST_P(RelayWallTimes, EveryLitBinIsAGeometricArrival) {
     std::vector<float> steady[2];
     for (int origin = 0; origin < 2; ++origin) {
         const bool fromSensor = origin == 0;
-        const PreparedRender p = prepare(wallScene(fromSensor ? "" : R"(, "time_origin": "wall")"), o);
+        const test::TestScene p = prepare(wallScene(fromSensor ? "" : R"(, "time_origin": "wall")"), o);
         Driver drv(*p.scene, p.settings, p.time);
         for (uint64_t pass = 1; pass <= 4; ++pass) ASSERT_TRUE(drv.runPass(pass));
         const auto snap = drv.snapshot();
