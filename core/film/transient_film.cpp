@@ -398,6 +398,31 @@ void TransientFilm::TileWriter::addPixel(int x, int y, PixelAccumulator& acc) {
     passMax_ = std::max(passMax_, addTo(next_->sums, own_, px));
 }
 
+void stagePixel(TileStaging& staging, uint32_t pixelInTile, PixelAccumulator& acc) {
+    staging.pixels.push_back(pixelRecord(acc, pixelInTile, staging));
+    acc.clearTouched();
+}
+
+void TransientFilm::TileWriter::addStaged(const TileStaging& staged) {
+    if (!staging_) {
+        for (const TileStaging::Pixel& px : staged.pixels)
+            passMax_ = std::max(passMax_, addTo(next_->sums, staged, px));
+        return;
+    }
+    // Appended to this writer's staging, the records' run and value offsets moved past its own.
+    const uint32_t runBase = static_cast<uint32_t>(staging_->runs.size());
+    const size_t valueBase = staging_->values.size();
+    staging_->runs.insert(staging_->runs.end(), staged.runs.begin(), staged.runs.end());
+    staging_->values.insert(staging_->values.end(), staged.values.begin(), staged.values.end());
+    for (TileStaging::Pixel px : staged.pixels) {
+        for (int a = 0; a < 2; ++a) {
+            px.firstRun[a] += runBase;
+            px.offset[a] += valueBase;
+        }
+        staging_->pixels.push_back(px);
+    }
+}
+
 double TransientFilm::TileWriter::addTo(TileSums& t, const TileStaging& staged, const TileStaging::Pixel& px) {
     // The averages are read as float: a pass whose contribution would push a sum past FLT_MAX (a
     // light power near 1e38, or ~1e30 with a tiny kernel over many passes) is dropped for this

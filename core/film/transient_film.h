@@ -197,6 +197,10 @@ struct TileStaging {
     }
 };
 
+// Stages pixel `pixelInTile` (index in its tile, row-major) of a pass from `acc` into `staging`
+// and clears acc's touched bins: for TileWriter::addStaged. A pixel is staged once per pass.
+void stagePixel(TileStaging& staging, uint32_t pixelInTile, PixelAccumulator& acc);
+
 class TransientFilm {
 public:
     static constexpr int kTile = FilmLayout::kTile;
@@ -227,6 +231,9 @@ public:
         TileWriter(const TileWriter&) = delete;
         TileWriter& operator=(const TileWriter&) = delete;
         void addPixel(int x, int y, PixelAccumulator& acc);
+        // Adds pixels staged earlier for this tile (stagePixel): an integrator that gathers a pass's
+        // pixels before the tiles run (a scan's laser points, integrators/photon_beams.cpp).
+        void addStaged(const TileStaging& staged);
 
     private:
         // Adds one staged pixel's pass to `sums` unless a sum would leave float's range (counted);

@@ -5,6 +5,8 @@
 #include "base/progressive.h"
 #include "integrators/time_kernel_schedule.h"
 #include "base/memory.h"
+#include "base/parallel.h"
+#include "film/film_snapshot.h"
 #include "film/film_bytes.h"
 
 #include <chrono>
@@ -70,23 +72,46 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     const TimeKernel volumeKernel = kernels.volume.kernel(ctx.pass), surfaceKernel = kernels.surface.kernel(ctx.pass);
     ps.volumeTimeHalfWidth = volumeKernel.halfWidth;
     ps.surfaceTimeHalfWidth = surfaceKernel.halfWidth;
+
+    // Camera pass settings and scratch for the tiles.
+    camera_.seed = settings_.seed;
+    camera_.pass = ctx.pass;
+    camera_.maxDepth = settings_.maxDepth;
+    scratch_.resize(static_cast<size_t>(ctx.threads));
+    for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
+    tileStats_.assign(static_cast<size_t>(ctx.tiles), CameraPassStats{});
+
+    const PhotonPassParams pt =
+        photonPassFor(scene_, settings_, volume_->needs(), ctx.pass, ctx.threads, ctx.time->endOpl());
+    if (scene_.camera.scan == ScanMode::None) {
+        // 1. Photon pass (only the stages the scene needs); 2. the estimators' accelerators.
+        if (!photonPass(ctx, pt, ps)) return false;
+        prepareEstimators(ctx, pt, volumeKernel, surfaceKernel, ps);
+        return true;
+    }
+    return scanPass(ctx, pt, volumeKernel, surfaceKernel, ps);
+}
+
+bool PhotonBeamsIntegrator::photonPass(const PassContext& ctx, const PhotonPassParams& pt, PassStats& ps) {
     const double t0 = wallSec();
-
-    // 1. Photon pass (only the stages the scene needs).
-    const VolumeEstimator::Needs needs = volume_->needs();
-    const PhotonPassParams pt = photonPassFor(scene_, settings_, needs, ctx.pass, ctx.threads, ctx.time->endOpl());
     map_ = tracer_.trace(scene_, pt, ctx.abort);
-    if (ctx.abort && ctx.abort->load()) return false;
-    ps.photons = map_.emitted;
-    ps.beams = static_cast<int64_t>(map_.beams.size());
-    ps.points = static_cast<int64_t>(map_.points.size());
-    ps.surfacePhotons = static_cast<int64_t>(map_.photons.size());
-    ps.emittedFlux = map_.emittedFlux;
-    ps.cutFlux = map_.cutFlux;
-    ps.regionOverflows = map_.regionOverflows;
-    const double t1 = wallSec();
+    if (map_.aborted || (ctx.abort && ctx.abort->load())) return false;
+    ps.photons += map_.emitted;
+    ps.beams += static_cast<int64_t>(map_.beams.size());
+    ps.points += static_cast<int64_t>(map_.points.size());
+    ps.surfacePhotons += static_cast<int64_t>(map_.photons.size());
+    ps.emittedFlux += map_.emittedFlux;
+    ps.cutFlux += map_.cutFlux;
+    ps.regionOverflows += map_.regionOverflows;
+    ps.photonSec += wallSec() - t0;
+    return true;
+}
 
-    // 2. The estimators' acceleration structures for this pass's radii.
+void PhotonBeamsIntegrator::prepareEstimators(const PassContext& ctx, const PhotonPassParams& pt,
+                                              const TimeKernel& volumeKernel, const TimeKernel& surfaceKernel,
+                                              PassStats& ps) {
+    const double t1 = wallSec();
+    const VolumeEstimator::Needs needs = volume_->needs();
     EstimatorPass ep;
     ep.profile = settings_.profile;
     ep.beamLength = settings_.beamLength;
@@ -119,7 +144,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
         ep.bundleSlack = bundles.slack;
         volume_->prepare(scene_, map_, ep);
         if (!volume_->empty()) estimators_.volume = volume_.get();
-        ps.beamPieces = static_cast<int64_t>(volume_->accelPrimitives());
+        ps.beamPieces += static_cast<int64_t>(volume_->accelPrimitives());
     }
     if (scene_.stages.surfacePhotons && !map_.photons.empty()) {
         ep.radius = ps.surfaceRadius;
@@ -128,23 +153,67 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
         surface_->prepare(scene_, map_, ep);
         if (!surface_->empty()) estimators_.surface = surface_.get();
     }
-    const double t2 = wallSec();
-    ps.photonSec = t1 - t0;
-    ps.buildSec = t2 - t1;
-
-    // 3. Camera pass settings and scratch for the tiles.
-    camera_.seed = settings_.seed;
-    camera_.pass = ctx.pass;
-    camera_.maxDepth = settings_.maxDepth;
     camera_.bundleBlock = bundles.block;
-    scratch_.resize(static_cast<size_t>(ctx.threads));
-    for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
-    tileStats_.assign(static_cast<size_t>(ctx.tiles), CameraPassStats{});
+    ps.buildSec += wallSec() - t1;
+}
+
+// A scan (scene/camera.h): laser point after laser point, the photon pass of that point, then its
+// pixels gathered and staged per tile (the tiles replay them: renderTile). The pixels of one laser
+// point are gathered in parallel, tile by tile (one thread per tile: no lock).
+bool PhotonBeamsIntegrator::scanPass(const PassContext& ctx, PhotonPassParams pt, const TimeKernel& volumeKernel,
+                                     const TimeKernel& surfaceKernel, PassStats& ps) {
+    const Camera& cam = scene_.camera;
+    const FilmLayout layout(cam.width, cam.height, *ctx.time);
+    scanTiles_.resize(layout.tiles.size());
+    for (TileStaging& t : scanTiles_) t.clear();
+    pt.aimLight = cam.scanLaser;
+    const int64_t points = cam.laserPoints();
+    for (int64_t l = 0; l < points; ++l) {
+        pt.aimTarget = cam.laserTarget(l);
+        pt.aimEmitOpl = scanEmitOpl(scene_, pt.aimTarget);
+        pt.laserPoint = l;
+        if (!photonPass(ctx, pt, ps)) return false;
+        prepareEstimators(ctx, pt, volumeKernel, surfaceKernel, ps);
+        const double t0 = wallSec();
+        // The film rows this laser point lights (confocal: one pixel).
+        int x0 = 0, x1 = cam.width, y0 = 0, y1 = cam.height;
+        if (cam.scan == ScanMode::Confocal) {
+            x0 = static_cast<int>(l % cam.width), x1 = x0 + 1;
+            y0 = static_cast<int>(l / cam.width), y1 = y0 + 1;
+        } else if (cam.scan == ScanMode::Exhaustive) {
+            y0 = static_cast<int>(l) * cam.sensorRows, y1 = y0 + cam.sensorRows;
+        }
+        std::vector<int> tiles;
+        for (int ty = y0 / FilmLayout::kTile; ty <= (y1 - 1) / FilmLayout::kTile; ++ty)
+            for (int tx = x0 / FilmLayout::kTile; tx <= (x1 - 1) / FilmLayout::kTile; ++tx)
+                tiles.push_back(ty * layout.tilesX + tx);
+        parallelFor(
+            static_cast<int64_t>(tiles.size()), ctx.threads,
+            [&](int64_t i, int thread) {
+                const int tile = tiles[static_cast<size_t>(i)];
+                const TileRect& r = layout.tiles[static_cast<size_t>(tile)];
+                CameraPassScratch& scratch = scratch_[static_cast<size_t>(thread)];
+                CameraPassStats& stats = tileStats_[static_cast<size_t>(tile)];
+                for (int y = std::max(y0, r.y0); y < std::min(y1, r.y0 + r.h); ++y)
+                    for (int x = std::max(x0, r.x0); x < std::min(x1, r.x0 + r.w); ++x) {
+                        renderPixel(scene_, estimators_, camera_, *ctx.time, x, y, scratch, stats);
+                        stagePixel(scanTiles_[static_cast<size_t>(tile)],
+                                   static_cast<uint32_t>((y - r.y0) * r.w + (x - r.x0)), scratch.acc);
+                    }
+            },
+            ctx.abort);
+        if (ctx.abort && ctx.abort->load()) return false;
+        ps.cameraSec += wallSec() - t0;
+    }
     return true;
 }
 
 void PhotonBeamsIntegrator::renderTile(const PassContext& ctx, int tile, const TileRect& r,
                                        TransientFilm::TileWriter& writer, int thread) {
+    if (scene_.camera.scan != ScanMode::None) {  // gathered by scanPass
+        writer.addStaged(scanTiles_[static_cast<size_t>(tile)]);
+        return;
+    }
     CameraPassScratch& scratch = scratch_[static_cast<size_t>(thread)];
     CameraPassStats& stats = tileStats_[static_cast<size_t>(tile)];
     renderPixels(scene_, estimators_, camera_, *ctx.time, r, writer, scratch, stats);
@@ -164,6 +233,11 @@ bool PhotonBeamsIntegrator::beginProbe(const PassContext& ctx, const ProbeReques
     pt.powerPhotons = 0;
     pt.storeSurfacePhotons = pt.storeSurfacePhotons && req.surfacePhotons;
     if (req.maxMapBytes > 0) pt.maxMapBytes = std::min(pt.maxMapBytes, req.maxMapBytes);
+    if (scene_.camera.scan != ScanMode::None) {  // a scan's pilot: the laser at its middle point
+        pt.aimLight = scene_.camera.scanLaser;
+        pt.aimTarget = scene_.camera.laserTarget(scene_.camera.laserPoints() / 2);
+        pt.aimEmitOpl = scanEmitOpl(scene_, pt.aimTarget);
+    }
     map_ = tracer_.trace(scene_, pt, ctx.abort);
     if (map_.aborted || (ctx.abort && ctx.abort->load())) return false;
     estimators_ = {};

@@ -57,6 +57,15 @@ public:
     const PhotonMap& photonMap() const { return map_; }
 
 private:
+    // The photon pass `pt` into map_, its counts added to `ps`; false when aborted.
+    bool photonPass(const PassContext& ctx, const PhotonPassParams& pt, PassStats& ps);
+    // The estimators' accelerators over map_ for this pass's kernels.
+    void prepareEstimators(const PassContext& ctx, const PhotonPassParams& pt, const TimeKernel& volumeKernel,
+                           const TimeKernel& surfaceKernel, PassStats& ps);
+    // A relay wall's scan: every laser point's photon pass and pixels, staged in scanTiles_.
+    bool scanPass(const PassContext& ctx, PhotonPassParams pt, const TimeKernel& volumeKernel,
+                  const TimeKernel& surfaceKernel, PassStats& ps);
+
     const Scene& scene_;
     RenderSettings settings_;
     PhotonMap map_;
@@ -67,6 +76,7 @@ private:
     CameraPassParams camera_;
     std::vector<CameraPassScratch> scratch_;  // per thread
     std::vector<CameraPassStats> tileStats_;  // per tile, summed in tile order
+    std::vector<TileStaging> scanTiles_;      // a scan's pass, per tile, until the tiles run
 };
 
 }  // namespace tpb

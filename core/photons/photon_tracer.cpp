@@ -47,11 +47,20 @@ uint64_t storedMapBytes(const PhotonMap& m) { return mapBytes(m.beams.size(), m.
 
 bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, PhotonMap& out,
                  const std::atomic<bool>* abort) {
-    Rng rng(s.seed, Stream::Photon, s.pass, static_cast<uint64_t>(index));
+    // Laser point l > 0 of a scan keys its photons above every photon index a pass can have.
+    Rng rng(s.seed, Stream::Photon, s.pass, static_cast<uint64_t>(index) + (static_cast<uint64_t>(s.laserPoint) << 40));
     double lightPdf;
     const int li = scene.pickLight(rng.uniform(), lightPdf);
     if (li < 0 || lightPdf <= 0.0) return true;
-    const Light& light = scene.lights[li];
+    const Light* emitter = &scene.lights[li];
+    Light aimed;
+    if (li == s.aimLight) {  // a scan's laser, aimed at this laser point
+        aimed = *emitter;
+        aimed.direction = glm::normalize(s.aimTarget - aimed.position);
+        aimed.emitOpl = s.aimEmitOpl;
+        emitter = &aimed;
+    }
+    const Light& light = *emitter;
     EmissionSample em = light.sampleEmission(rng, scene.rayEps);
     Color power = em.power / (lightPdf * static_cast<double>(s.powerPhotons > 0 ? s.powerPhotons : s.photons));
     const double power0 = maxComponent(power);

@@ -120,6 +120,14 @@ struct PhotonPassParams {
     // frames lose nothing to their cut (photon_tracer.cpp, openBeamLength). 0 = no film yet.
     double filmEndOpl = 0.0;
     int threads = 1;
+    // A scan's laser point (scene/camera.h laserTarget): light `aimLight` (a laser) is aimed at
+    // `aimTarget` instead of its own direction, and the photons' random numbers are keyed by
+    // `laserPoint` too, so every laser point of a pass has its own photons. -1: no aim.
+    int aimLight = -1;
+    Vec3 aimTarget{0.0};
+    double aimEmitOpl =
+        0.0;  // the aimed laser's pulse instant (OPL, m): a wall time origin starts its clock at the wall
+    int64_t laserPoint = 0;
     // Memory guard: a pass whose beams, surface photons and points would take more than this throws
     // UserError (key render.photons_per_pass) instead of exhausting memory, e.g. an albedo-1
     // medium with a huge max_depth. 0 = no limit.

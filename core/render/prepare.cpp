@@ -35,14 +35,16 @@ void applyFilmShape(SceneDesc& d, const SettingsOverrides& o) {
     }
     if (d.camera.width < 1 || d.camera.height < 1 || d.film.bins < 1)
         throw UserError("--width, --height and --bins must be >= 1");
-    const uint64_t need = filmBytes(d.camera.width, d.camera.height, d.film.bins);
+    // (An exhaustive scan's film stacks one sensor image per laser point: filmHeight.)
+    const uint64_t need =
+        saturatingMul(filmBytes(d.camera.width, 1, d.film.bins), static_cast<uint64_t>(d.camera.filmHeight()));
     if (need > maxFilmBytes())
         throw UserError("the film would need " + humanBytes(need) + " but at most " + humanBytes(maxFilmBytes()) +
                         " is allowed; lower --width/--height/--bins");
-    if (static_cast<int64_t>(d.camera.width) * d.camera.height > INT_MAX)
+    if (static_cast<int64_t>(d.camera.width) * d.camera.filmHeight() > INT_MAX)
         throw UserError("--width x --height is " +
-                        std::to_string(static_cast<int64_t>(d.camera.width) * d.camera.height) + " pixels, more than " +
-                        std::to_string(INT_MAX) + "; lower --width/--height");
+                        std::to_string(static_cast<int64_t>(d.camera.width) * d.camera.filmHeight()) +
+                        " pixels of film, more than " + std::to_string(INT_MAX) + "; lower --width/--height");
 }
 
 namespace {

@@ -7,7 +7,17 @@ Camera Camera::fromDesc(const CameraDesc& d) {
     c.position = d.position;
     c.width = d.width;
     c.height = d.height;
-    if (d.type == CameraType::RelayWall) return c;  // (no view direction: Scene::build sets the wall)
+    c.sensorRows = d.height;
+    if (d.type == CameraType::RelayWall) {  // (no view direction: Scene::build sets the wall)
+        c.height = static_cast<int>(d.filmHeight());
+        c.scan = d.scan;
+        c.scanLaser = d.scanLaser;
+        c.laserGridX = d.laserGridX;
+        c.laserGridY = d.laserGridY;
+        c.scanPointU = d.scanPointU;
+        c.scanPointV = d.scanPointV;
+        return c;
+    }  // (no view direction: Scene::build sets the wall)
     c.forward = glm::normalize(d.lookAt - d.position);
     c.right = glm::normalize(glm::cross(c.forward, d.up));
     c.up = glm::cross(c.right, c.forward);
@@ -29,7 +39,7 @@ bool Camera::project(const Vec3& p, double& px, double& py) const {
         const double uu = glm::dot(wallU, wallU), uv = glm::dot(wallU, wallV), vv = glm::dot(wallV, wallV);
         const double qu = glm::dot(q, wallU), qv = glm::dot(q, wallV), det = uu * vv - uv * uv;
         px = (qu * vv - qv * uv) / det * width;
-        py = (qv * uu - qu * uv) / det * height;
+        py = (qv * uu - qu * uv) / det * sensorRows;
         return true;
     }
     const double z = glm::dot(v, forward);

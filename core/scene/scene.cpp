@@ -4,6 +4,7 @@
 #include "scene/mesh.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 
 namespace tpb {
@@ -104,6 +105,36 @@ LightPlacement placeLight(const Scene& s, const Light& l) {
         if (!apart) pl.uniform = false;
     }
     return pl;
+}
+
+// Every laser point of a scan must be lit: the laser's ray towards it meets the relay wall there
+// first (not another shape, not the wall's back). Checked for every point, before any pass runs.
+void checkScanLaser(const Scene& s, const SceneDesc& d) {
+    const Camera& c = s.camera;
+    const Light& laser = s.lights.at(static_cast<size_t>(c.scanLaser));
+    const std::string key = "camera.scan.laser";
+    const std::string name = d.lights.at(static_cast<size_t>(c.scanLaser)).name;
+    const double side = glm::dot(laser.position - c.wallCorner, c.wallN);
+    const double size = std::max(glm::length(c.wallU), glm::length(c.wallV));
+    if (!(std::abs(side) > 1e-9 * size) || side * glm::dot(c.position - c.wallCorner, c.wallN) < 0.0)
+        throw UserError(d.where(key) + key + ": the laser \"" + name +
+                        "\" is not on the sensor's side of the relay wall: it cannot light the points the sensor "
+                        "sees; move its position in front of the wall, on the sensor's side");
+    const int wall = d.camera.wallShape;
+    for (int64_t l = 0; l < c.laserPoints(); ++l) {
+        const Vec3 target = c.laserTarget(l), v = target - laser.position;
+        const double dist = glm::length(v);
+        const std::optional<SurfaceHit> hit = s.geometry.intersect({laser.position, v / dist});
+        if (!hit || hit->shape != wall || std::abs(hit->t - dist) > 1e-6 * std::max(1.0, dist)) {
+            char at[96];
+            std::snprintf(at, sizeof at, "(%.4g, %.4g, %.4g)", target.x, target.y, target.z);
+            throw UserError(d.where(key) + key + ": the laser \"" + name + "\" cannot reach laser point " +
+                            std::to_string(l) + " at " + at + " on the relay wall: " +
+                            (hit ? "shape \"" + d.shapes.at(static_cast<size_t>(hit->shape)).name + "\" is in the way"
+                                 : std::string("its ray misses every shape")) +
+                            "; move the laser, or the shape, so that it sees the wall");
+        }
+    }
 }
 
 }  // namespace
@@ -236,6 +267,7 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d, StageAnalysis anal
                             "camera.position: the sensor's origin lies in the plane of the "
                             "relay wall \"" +
                             w.name + "\": it cannot see the wall; move it in front of the wall");
+        if (c.scan != ScanMode::None) checkScanLaser(*s, d);
     }
 
     s->bounds = s->geometry.bounds();
@@ -261,6 +293,15 @@ std::unique_ptr<const Scene> Scene::build(const SceneDesc& d, StageAnalysis anal
     // Stages this scene needs (decided by the floor that traces rays: transport/stages.h).
     s->stages = analyzeStages(*s);
     return s;
+}
+
+double scanEmitOpl(const Scene& scene, const Vec3& target) {
+    const int li = scene.camera.scanLaser;
+    const Light& laser = scene.lights.at(static_cast<size_t>(li));
+    if (!scene.camera.timeFromWall) return laser.emitOpl;
+    const double ior =
+        scene.regions[static_cast<size_t>(scene.lightPlacement[static_cast<size_t>(li)].regions.top())].ior;
+    return laser.emitOpl - ior * glm::length(target - laser.position);
 }
 
 Ray Scene::leaveSurface(const Vec3& p, const Vec3& w, const Vec3& n) const {

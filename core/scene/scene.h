@@ -143,4 +143,9 @@ public:
     std::vector<LightPlacement> lightPlacement;  // where each light's photons start
 };
 
+// A scan's laser pulse instant (OPL, m) for the laser point at `target` on the relay wall: the
+// light's emitOpl, minus the laser -> wall leg (eta |target - laser|) when time starts at the wall
+// (the NLOS toolkit's t_accounts_first_and_last_bounces false: both legs left out).
+double scanEmitOpl(const Scene& scene, const Vec3& target);
+
 }  // namespace tpb

@@ -38,4 +38,14 @@ const char* lightTypeName(LightType t) {
     return "?";
 }
 
+const char* scanModeName(ScanMode m) {
+    switch (m) {
+        case ScanMode::None: return "none";
+        case ScanMode::Single: return "single";
+        case ScanMode::Confocal: return "confocal";
+        case ScanMode::Exhaustive: return "exhaustive";
+    }
+    return "?";
+}
+
 }  // namespace tpb

@@ -42,6 +42,10 @@ enum class CameraType { Pinhole, RelayWall };
 // for a camera), Wall leaves it out (the NLOS toolkit's t_accounts_first_and_last_bounces false,
 // on the sensor side): time is measured at the wall point.
 enum class WallTimeOrigin { Sensor, Wall };
+// How a relay wall's laser scans it ("scan" in the camera block): not at all (the scene's lights
+// as they are), one wall point, the sensor's own point for every pixel (confocal), or every point of
+// an Lx x Ly grid for every pixel (exhaustive: the film stacks one Sx x Sy image per laser point).
+enum class ScanMode { None, Single, Confocal, Exhaustive };
 
 struct CameraDesc {
     CameraType type = CameraType::Pinhole;
@@ -54,6 +58,23 @@ struct CameraDesc {
     // Relay wall: the quad shape holding the grid (index into SceneDesc::shapes), and the time origin.
     int wallShape = -1;
     WallTimeOrigin timeOrigin = WallTimeOrigin::Sensor;
+    // The scan: the laser light that scans (index into SceneDesc::lights; its direction is replaced
+    // by the aim at each laser point), the single point as wall fractions (u along edge_u, v along
+    // edge_v, in [0, 1]), the exhaustive grid (points at the cell centres, as the sensor's).
+    ScanMode scan = ScanMode::None;
+    int scanLaser = -1;
+    double scanPointU = 0.5, scanPointV = 0.5;
+    int laserGridX = 1, laserGridY = 1;
+    // Laser points rendered one after the other per pass (1 unless a scan), and the film's height:
+    // an exhaustive scan stacks one sensor image per laser point.
+    int64_t laserPoints() const {
+        return scan == ScanMode::Confocal     ? static_cast<int64_t>(width) * height
+               : scan == ScanMode::Exhaustive ? static_cast<int64_t>(laserGridX) * laserGridY
+                                              : 1;
+    }
+    int64_t filmHeight() const {
+        return scan == ScanMode::Exhaustive ? static_cast<int64_t>(height) * laserGridX * laserGridY : height;
+    }
 };
 
 // Time axis of the transient film, always optical path length in meters internally.
@@ -153,6 +174,7 @@ struct RenderDesc {
 const char* shapeTypeName(ShapeType t);
 const char* materialTypeName(MaterialType t);
 const char* lightTypeName(LightType t);
+const char* scanModeName(ScanMode m);
 
 struct SceneDesc {
     int version = 1;

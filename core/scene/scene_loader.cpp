@@ -23,7 +23,11 @@
 //   //   "position": [-0.5, 0, 0.25],    // the sensor's origin
 //   //   "wall": "relay",                // name of the quad shape the grid lies on
 //   //   "resolution": [32, 32],         // the grid: pixel (i, j) = corner + [i, i+1)/W edge_u + [j, j+1)/H edge_v
-//   //   "time_origin": "sensor"},       // "sensor": the wall -> sensor leg counted ["sensor"]; "wall": not
+//   //   "time_origin": "sensor",        // "sensor": the wall -> sensor leg counted ["sensor"]; "wall": not
+//   //   "scan": {"mode": "confocal",    // "single" | "confocal" | "exhaustive" (no "scan": the lights as they are)
+//   //            "laser": "laser",      // name of the laser light that scans (its direction is the aim's)
+//   //            "point": [0.5, 0.5],   // single: the laser point as wall fractions [u, v] in [0, 1]
+//   //            "grid": [4, 4]}},      // exhaustive: Lx x Ly laser points at the cell centres
 //   "film": {
 //     "bins": 256,                       // time bins, integer >= 1
 //     "range": "auto",                   // fit the time range to the scene [default] ...
@@ -382,15 +386,56 @@ bool nonNegative(const Color& c) { return c.x >= 0 && c.y >= 0 && c.z >= 0; }
 
 // ---- sections ------------------------------------------------------------------------------------
 
-// Returns the relay wall's shape name ("" for a pinhole camera), resolved once the shapes are read.
-std::string readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
+// The names a camera block refers to, resolved once the shapes and lights are read.
+struct CameraRefs {
+    std::string wall;   // the relay wall's quad ("" for a pinhole camera)
+    std::string laser;  // the scanning laser ("" without a scan)
+};
+
+void readScan(Context& ctx, const JsonValue& obj, CameraDesc& cam, CameraRefs& refs) {
+    Bag b(ctx, obj, "camera.scan", "the scan");
+    const std::optional<ScanMode> mode = b.choice<ScanMode>(
+        "mode", {{"single", ScanMode::Single}, {"confocal", ScanMode::Confocal}, {"exhaustive", ScanMode::Exhaustive}},
+        "mode");
+    if (!mode) b.missing("mode", "; allowed: \"single\", \"confocal\", \"exhaustive\"");
+    cam.scan = *mode;
+    if (!b.has("laser")) b.missing("laser", " (the name of the laser light that scans the wall)");
+    refs.laser = b.string("laser").value_or("");
+    if (cam.scan == ScanMode::Single) {
+        if (const JsonValue* p = b.get("point")) {
+            if (!p->isArray() || p->items.size() != 2 || !p->items[0].isNumber() || !p->items[1].isNumber())
+                b.wrongType("point", "a [u, v] array of wall fractions");
+            cam.scanPointU = p->items[0].number;
+            cam.scanPointV = p->items[1].number;
+            b.check(cam.scanPointU >= 0.0 && cam.scanPointU <= 1.0 && cam.scanPointV >= 0.0 && cam.scanPointV <= 1.0,
+                    "point", "must be wall fractions in [0, 1] (u along edge_u, v along edge_v)");
+        }
+    } else if (b.has("point")) {
+        b.fail("point", "point is the single scan's laser point; a " + std::string(scanModeName(cam.scan)) +
+                            " scan aims at " + (cam.scan == ScanMode::Confocal ? "every sensor point" : "its grid") +
+                            " (remove it, or use \"mode\": \"single\")");
+    }
+    if (cam.scan == ScanMode::Exhaustive) {
+        const JsonValue* g = b.get("grid");
+        if (!g) b.missing("grid", " (the exhaustive scan's laser grid, [Lx, Ly])");
+        if (!g->isArray() || g->items.size() != 2) b.wrongType("grid", "a [Lx, Ly] array");
+        cam.laserGridX = b.toInt(g->items[0], "grid", "grid", 1);
+        cam.laserGridY = b.toInt(g->items[1], "grid", "grid", 1);
+    } else if (b.has("grid")) {
+        b.fail("grid", "grid is the exhaustive scan's laser grid; a " + std::string(scanModeName(cam.scan)) +
+                           " scan has none (remove it, or use \"mode\": \"exhaustive\")");
+    }
+    b.finish();
+}
+
+CameraRefs readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
     Bag b(ctx, obj, "camera", "the camera");
     cam.type =
         b.choice<CameraType>("type", {{"pinhole", CameraType::Pinhole}, {"relay_wall", CameraType::RelayWall}}, "type")
             .value_or(cam.type);
     const bool wall = cam.type == CameraType::RelayWall;
     cam.position = b.point("position", cam.position);
-    std::string wallName;
+    CameraRefs refs;
     if (wall) {
         b.setWhat("a relay-wall sensor");
         for (const char* pinholeOnly : {"look_at", "up", "fov"})
@@ -400,7 +445,8 @@ std::string readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
                                         "\"type\": \"pinhole\")");
         if (!b.has("wall"))
             b.fail("wall", "a relay-wall sensor needs \"wall\": the name of the quad shape its grid lies on");
-        wallName = b.string("wall").value_or("");
+        refs.wall = b.string("wall").value_or("");
+        if (const JsonValue* scan = objectAt(b, "scan")) readScan(ctx, *scan, cam, refs);
         cam.timeOrigin =
             b.choice<WallTimeOrigin>(
                  "time_origin", {{"sensor", WallTimeOrigin::Sensor}, {"wall", WallTimeOrigin::Wall}}, "time_origin")
@@ -422,12 +468,12 @@ std::string readCamera(Context& ctx, const JsonValue& obj, CameraDesc& cam) {
                                      " has more than " + std::to_string(INT_MAX) + " pixels");
     }
     b.finish();
-    if (wall) return wallName;
+    if (wall) return refs;
     const Vec3 view = cam.lookAt - cam.position;
     if (glm::length(view) == 0.0) b.fail("look_at", "look_at must differ from position");
     if (glm::length(glm::cross(glm::normalize(view), glm::normalize(cam.up))) < 1e-6)
         b.fail("up", "up must not be parallel to the viewing direction (look_at - position)");
-    return "";
+    return refs;
 }
 
 void readFilm(Context& ctx, const JsonValue& obj, FilmDesc& film) {
@@ -552,7 +598,8 @@ Mat4 readTransform(Context& ctx, const JsonValue& obj, const std::string& path) 
         const size_t n = list ? r->items.size() : 1;
         for (size_t i = 0; i < n; ++i) {
             const JsonValue& one = list ? r->items[i] : *r;
-            const std::string rpath = b.pathOf("rotate") + (list ? "[" + std::to_string(i) + "]" : "");
+            std::string rpath = b.pathOf("rotate");
+            if (list) rpath += "[" + std::to_string(i) + "]";
             if (!one.isObject())
                 throw UserError(ctx.file, one.line, rpath,
                                 "expected {\"axis\": [x, y, z], \"angle_deg\": a}, got " + std::string(one.typeName()));
@@ -887,24 +934,40 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
         warn(desc, "version", "\"version\" is missing; version 1 is assumed (add \"version\": 1)");
     }
 
-    std::string wallName;
-    if (const JsonValue* c = objectAt(b, "camera")) wallName = readCamera(ctx, *c, desc.camera);
+    CameraRefs refs;
+    if (const JsonValue* c = objectAt(b, "camera")) refs = readCamera(ctx, *c, desc.camera);
     if (const JsonValue* f = objectAt(b, "film")) readFilm(ctx, *f, desc.film);
 
     // The film must fit in memory.
-    const uint64_t need = filmBytes(desc.camera.width, desc.camera.height, desc.film.bins), limit = maxFilmBytes();
+    if (desc.camera.width * desc.camera.filmHeight() > INT_MAX) {
+        const SourceLoc loc =
+            desc.locs.count("camera.scan.grid") ? desc.locs["camera.scan.grid"] : SourceLoc{virtualPath, 0};
+        throw UserError(loc.file, loc.line, "camera.scan.grid",
+                        "the exhaustive scan's film has " +
+                            std::to_string(desc.camera.width * desc.camera.filmHeight()) + " pixels (" +
+                            std::to_string(desc.camera.laserPoints()) + " laser points of " +
+                            std::to_string(desc.camera.width) + " x " + std::to_string(desc.camera.height) +
+                            "), more than " + std::to_string(INT_MAX) + "; lower the grid or the resolution");
+    }
+    const uint64_t need = filmBytes(desc.camera.width, static_cast<int>(desc.camera.filmHeight()), desc.film.bins),
+                   limit = maxFilmBytes();
     if (need > limit) {
         const std::string key = desc.locs.count("film.bins")           ? "film.bins"
                                 : desc.locs.count("camera.resolution") ? "camera.resolution"
                                                                        : "";
         const SourceLoc loc = key.empty() ? SourceLoc{virtualPath, 0} : desc.locs[key];
-        throw UserError(loc.file, loc.line, key,
-                        "the film needs " + std::to_string(need) + " bytes (" + humanBytes(need) + ") for " +
-                            std::to_string(desc.camera.width) + " x " + std::to_string(desc.camera.height) +
-                            " pixels x " + std::to_string(desc.film.bins) + " bins, more than the limit of " +
-                            std::to_string(limit) + " bytes (" + humanBytes(limit) +
-                            ", 75% of physical memory unless TPB_MAX_FILM_BYTES is set); lower film.bins or "
-                            "camera.resolution");
+        throw UserError(
+            loc.file, loc.line, key,
+            "the film needs " + std::to_string(need) + " bytes (" + humanBytes(need) + ") for " +
+                std::to_string(desc.camera.width) + " x " + std::to_string(desc.camera.filmHeight()) + " pixels x " +
+                std::to_string(desc.film.bins) + " bins" +
+                (desc.camera.scan == ScanMode::Exhaustive
+                     ? " (" + std::to_string(desc.camera.laserPoints()) + " laser points of " +
+                           std::to_string(desc.camera.width) + " x " + std::to_string(desc.camera.height) + ")"
+                     : "") +
+                ", more than the limit of " + std::to_string(limit) + " bytes (" + humanBytes(limit) +
+                ", 75% of physical memory unless TPB_MAX_FILM_BYTES is set); lower film.bins or "
+                "camera.resolution");
     }
 
     // Media and materials, then everything that refers to them by name.
@@ -941,14 +1004,14 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
     // A relay wall's grid lies on a quad shape, named.
     if (desc.camera.type == CameraType::RelayWall) {
         for (size_t i = 0; i < desc.shapes.size(); ++i)
-            if (desc.shapes[i].name == wallName) desc.camera.wallShape = static_cast<int>(i);
+            if (desc.shapes[i].name == refs.wall) desc.camera.wallShape = static_cast<int>(i);
         const SourceLoc at = desc.locs.count("camera.wall") ? desc.locs["camera.wall"] : SourceLoc{virtualPath, 0};
         if (desc.camera.wallShape < 0)
             throw UserError(at.file, at.line, "camera.wall",
-                            "no shape is named \"" + wallName + "\" (give the relay wall's quad a \"name\")");
+                            "no shape is named \"" + refs.wall + "\" (give the relay wall's quad a \"name\")");
         if (desc.shapes[static_cast<size_t>(desc.camera.wallShape)].type != ShapeType::Quad)
             throw UserError(at.file, at.line, "camera.wall",
-                            "the relay wall \"" + wallName +
+                            "the relay wall \"" + refs.wall +
                                 "\" must be a quad (its grid is the quad's corner + "
                                 "edge_u, edge_v)");
     }
@@ -957,6 +1020,21 @@ SceneDesc loadSceneFromString(const std::string& text, const std::string& virtua
         readLight(ctx, e, path, l);
         desc.lights.push_back(l);
     });
+    // A scan's laser is a laser light, named.
+    if (desc.camera.scan != ScanMode::None) {
+        for (size_t i = 0; i < desc.lights.size(); ++i)
+            if (desc.lights[i].name == refs.laser) desc.camera.scanLaser = static_cast<int>(i);
+        const SourceLoc at =
+            desc.locs.count("camera.scan.laser") ? desc.locs["camera.scan.laser"] : SourceLoc{virtualPath, 0};
+        if (desc.camera.scanLaser < 0)
+            throw UserError(at.file, at.line, "camera.scan.laser",
+                            "no light is named \"" + refs.laser + "\" (give the scanning laser a \"name\")");
+        if (desc.lights[static_cast<size_t>(desc.camera.scanLaser)].type != LightType::Laser)
+            throw UserError(at.file, at.line, "camera.scan.laser",
+                            "the scan's light \"" + refs.laser + "\" is a " +
+                                lightTypeName(desc.lights[static_cast<size_t>(desc.camera.scanLaser)].type) +
+                                " light; a scan needs a \"laser\" (a collimated beam)");
+    }
     if (const JsonValue* r = objectAt(b, "render")) readRender(ctx, *r, desc.render);
     b.finish();
 
