@@ -10,9 +10,7 @@
 
 namespace tpb {
 
-namespace {
-
-std::string fixFor(int err) {
+std::string atomicFailureFix(int err) {
     switch (err) {
         case ENOSPC:
         case EDQUOT: return "; free space on that disk or write somewhere else (tpb render -o DIR)";
@@ -26,15 +24,14 @@ std::string fixFor(int err) {
     }
 }
 
-}  // namespace
-
 std::string atomicTmpName(const std::string& path) { return path + ".tmp-" + std::to_string(::getpid()); }
 
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)), tmp_(atomicTmpName(path_)) {
     fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd_ < 0) {
         const int err = errno;
-        throw UserError(path_, 0, "", std::string("cannot create the file: ") + std::strerror(err) + fixFor(err));
+        throw UserError(path_, 0, "",
+                        std::string("cannot create the file: ") + std::strerror(err) + atomicFailureFix(err));
     }
 }
 
@@ -53,8 +50,9 @@ void AtomicFile::discard() {
 void AtomicFile::fail(const std::string& what, int err) {
     discard();
     committed_ = true;  // nothing left to clean up
-    throw UserError(path_, 0, "",
-                    what + ": " + std::strerror(err) + fixFor(err) + " (nothing was written under this name)");
+    throw UserError(
+        path_, 0, "",
+        what + ": " + std::strerror(err) + atomicFailureFix(err) + " (nothing was written under this name)");
 }
 
 void AtomicFile::write(const void* data, size_t bytes) {

@@ -50,4 +50,9 @@ void writeFileAtomic(const std::string& path, std::string_view bytes);
 // The name of the temporary file AtomicFile uses for `path` in this process.
 std::string atomicTmpName(const std::string& path);
 
+// The fix to add to a failed write's message for the system error `err` ("; free space on that
+// disk..."), or "" when there is none to suggest. Shared with writers that cannot go through
+// AtomicFile (the HDF5 library writes its file by name: nlos_hdf5.cpp).
+std::string atomicFailureFix(int err);
+
 }  // namespace tpb
