@@ -11,6 +11,7 @@
 #include "film/film_view.h"
 #include "film/picture_export.h"
 #include "io/folder_lock.h"
+#include "render/nlos_capture.h"
 #include "render/checkpoint.h"
 #include "render/time_range.h"
 
@@ -585,6 +586,7 @@ OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     OutputFiles f;
     f.files = {kPreviewExrName, kPreviewPngName, kSteadyExrName, kSteadyPngName, kSummaryName};
     if (r.strip > 0) f.files.push_back(kStripName);
+    if (r.captureScene) f.files.push_back(kCaptureH5Name);
     if (r.npy)
         for (const std::string& n : volumeFileNames()) f.files.push_back(n);
     if (r.contactSheet > 0) f.files.push_back(contactSheetName());
@@ -751,6 +753,10 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
             writeAutoExposedPng(r.out + "/" + kSteadyPngName, film.width(), film.height(), steady, ToneMap{});
         rep.kept.push_back(kSteadyPngName);
         rep.exposureEv.emplace_back(kSteadyPngName, ev);
+    }
+    if (r.captureScene) {
+        writeNlosHdf5(r.out + "/" + kCaptureH5Name, nlosCapture(*snap, *r.captureScene, r.provenance.scene));
+        rep.kept.push_back(kCaptureH5Name);
     }
     rep.kept.push_back(kSummaryName);
     writeSummary(false);

@@ -119,6 +119,9 @@ struct RenderOutputs {
     ToneMap tone;          // the MP4's and contact sheet's mapping; its exposure is added to the automatic one
     std::optional<float> previewEv;  // the EV preview.png was written with (for summary.json), if it was
     VolumeProvenance provenance;     // for transient.json; filled after the render (provenanceOf)
+    // A relay-wall scan: capture.h5 in the NLOS toolkit's layout (render/nlos_capture.h), written
+    // with the steady image.
+    const Scene* captureScene = nullptr;
 };
 // The files RenderOutputs writes for a film of `bins` bins (preview.exr/png included).
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins);

@@ -250,6 +250,7 @@ void run(RenderCmd& c) {
     outputs.mp4 = c.mp4;
     outputs.fps = c.fps;
     outputs.contactSheet = c.contactSheet;
+    if (prepared.scene->camera.scan != ScanMode::None) outputs.captureScene = prepared.scene.get();
     outputs.tone.exposureEv = static_cast<float>(c.videoEv);
     outputs.tone.falseColor = c.falseColour;
     outputs.tone.srgb = !c.noSrgb;

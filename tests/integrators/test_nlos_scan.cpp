@@ -125,6 +125,15 @@ TEST(NlosScan, BadScansAreRefusedNamingTheKey) {
     // An exhaustive scan whose film cannot fit: refused before anything is built.
     EXPECT_THAT(errorOf(scanScene(R"({"mode": "exhaustive", "laser": "laser", "grid": [30000, 30000]})")),
                 HasSubstr("camera.scan.grid"));
+    // The path tracer cannot connect to the laser spot yet: refused rather than black.
+    SettingsOverrides pt;
+    pt.method = Method::PathTracer;
+    try {
+        prepare(scanScene(R"({"mode": "confocal", "laser": "laser"})"), pt);
+        ADD_FAILURE() << "a path-traced scan was accepted";
+    } catch (const UserError& e) {
+        EXPECT_THAT(e.what(), HasSubstr("camera.scan: the path tracer does not render laser scans yet"));
+    }
     // A laser behind the wall, and one whose ray meets the target first.
     EXPECT_THAT(errorOf(scanScene(R"({"mode": "confocal", "laser": "laser"})", "",
                                   R"("name": "laser", "type": "laser", "position": [0, 0, -0.5])")),
