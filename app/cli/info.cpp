@@ -43,7 +43,11 @@ nlohmann::json describe(const std::string& path, const PreparedRender& p) {
         j["camera"]["relay_wall"] = {{"corner", vec3(cam.wallCorner)},
                                      {"edge_u", vec3(cam.wallU)},
                                      {"edge_v", vec3(cam.wallV)},
-                                     {"time_origin", cam.timeFromWall ? "wall" : "sensor"}};
+                                     {"time_origin", cam.timeFromWall ? "wall" : "sensor"},
+                                     {"sensor_grid", {cam.width, cam.sensorRows}},
+                                     {"scan", scanModeName(cam.scan)}};
+    if (cam.scan != ScanMode::None) j["camera"]["relay_wall"]["laser_points"] = cam.laserPoints();
+    if (cam.scan == ScanMode::Exhaustive) j["camera"]["relay_wall"]["laser_grid"] = {cam.laserGridX, cam.laserGridY};
     j["bounds"] = {{"min", vec3(s->bounds.lo)}, {"max", vec3(s->bounds.hi)}, {"diagonal_m", s->bounds.diagonal()}};
     j["geometry"] = {{"triangles", s->geometry.triangleCount()},
                      {"spheres", s->geometry.sphereCount()},
@@ -111,11 +115,22 @@ void printText(const nlohmann::json& j) {
     const auto pos = v3(cam["position"]);
     std::printf("scene      %s (version %d)\n", j["scene"]["path"].get<std::string>().c_str(),
                 j["scene"]["version"].get<int>());
-    if (cam.contains("relay_wall"))
+    if (cam.contains("relay_wall")) {
+        const auto& rw = cam["relay_wall"];
         std::printf("camera     relay wall: %dx%d grid, sensor at (%.3g, %.3g, %.3g), time from the %s\n",
-                    cam["width"].get<int>(), cam["height"].get<int>(), pos[0], pos[1], pos[2],
-                    cam["relay_wall"]["time_origin"].get<std::string>().c_str());
-    else
+                    rw["sensor_grid"][0].get<int>(), rw["sensor_grid"][1].get<int>(), pos[0], pos[1], pos[2],
+                    rw["time_origin"].get<std::string>().c_str());
+        if (rw.contains("laser_points"))
+            std::printf("scan       %s, %lld laser point(s) per pass%s\n", rw["scan"].get<std::string>().c_str(),
+                        static_cast<long long>(rw["laser_points"].get<int64_t>()),
+                        rw.contains("laser_grid")
+                            ? (" (" + std::to_string(rw["laser_grid"][0].get<int>()) + " x " +
+                               std::to_string(rw["laser_grid"][1].get<int>()) +
+                               "; the film stacks one image each: " + std::to_string(cam["width"].get<int>()) + "x" +
+                               std::to_string(cam["height"].get<int>()) + ")")
+                                  .c_str()
+                            : "");
+    } else
         std::printf("camera     %dx%d, fov %.1f deg, at (%.3g, %.3g, %.3g)\n", cam["width"].get<int>(),
                     cam["height"].get<int>(), cam["fov_y_deg"].get<double>(), pos[0], pos[1], pos[2]);
     const auto lo = v3(j["bounds"]["min"]), hi = v3(j["bounds"]["max"]);

@@ -30,7 +30,45 @@ struct PathContext {
     PixelAccumulator& acc;
     PathTracerStats& stats;
     double sampleWeight;  // 1 / samplesPerPixel
+    // A scan (scene/camera.h): the pixel's laser point; the scan's laser aims there, pulsing at
+    // aimEmitOpl (scanEmitOpl). Null: every laser keeps its own direction.
+    const Vec3* aim = nullptr;
+    double aimEmitOpl = 0.0;
 };
+
+// The spot of laser `li`: where its beam (from disc point (u1, u2)) first meets a surface. A diffuse
+// surface re-emits the flux the leg transmits as a Lambertian point, of radiant intensity
+// Phi T_leg (rho / pi) cos(n, w) towards w (W / sr), so a vertex can connect to it: the laser's
+// delta direction is carried by the leg, and the spot is an ordinary point light with a cosine
+// lobe. No spot (returns false) when the beam meets glass, a mirror, a null boundary or nothing,
+// or a scattering medium fills the leg (its in-scattered light is not connected: the photon beams
+// render it).
+struct LaserSpot {
+    Vec3 anchor;              // rayEps in front of the spot, on the laser's side: where shadow rays end
+    Vec3 normal;              // the surface's normal, facing the laser
+    Color intensityCos{0.0};  // Phi T_leg rho / pi (W / sr per unit cosine)
+    double opl = 0.0;         // pulse instant + the leg's OPL
+};
+
+bool laserSpot(const PathContext& ctx, int li, double u1, double u2, LaserSpot& spot) {
+    const Scene& scene = ctx.scene;
+    const Light& light = scene.lights[li];
+    const bool aimed = ctx.aim && li == scene.camera.scanLaser;
+    const Vec3 dir = aimed ? glm::normalize(*ctx.aim - light.position) : light.direction;
+    const Ray ray{light.laserOrigin(u1, u2, dir), dir};
+    const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
+    if (!hit) return false;
+    const Region& leg = scene.regions[static_cast<size_t>(scene.lightPlacement[static_cast<size_t>(li)].regions.top())];
+    if (leg.hasMedium && leg.medium.scattering) return false;
+    const SurfaceInteraction si = interact(scene, ray, *hit);
+    if (si.kind != SurfaceKind::Diffuse) return false;
+    const SegmentTransport seg = crossSegment(leg, ray, hit->t);
+    spot.anchor = scene.bounceOrigin(ray, *hit, si.ng);
+    spot.normal = si.ng;
+    spot.intensityCos = light.power * seg.transmittance * si.material->albedo * kInvPi;
+    spot.opl = (aimed ? ctx.aimEmitOpl : light.emitOpl) + seg.opl;
+    return true;
+}
 
 // One contribution at real time tReal and unwarped time tUnw.
 void splat(PathContext& ctx, const Color& L, double tReal, double tUnw) {
@@ -80,6 +118,7 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
     const Light& light = scene.lights[li];
     Vec3 y;
     Color Li(0.0);
+    double emitOpl = light.emitOpl;
     switch (light.type) {
         case LightType::Point:
         case LightType::Spot: {
@@ -108,7 +147,22 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
             Li = light.areaRadiance() * (cosL * light.area / d2);
             break;
         }
-        case LightType::Laser: ++ctx.stats.laserSamples; return;
+        case LightType::Laser: {
+            LaserSpot spot;
+            if (!laserSpot(ctx, li, u1, u2, spot)) {
+                ++ctx.stats.laserSamples;
+                return;
+            }
+            y = spot.anchor;
+            const Vec3 v = y - x;
+            const double d2 = glm::dot(v, v);
+            if (!(d2 > 0.0)) return;
+            const double cosOut = -glm::dot(spot.normal, v) / std::sqrt(d2);
+            if (cosOut <= 0.0) return;  // behind the spot's surface (or along it: the wall itself)
+            Li = spot.intensityCos * (cosOut / d2);
+            emitOpl = spot.opl;
+            break;
+        }
     }
     if (isBlack(Li)) return;
     const Vec3 w = glm::normalize(y - x);
@@ -119,7 +173,7 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
     double oplShadow;
     if (!traceShadow(scene, x + offset, y, regions, tr, oplShadow, ctx.stats)) return;
     const Color L = beta * f * Li * tr / pick;
-    splat(ctx, L, light.emitOpl + oplShadow + oplCam, light.emitOpl + oplShadow + oplUnw);
+    splat(ctx, L, emitOpl + oplShadow + oplCam, emitOpl + oplShadow + oplUnw);
 }
 
 // Where equiangular sampling stops on a segment: transmittance e^-30 in the clearest channel.
@@ -359,6 +413,12 @@ void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, 
     const uint64_t pixelIndex = static_cast<uint64_t>(y) * static_cast<uint64_t>(scene.camera.width) + x;
     Rng rng(s.seed, Stream::PathTracer, pass, pixelIndex);
     PathContext ctx{scene, time, acc, stats, 1.0 / spp};
+    Vec3 aim;
+    if (scene.camera.scan != ScanMode::None) {
+        aim = scene.camera.laserTarget(scene.camera.laserPointOf(x, y));
+        ctx.aim = &aim;
+        ctx.aimEmitOpl = scanEmitOpl(scene, aim);
+    }
     for (int i = 0; i < spp; ++i) {
         const double jx = rng.uniform(), jy = rng.uniform();
         tracePath(ctx, s, scene.camera.generate(x + jx, y + jy), rng);

@@ -28,7 +28,11 @@
 // direct-light paths through dielectrics are still found: by BSDF sampling an area light through
 // the specular chain. Consequences (inherent to unidirectional path tracing, not bugs):
 //  - lasers are delta in direction AND position-on-a-line: a camera path can neither connect to
-//    them nor hit them, so they contribute nothing here (counted in PathTracerStats::laserSamples);
+//    them nor hit them. NEE connects to the laser's spot instead: where its beam first meets a
+//    diffuse surface, a Lambertian point of intensity Phi T_leg rho / pi cos (a scan's laser aimed
+//    at the pixel's laser point). A laser whose beam meets glass, a mirror or a null boundary first,
+//    or whose leg crosses a scattering medium, contributes nothing (PathTracerStats::laserSamples);
+//    so does the spot seen directly (a delta on the wall);
 //  - point and spot lights seen through a specular chain (caustics from delta lights, e.g. a
 //    point light behind glass or reflected by a mirror) are missed: the beam core's photon map and
 //    beams do capture them, so compare with such scenes only with area lights;
@@ -65,7 +69,7 @@ struct PathTracerStats : FilmTally {  // rejected: non-finite contributions (or 
     int64_t cameraPaths = 0;
     int64_t contributions = 0;       // finite contributions added (NEE + emitter hits)
     int64_t shadowRays = 0;          // NEE connections traced
-    int64_t laserSamples = 0;        // NEE picked a laser (cannot be connected; contributes nothing)
+    int64_t laserSamples = 0;        // NEE picked a laser without a spot to connect to (contributes nothing)
     int64_t equiangularSamples = 0;  // equiangular points placed towards point/spot lights
     int64_t depthLimited = 0;        // paths stopped by maxDepth (not by escape, absorption or RR)
     int64_t regionOverflows = 0;     // paths (or shadow rays) ended because their region stack was full (RegionStack)

@@ -148,12 +148,6 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     p.settings = RenderSettings::fromDesc(desc.render, diag);
     p.settings.apply(overrides);
     for (const std::string& w : p.settings.validate({&desc, &overrides, diag})) warn(w);
-    // The path tracer cannot connect to a laser (a delta in direction and position): a scan would
-    // render black. (Next-event estimation to the laser spot is the missing piece; issue 35.)
-    if (p.scene->camera.scan != ScanMode::None && p.settings.method == Method::PathTracer)
-        throw UserError(desc.where("camera.scan") +
-                        "camera.scan: the path tracer does not render laser scans yet (it cannot connect to "
-                        "the laser's spot); render the scan with photon beams (--method beams)");
 
     // "radius": "auto" (unless --radius overrides it) or --auto-radius: from a pilot pass's photon
     // density (auto_radius.h), capped like any radius; the surface radius, unless given, keeps the

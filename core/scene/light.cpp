@@ -11,6 +11,12 @@ double Light::spotProfile(double cosTheta) const {
     return x * x * (3.0 - 2.0 * x);  // smoothstep
 }
 
+Vec3 Light::laserOrigin(double u1, double u2, const Vec3& dir) const {
+    if (!(laserRadius > 0.0)) return position;
+    const double r = laserRadius * std::sqrt(u1), phi = 2.0 * kPi * u2;
+    return position + toWorld(Vec3(r * std::cos(phi), r * std::sin(phi), 0.0), dir);
+}
+
 Light Light::fromDesc(const LightDesc& d) {
     Light l;
     l.type = d.type;
@@ -71,12 +77,7 @@ EmissionSample Light::sampleEmission(Rng& rng, double offset) const {
             break;
         }
         case LightType::Laser: {
-            Vec3 o = position;
-            if (laserRadius > 0.0) {
-                const double r = laserRadius * std::sqrt(u1), phi = 2.0 * kPi * u2;
-                o += toWorld(Vec3(r * std::cos(phi), r * std::sin(phi), 0.0), direction);
-            }
-            e.ray = {o, direction};
+            e.ray = {laserOrigin(u1, u2, direction), direction};
             e.power = power;
             break;
         }

@@ -34,6 +34,9 @@ struct Light {
     // The point of an area light at (u, v) in [0, 1]^2 moved `offset` in front of the quad and up
     // to `offset` in from its edges: where its photons start, and where shadow rays end.
     Vec3 offsetAreaPoint(double u, double v, double offset) const;
+    // A laser photon's start for (u1, u2) in [0, 1)^2: a point of the beam's disc (laserRadius)
+    // around `position`, across `dir` (the light's direction, or a scan's aim).
+    Vec3 laserOrigin(double u1, double u2, const Vec3& dir) const;
     // Spot profile f(cos) in [0, 1]: 1 inside the falloff cone, smooth to 0 at the cutoff.
     double spotProfile(double cosTheta) const;
     // Radiance leaving the front side of an area light (W / (m^2 sr)).
