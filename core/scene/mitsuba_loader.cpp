@@ -13,7 +13,10 @@
 //   homogeneous media (sigma_t + albedo or sigma_a + sigma_s, scale; isotropic / hg phase);
 //   emitters point (flux = 4 pi I), spot (flux = I * int of tpb's profile), area on a rectangle
 //   (flux = pi L A); integrator max_depth -> render.max_depth = max_depth - 1 (Mitsuba counts the
-//   segments, tpb the scattering vertices), tpb_* parameters of the integrator -> render.*.
+//   segments, tpb the scattering vertices), tpb_* parameters of the integrator -> render.*;
+//   mitransient's NLOS setup: a rectangle holding an nlos_capture_meter -> a relay-wall camera on
+//   it (sensor_origin, transient_nlos_path's account_first_and_last_bounces and capture_type), a
+//   projector -> a laser (flux = pi E scale A, A its image at z = 1), the scan's laser.
 #include "scene/mitsuba_loader.h"
 
 #include "base/error.h"
@@ -68,6 +71,8 @@ namespace {
 constexpr int kDiskSegments = 128;
 constexpr double kAirTolerance = 1e-3;  // ext_ior within this of 1 (air: 1.00028) is taken as 1
 constexpr int kXmlMaxDepth = 256;       // element nesting (Importer::checkNesting)
+// Widest projector imported as a laser (full angle, degrees): tal writes 0.2 (2 without laser sampling).
+constexpr double kMaxProjectorFovDeg = 5.0;
 
 struct XmlFile {
     std::string path, dir, text;
@@ -186,7 +191,10 @@ private:
     void registerIds(const Elem& e);
 
     void readSensor(const Elem& e);
-    void readFilm(const Elem& e);
+    void readSampler(Props& p, const Elem& o);
+    void readFilm(const Elem& e, bool nlos = false);
+    void readCaptureMeter(const Elem& sensor, const Elem& shape, const std::string& shapeType);
+    void finishNlos();
     void readIntegrator(const Elem& e);
     void readShape(const Elem& e);
     void readEmitter(const Elem& e, const Elem* shape, const Mat4* shapeToWorld, bool flip);
@@ -207,6 +215,34 @@ private:
     std::map<const void*, int> materials_, media_;
     int defaultDiffuse_ = -1, defaultNull_ = -1;
     bool haveSensor_ = false, haveIntegrator_ = false;
+    bool captureMeterAhead_ = false;  // a shape holds an nlos_capture_meter: it is the sensor
+    std::vector<Elem> lightElems_;    // the element of each light, by index
+    // mitransient's NLOS setup: the relay wall's nlos_capture_meter, read when its shape is, and
+    // the transient_nlos_path integrator's settings; resolved into the camera by finishNlos().
+    struct Nlos {
+        bool present = false;
+        Elem sensor, shape, film;
+        int wall = -1;
+        std::optional<Elem> origin, lookatPixel, lookat3d, laserOrigin, original, laserScan;
+        Vec3 lookatPixelV{0.0}, lookat3dV{0.0}, laserOriginV{0.0};
+        int originalW = 0, originalH = 0;  // original_film_width/height: one confocal point per render
+        bool exhaustiveFilm = false;
+        int laserScanW = 0, laserScanH = 0;
+    } nlos_;
+    struct NlosIntegrator {
+        std::string type;
+        std::optional<ScanMode> capture;
+        std::optional<bool> account;
+        bool forceEqual = true;
+        std::optional<Elem> captureElem, accountElem, forceEqualElem;
+    } nlosInt_;
+    struct Projector {
+        int light = -1;
+        Elem e;
+        std::optional<Elem> toWorld;
+        bool translationOnly = true;  // no to_world, or a translation: tal's laser, aimed from Python
+    };
+    std::vector<Projector> projectors_;
     std::vector<std::pair<Elem, int>> exteriorChecks_;  // (element, medium) to compare with the global medium
 };
 
@@ -571,6 +607,12 @@ const Elem& Importer::lookup(const Elem& ref, const std::string& id) const {
 // ---- sensor, film, integrator --------------------------------------------------------------------
 
 void Importer::readSensor(const Elem& e) {
+    if (captureMeterAhead_) {
+        warn(e,
+             "ignored (with its film, sampler and medium): the scene's nlos_capture_meter, on its relay wall, is "
+             "tpb's sensor");
+        return;
+    }
     if (haveSensor_) {
         warn(e, "a second sensor: tpb renders the first one only; ignored");
         return;
@@ -648,18 +690,7 @@ void Importer::readSensor(const Elem& e) {
     for (Elem& o : p.objects()) {
         const std::string tag = o.tag();
         if (tag == "sampler") {
-            p.took(o);
-            Props s(*this, o);
-            if (const Elem* c = s.find("sample_count"))
-                warn(*c,
-                     "sample_count has no tpb equivalent (tpb renders progressive passes: set tpb_passes on the "
-                     "<integrator>, or --passes); ignored");
-            if (const std::optional<int64_t> seed = s.integer("seed")) {
-                if (*seed < 0) fail(*s.find("seed"), "seed must be >= 0");
-                d_.render.seed = static_cast<uint64_t>(*seed);
-                loc("render.seed", *s.find("seed"));
-            }
-            s.finish();
+            readSampler(p, o);
         } else if (tag == "medium" || tag == "ref") {
             const Elem& target = tag == "ref" ? lookup(o, required(o, "id")) : o;
             if (target.tag() != "medium") fail(o, "a sensor takes a medium here, not a <" + target.tag() + ">");
@@ -675,7 +706,22 @@ void Importer::readSensor(const Elem& e) {
     p.finish();
 }
 
-void Importer::readFilm(const Elem& e) {
+void Importer::readSampler(Props& p, const Elem& o) {
+    p.took(o);
+    Props s(*this, o);
+    if (const Elem* c = s.find("sample_count"))
+        warn(*c,
+             "sample_count has no tpb equivalent (tpb renders progressive passes: set tpb_passes on the "
+             "<integrator>, or --passes); ignored");
+    if (const std::optional<int64_t> seed = s.integer("seed")) {
+        if (*seed < 0) fail(*s.find("seed"), "seed must be >= 0");
+        d_.render.seed = static_cast<uint64_t>(*seed);
+        loc("render.seed", *s.find("seed"));
+    }
+    s.finish();
+}
+
+void Importer::readFilm(const Elem& e, bool nlos) {
     Props p(*this, e);
     const std::string type = p.type();
     if (type != "hdrfilm" && type != "transient_hdr_film")
@@ -711,6 +757,16 @@ void Importer::readFilm(const Elem& e) {
             loc("film.start_m", *p.find("start_opl"));
         }
         p.noEffect("auto_detect_bins", "tpb's automatic range is used when bin_width_opl is not given");
+        if (nlos) {  // mitransient's exhaustive NLOS capture: the laser's grid
+            nlos_.film = e;
+            nlos_.exhaustiveFilm = p.boolean("exhaustive_scan").value_or(false);
+            for (const char* k : {"laser_scan_width", "laser_scan_height"})
+                if (const std::optional<int64_t> v = p.integer(k)) {
+                    if (*v < 0 || *v > INT_MAX) fail(*p.find(k), std::string(k) + " must be an integer >= 0");
+                    (k[11] == 'w' ? nlos_.laserScanW : nlos_.laserScanH) = static_cast<int>(*v);
+                    nlos_.laserScan = *p.find(k);
+                }
+        }
     }
     for (const char* k : {"crop_offset_x", "crop_offset_y", "crop_width", "crop_height"})
         if (const Elem* c = p.find(k)) fail(*c, "crop windows are not supported; render the full film (width, height)");
@@ -769,6 +825,40 @@ void Importer::readIntegrator(const Elem& e) {
             loc("render.max_depth", de);
         }
     }
+    // mitransient's transient_nlos_path: the NLOS capture (resolved with the nlos_capture_meter).
+    nlosInt_.type = type;
+    if (const Elem* c = p.find("capture_type")) {  // "single"/"confocal"/"exhaustive" or 1/2/3
+        nlosInt_.captureElem = *c;
+        const std::string v = lower(trim(required(*c, "value")));
+        if (v == "single" || v == "1")
+            nlosInt_.capture = ScanMode::Single;
+        else if (v == "confocal" || v == "2")
+            nlosInt_.capture = ScanMode::Confocal;
+        else if (v == "exhaustive" || v == "3")
+            nlosInt_.capture = ScanMode::Exhaustive;
+        else
+            fail(*c, "unknown capture_type \"" + v + "\"; allowed: single (1), confocal (2), exhaustive (3)");
+    }
+    if (const std::optional<bool> a = p.boolean("account_first_and_last_bounces")) {
+        nlosInt_.account = *a;
+        nlosInt_.accountElem = *p.find("account_first_and_last_bounces");
+    }
+    if (const std::optional<bool> f = p.boolean("force_equal_illumination_scanning")) {
+        nlosInt_.forceEqual = *f;
+        nlosInt_.forceEqualElem = *p.find("force_equal_illumination_scanning");
+    }
+    p.noEffect("illumination_scan_fov",
+               "tpb's exhaustive laser grid lies on the relay wall (force_equal_illumination_scanning)");
+    for (const char* k :
+         {"nlos_laser_sampling", "nlos_hidden_geometry_sampling", "nlos_hidden_geometry_sampling_do_rroulette",
+          "nlos_hidden_geometry_sampling_includes_relay_wall"})
+        p.noEffect(k, "a path-tracing technique of mitransient; tpb's photon beams need none");
+    p.noEffect("block_size", "tpb schedules its own work");
+    for (const char* k : {"filter_depth", "filter_bounces"})
+        if (const std::optional<int64_t> v = p.integer(k); v && *v != -1)
+            warn(*p.find(k), std::string(k) +
+                                 " has no tpb equivalent: tpb's film holds paths of every length (up to max_depth); "
+                                 "ignored");
     p.noEffect("rr_depth", "tpb's Russian roulette has its own rule");
     p.noEffect("hide_emitters", "visible area lights are always drawn");
     p.noEffect("temporal_filter", "tpb's time kernel is tpb_time_kernel");
@@ -1025,7 +1115,14 @@ void Importer::readShape(const Elem& e) {
     // The bsdf (nested or a ref) and an area emitter.
     const Elem* bsdf = nullptr;
     const Elem* emitter = nullptr;
+    const Elem* sensor = nullptr;
     for (Elem& o : p.objects()) {
+        if (o.tag() == "sensor") {  // mitransient's relay wall: an nlos_capture_meter on the shape
+            if (sensor) fail(o, "a shape holds one sensor");
+            sensor = &o;
+            p.took(o);
+            continue;
+        }
         const Elem* t = o.tag() == "ref" ? &lookup(o, required(o, "id")) : &o;  // ids_ entries are stable
         if (t->tag() == "bsdf") {
             if (bsdf) fail(o, "a shape has one bsdf");
@@ -1043,6 +1140,8 @@ void Importer::readShape(const Elem& e) {
     const double det = glm::determinant(glm::dmat3(M));
     if (toWorld && !(std::fabs(det) > 0.0)) fail(*p.find("to_world"), "to_world is singular");
 
+    if (sensor && emitter)
+        fail(*sensor, "a relay wall cannot also be an area light; put the emitter on another rectangle");
     if (emitter) {
         if (type != "rectangle") fail(*emitter, "an area emitter must sit on a rectangle: tpb's area lights are quads");
         if (bsdf)
@@ -1156,6 +1255,7 @@ void Importer::readShape(const Elem& e) {
         warn(*p.find("interior"), "the interior medium has no effect: the shape's bsdf is not a dielectric or null");
     p.finish();
     d_.shapes.push_back(s);
+    if (sensor) readCaptureMeter(*sensor, e, type);
 }
 
 void Importer::readEmitter(const Elem& e, const Elem* shape, const Mat4* shapeToWorld, bool flip) {
@@ -1216,6 +1316,64 @@ void Importer::readEmitter(const Elem& e, const Elem* shape, const Mat4* shapeTo
                  "between beam_width and cutoff_angle tpb's spot falls off as a smoothstep in cos(angle), Mitsuba's "
                  "linearly in the angle; the on-axis intensity and the cone are the same");
         loc(key, e);
+    } else if (type == "projector") {
+        // A laser: mitransient's NLOS scenes light the relay wall with a projector of a small fov.
+        // tpb's laser is a thin collimated beam from the projector's origin along its +z.
+        l.type = LightType::Laser;
+        const std::optional<Mat4> T = p.transform("to_world");
+        const Mat4 M = T.value_or(Mat4(1.0));
+        l.position = Vec3(M * glm::dvec4(0, 0, 0, 1));
+        const Vec3 dir(M * glm::dvec4(0, 0, 1, 0));
+        if (!(glm::length(dir) > 0.0)) fail(T ? *p.find("to_world") : e, "the projector's to_world is singular");
+        l.direction = glm::normalize(dir);
+        // The image on the plane z = 1: a square of half side t (a constant irradiance is a 1 x 1
+        // texture), t from the fov as Mitsuba's perspective mapping (fov_axis), or a focal length.
+        const std::optional<double> fov = p.number("fov");
+        const std::optional<std::string> focal = p.string("focal_length");
+        const std::string axis = lower(p.string("fov_axis").value_or("x"));
+        if (fov && focal) fail(*p.find("focal_length"), "give either fov or focal_length, not both");
+        double t = 0.0;
+        if (fov) {
+            if (!(*fov > 0.0 && *fov < 180.0)) fail(*p.find("fov"), "fov must be in (0, 180) degrees");
+            t = std::tan(0.5 * *fov * kPi / 180.0);
+            if (axis == "diagonal")
+                t /= std::sqrt(2.0);
+            else if (axis != "x" && axis != "y" && axis != "smaller" && axis != "larger")
+                fail(*p.find("fov_axis"),
+                     "unknown fov_axis \"" + axis + "\"; allowed: x, y, diagonal, smaller, larger");
+        } else {  // 35 mm film equivalent, on the diagonal (Mitsuba's default: 50mm)
+            const Elem* fe = p.find("focal_length");
+            std::string f = trim(focal.value_or("50mm"));
+            if (f.size() > 2 && f.substr(f.size() - 2) == "mm") f.resize(f.size() - 2);
+            const double mm = number(fe ? *fe : e, f, "focal_length");
+            if (!(mm > 0.0)) fail(fe ? *fe : e, "focal_length must be > 0 mm");
+            t = std::sqrt(36.0 * 36.0 + 24.0 * 24.0) / (2.0 * mm) / std::sqrt(2.0);
+        }
+        const double fullDeg = 2.0 * std::atan(t) * 180.0 / kPi;
+        if (fullDeg > kMaxProjectorFovDeg) {
+            char deg[32];
+            std::snprintf(deg, sizeof deg, "%.3g", fullDeg);
+            fail(fov ? *p.find("fov") : e,
+                 "a projector is imported as a laser (a thin collimated beam), but this one "
+                 "spreads over " +
+                     std::string(deg) + " degrees (more than " + std::to_string(static_cast<int>(kMaxProjectorFovDeg)) +
+                     "); give it a small fov (mitransient's lasers use 0.2), or use a spot");
+        }
+        const double scale = p.number("scale").value_or(1.0);
+        if (!(scale >= 0.0)) fail(*p.find("scale"), "scale must be >= 0");
+        // Mitsuba's projector emits pi * irradiance * scale * (area of its image at z = 1) watts
+        // (the weight of its sample_ray): that is the laser's flux.
+        l.power = colorOf("irradiance", 1.0) * (kPi * scale * 4.0 * t * t);
+        l.laserRadius = 0.0;
+        Projector pr;
+        pr.light = static_cast<int>(d_.lights.size());
+        pr.e = e;
+        if (T) {
+            pr.toWorld = *p.find("to_world");
+            pr.translationOnly = glm::dmat3(*T) == glm::dmat3(1.0);
+        }
+        projectors_.push_back(pr);
+        loc(key, e);
     } else if (type == "directional") {
         fail(e,
              "directional emitters are not supported: tpb has no light at infinity (in a medium it would carry "
@@ -1223,7 +1381,8 @@ void Importer::readEmitter(const Elem& e, const Elem* shape, const Mat4* shapeTo
     } else if (type == "area") {
         fail(e, "an area emitter must be nested in the <shape type=\"rectangle\"> it lights");
     } else {
-        fail(e, "unsupported emitter type \"" + type + "\"; tpb imports point, spot and area (on a rectangle)");
+        fail(e, "unsupported emitter type \"" + type +
+                    "\"; tpb imports point, spot, area (on a rectangle) and projector (as a laser)");
     }
     checkPoint(e, l.position, "the light");
     if (maxComponent(l.power) > 1e20)
@@ -1238,6 +1397,261 @@ void Importer::readEmitter(const Elem& e, const Elem* shape, const Mat4* shapeTo
         }
     p.finish();
     d_.lights.push_back(l);
+    lightElems_.push_back(e);
+}
+
+// ---- mitransient's NLOS setup ----------------------------------------------------------------------
+
+// <sensor type="nlos_capture_meter"> on the relay wall's rectangle (mitransient's
+// sensors/nloscapturemeter.py): its film's pixels are the wall's grid, sensor_origin the sensor.
+void Importer::readCaptureMeter(const Elem& sensor, const Elem& shape, const std::string& shapeType) {
+    Props p(*this, sensor);
+    const std::string type = p.type();
+    if (type != "nlos_capture_meter")
+        fail(sensor, "unsupported sensor type \"" + type + "\" on a shape; tpb imports mitransient's " +
+                         "\"nlos_capture_meter\" (a relay wall)" +
+                         (type == "nloscapturemeter"
+                              ? ": \"nloscapturemeter\" is mitsuba2-transient-nlos's; write the scene for mitransient "
+                                "(tal's mitsuba3 backend)"
+                              : ""));
+    if (nlos_.present)
+        fail(sensor, "a second nlos_capture_meter (the first is at line " + std::to_string(nlos_.sensor.line()) +
+                         "): tpb renders one relay wall; keep one capture meter and render the other wall as its "
+                         "own scene");
+    if (shapeType != "rectangle")
+        fail(shape,
+             "the nlos_capture_meter's relay wall must be a rectangle (tpb's relay wall is a quad; mitransient "
+             "recommends a rectangle too): use <shape type=\"rectangle\"> placed by its to_world");
+    nlos_.present = true;
+    nlos_.sensor = sensor;
+    nlos_.shape = shape;
+    nlos_.wall = static_cast<int>(d_.shapes.size()) - 1;
+    loc("camera", sensor);
+    loc("camera.wall", shape);
+    bool film = false;
+    for (Elem& o : p.objects()) {
+        if (o.tag() == "film") {
+            if (film) fail(o, "a sensor has one film");
+            film = true;
+            p.took(o);
+            readFilm(o, true);
+        } else if (o.tag() == "sampler") {
+            readSampler(p, o);
+        }
+    }
+    if (!film) {  // Mitsuba's default hdrfilm
+        d_.camera.width = 768;
+        d_.camera.height = 576;
+        loc("camera.resolution", sensor);
+    }
+    if (const std::optional<Vec3> o = p.point("sensor_origin")) {
+        checkPoint(*p.find("sensor_origin"), *o, "sensor_origin");
+        d_.camera.position = *o;
+        nlos_.origin = *p.find("sensor_origin");
+        loc("camera.position", *nlos_.origin);
+    } else {
+        d_.camera.position = Vec3(0.0);  // mitransient's default
+        loc("camera.position", sensor);
+    }
+    // One point of a sequential confocal scan (tal's simultaneous_scan false): a 1 x 1 film, the
+    // scan's size in original_film_width/height.
+    const std::optional<int64_t> ow = p.integer("original_film_width"), oh = p.integer("original_film_height");
+    if (ow || oh) {
+        const Elem& at = *p.find(ow ? "original_film_width" : "original_film_height");
+        if (!ow || !oh) fail(at, "give both original_film_width and original_film_height (a confocal scan's size)");
+        if (*ow < 1 || *oh < 1 || *ow > INT_MAX || *oh > INT_MAX || *ow * *oh > INT_MAX)
+            fail(at, "original_film_width and original_film_height must be integers >= 1");
+        if (d_.camera.width != 1 || d_.camera.height != 1)
+            fail(at,
+                 "original_film_width/height mean a confocal capture of one point per render, with a 1 x 1 "
+                 "film (mitransient refuses others); make the film 1 x 1, or remove them");
+        nlos_.original = at;
+        nlos_.originalW = static_cast<int>(*ow);
+        nlos_.originalH = static_cast<int>(*oh);
+    }
+    // Aims of the laser: mitransient aims it from Python (mitransient.nlos.focus_emitter_at_relay_wall_*);
+    // mitsuba2-transient-nlos wrote them on the sensor, as tpb reads them.
+    if (const std::optional<Vec3> v = p.point("laser_lookat_pixel")) {
+        nlos_.lookatPixel = *p.find("laser_lookat_pixel");
+        nlos_.lookatPixelV = *v;
+    }
+    if (const std::optional<Vec3> v = p.point("laser_lookat_3d")) {
+        nlos_.lookat3d = *p.find("laser_lookat_3d");
+        nlos_.lookat3dV = *v;
+    }
+    if (nlos_.lookatPixel && nlos_.lookat3d)
+        fail(*nlos_.lookat3d, "give laser_lookat_pixel or laser_lookat_3d, not both");
+    if (const std::optional<Vec3> v = p.point("laser_origin")) {
+        checkPoint(*p.find("laser_origin"), *v, "laser_origin");
+        nlos_.laserOrigin = *p.find("laser_origin");
+        nlos_.laserOriginV = *v;
+    }
+    if (const Elem* a = p.find("account_first_and_last_bounces"))
+        warn(*a,
+             "deprecated on the nlos_capture_meter, and ignored by mitransient as by tpb: the time origin is the "
+             "transient_nlos_path integrator's account_first_and_last_bounces (default false)");
+    if (const Elem* c = p.find("confocal"))
+        warn(*c,
+             "mitsuba2-transient-nlos's parameter, ignored by mitransient as by tpb: set capture_type on the "
+             "transient_nlos_path integrator (single, confocal, exhaustive)");
+    p.finish();
+}
+
+// The relay-wall camera and its scan, once the integrator and the emitters are read.
+void Importer::finishNlos() {
+    if (!nlos_.present) {
+        if (nlosInt_.captureElem)
+            warn(*nlosInt_.captureElem, "capture_type has no effect: the scene has no nlos_capture_meter (relay wall)");
+        return;
+    }
+    CameraDesc& cam = d_.camera;
+    cam.type = CameraType::RelayWall;
+    cam.wallShape = nlos_.wall;
+    const bool nlosPath = nlosInt_.type == "transient_nlos_path";
+    // mitransient's account_first_and_last_bounces (transient_nlos_path, default false): true counts
+    // the laser -> wall and wall -> sensor legs (tpb's "sensor" origin), false leaves both out
+    // (tpb's "wall"). Other integrators (transient_path) count every segment.
+    const bool account = nlosPath ? nlosInt_.account.value_or(false) : true;
+    cam.timeOrigin = account ? WallTimeOrigin::Sensor : WallTimeOrigin::Wall;
+    loc("camera.time_origin", nlosInt_.accountElem ? *nlosInt_.accountElem : nlos_.sensor);
+    ScanMode mode = nlosPath ? nlosInt_.capture.value_or(ScanMode::Single) : ScanMode::Single;
+    if (nlos_.original) {
+        if (mode != ScanMode::Confocal)
+            fail(*nlos_.original, std::string("original_film_width/height are for confocal captures, but the "
+                                              "capture is ") +
+                                      scanModeName(mode) +
+                                      ": set <string name=\"capture_type\" value=\"confocal\"/> on the "
+                                      "transient_nlos_path integrator, or remove them");
+        cam.width = nlos_.originalW;
+        cam.height = nlos_.originalH;
+        warn(*nlos_.original, "one confocal point per render (tal's simultaneous_scan false): tpb renders the whole " +
+                                  std::to_string(cam.width) + " x " + std::to_string(cam.height) +
+                                  " confocal scan into one film");
+    }
+    const auto badLight = [&](int i) -> const Elem& { return lightElems_.at(static_cast<size_t>(i)); };
+    // The laser: the emitter with id "laser" (mitransient's and tal's convention), else the only projector.
+    int laser = -1;
+    for (size_t i = 0; i < d_.lights.size(); ++i)
+        if (d_.lights[i].name == "laser") laser = static_cast<int>(i);
+    if (laser >= 0 && d_.lights[static_cast<size_t>(laser)].type != LightType::Laser)
+        fail(badLight(laser), std::string("the NLOS laser (id \"laser\") is a ") +
+                                  lightTypeName(d_.lights[static_cast<size_t>(laser)].type) +
+                                  " light; tpb maps a projector to its laser: make it <emitter type=\"projector\" "
+                                  "id=\"laser\"> with a small fov");
+    if (laser < 0 && projectors_.size() > 1)
+        fail(projectors_[1].e, "several projectors and none has id=\"laser\": give the NLOS laser id=\"laser\"");
+    if (laser < 0 && projectors_.size() == 1) laser = projectors_[0].light;
+    if (laser < 0) {
+        if (mode != ScanMode::Single)
+            fail(nlosInt_.captureElem ? *nlosInt_.captureElem : nlos_.sensor,
+                 std::string("a ") + scanModeName(mode) +
+                     " capture needs its laser: add <emitter type=\"projector\" id=\"laser\"> (a small fov) with "
+                     "its to_world at the laser's position");
+        for (const std::optional<Elem>& x : {nlos_.lookatPixel, nlos_.lookat3d, nlos_.laserOrigin})
+            if (x) warn(*x, "no effect: the scene has no laser (a projector)");
+        cam.scan = ScanMode::None;  // the scene's lights as they are
+        return;
+    }
+    const Projector* proj = nullptr;
+    for (const Projector& pr : projectors_)
+        if (pr.light == laser) proj = &pr;
+    LightDesc& L = d_.lights[static_cast<size_t>(laser)];
+    const Elem& laserElem = badLight(laser);
+    L.name = "laser";
+    cam.scan = mode;
+    cam.scanLaser = laser;
+    loc("camera.scan.laser", laserElem);
+    if (nlos_.laserOrigin) {  // mitsuba2-transient-nlos: the laser's position on the sensor
+        const ShapeDesc& w = d_.shapes[static_cast<size_t>(nlos_.wall)];
+        const double size = std::max(glm::length(w.edgeU), glm::length(w.edgeV));
+        if (proj->toWorld && glm::length(L.position - nlos_.laserOriginV) > 1e-9 * size)
+            fail(*nlos_.laserOrigin, "laser_origin differs from the laser's to_world (line " +
+                                         std::to_string(proj->toWorld->line()) + "): remove one of them");
+        L.position = nlos_.laserOriginV;
+    }
+    const ShapeDesc& w = d_.shapes[static_cast<size_t>(nlos_.wall)];
+    if (mode != ScanMode::Single) {
+        for (const std::optional<Elem>& x : {nlos_.lookatPixel, nlos_.lookat3d})
+            if (x)
+                warn(*x, std::string("no effect: a ") + scanModeName(mode) + " capture aims the laser at " +
+                             (mode == ScanMode::Confocal ? "every sensor point" : "its grid"));
+    }
+    if (mode == ScanMode::Exhaustive) {
+        if (!nlosInt_.forceEqual)
+            fail(*nlosInt_.forceEqualElem,
+                 "force_equal_illumination_scanning false makes mitransient's laser points a grid of directions "
+                 "within illumination_scan_fov of the projector, which tpb's exhaustive scan (a grid of cells of the "
+                 "relay wall) cannot reproduce; set it to true (the laser grid is then laser_scan_width x "
+                 "laser_scan_height cells of the wall)");
+        cam.laserGridX = nlos_.laserScanW > 0 ? nlos_.laserScanW : cam.width;
+        cam.laserGridY = nlos_.laserScanH > 0 ? nlos_.laserScanH : cam.height;
+        if (nlos_.exhaustiveFilm && (cam.laserGridX != cam.width || cam.laserGridY != cam.height))
+            fail(*nlos_.laserScan, "laser_scan_width x laser_scan_height (" + std::to_string(cam.laserGridX) + " x " +
+                                       std::to_string(cam.laserGridY) + ") must equal the film's width x height (" +
+                                       std::to_string(cam.width) + " x " + std::to_string(cam.height) +
+                                       ") with force_equal_illumination_scanning (mitransient refuses others); make "
+                                       "them equal");
+        if (!nlos_.exhaustiveFilm)
+            warn(nlos_.film.node ? nlos_.film : nlos_.sensor,
+                 "exhaustive_scan is false: one laser point per render (tal's simultaneous_scan false); tpb renders "
+                 "all " +
+                     std::to_string(cam.laserGridX) + " x " + std::to_string(cam.laserGridY) +
+                     " laser points into one film (one sensor image per laser point)");
+        return;
+    }
+    if (mode != ScanMode::Single) return;
+    // A single laser point: (u, v) on the wall, from laser_lookat_pixel, laser_lookat_3d or the aim of
+    // the projector's to_world.
+    const Vec3 U = w.edgeU, V = w.edgeV, N = glm::cross(U, V);
+    const double size = std::max(glm::length(U), glm::length(V));
+    const auto uvOf = [&](const Vec3& q, double& u, double& v) {
+        u = glm::dot(q - w.corner, U) / glm::dot(U, U);
+        v = glm::dot(q - w.corner, V) / glm::dot(V, V);
+    };
+    double u = 0.5, v = 0.5;
+    const Elem* aim = nullptr;
+    if (nlos_.lookatPixel) {  // mitransient.nlos.focus_emitter_at_relay_wall_pixel: uv = pixel / film size
+        aim = &*nlos_.lookatPixel;
+        u = nlos_.lookatPixelV.x / cam.width;
+        v = nlos_.lookatPixelV.y / cam.height;
+    } else if (nlos_.lookat3d) {  // focus_emitter_at_relay_wall_3dpoint
+        aim = &*nlos_.lookat3d;
+        if (std::fabs(glm::dot(nlos_.lookat3dV - w.corner, glm::normalize(N))) > 1e-6 * size)
+            fail(*aim, "laser_lookat_3d is not on the relay wall's plane; give a point of the wall");
+        uvOf(nlos_.lookat3dV, u, v);
+    } else {
+        const double den = glm::dot(L.direction, N);
+        const double t = den != 0.0 ? glm::dot(w.corner - L.position, N) / den : -1.0;
+        bool hit = false;
+        if (t > 0.0) {
+            uvOf(L.position + t * L.direction, u, v);
+            hit = u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0;
+        }
+        if (!hit) {
+            if (!proj->translationOnly)
+                fail(*proj->toWorld,
+                     "the laser's to_world aims at no point of the relay wall \"" + w.name +
+                         "\"; aim it with <lookat origin=... target=\"a point of the wall\"/>, or give the "
+                         "nlos_capture_meter <point name=\"laser_lookat_pixel\" x=... y=... z=\"0\"/>");
+            u = v = 0.5;
+            warn(proj->toWorld ? *proj->toWorld : laserElem,
+                 "the laser is not aimed in the file (mitransient and tal aim it from Python, tal by default at "
+                 "the wall's centre): aimed at the centre of the relay wall \"" +
+                     w.name +
+                     "\"; for another point give the nlos_capture_meter <point name=\"laser_lookat_pixel\" x=... "
+                     "y=... z=\"0\"/> (film pixels) or laser_lookat_3d, or a <lookat> in the projector's to_world");
+        }
+    }
+    if (!(u >= 0.0 && u <= 1.0 && v >= 0.0 && v <= 1.0)) {
+        char at[96];
+        std::snprintf(at, sizeof at, "(u, v) = (%.4g, %.4g)", u, v);
+        fail(*aim, std::string("the laser's aim lies outside the relay wall: ") + at +
+                       " (laser_lookat_pixel is in film pixels, 0..width and 0..height); aim inside the wall");
+    }
+    cam.scanPointU = u;
+    cam.scanPointV = v;
+    const Vec3 target = w.corner + u * U + v * V;
+    if (glm::length(target - L.position) > 0.0) L.direction = glm::normalize(target - L.position);
 }
 
 void Importer::run(const std::string& text, const std::string& path) {
@@ -1262,6 +1676,9 @@ void Importer::run(const std::string& text, const std::string& path) {
     std::vector<std::string> stack{path};
     collect(rootE, top, stack);
     for (const Elem& e : top) registerIds(e);
+    for (const Elem& e : top)
+        if (e.tag() == "shape")
+            for (pugi::xml_node c = e.node.child("sensor"); c; c = c.next_sibling("sensor")) captureMeterAhead_ = true;
     for (const Elem& e : top) {
         const std::string tag = e.tag();
         if (tag == "sensor")
@@ -1283,7 +1700,9 @@ void Importer::run(const std::string& text, const std::string& path) {
                         "> in a scene; tpb imports sensor, integrator, shape, "
                         "emitter, bsdf, medium, default, include");
     }
-    if (!haveSensor_) d_.warnings.push_back(path + ": the scene has no sensor: tpb's default camera is used");
+    finishNlos();
+    if (!haveSensor_ && !nlos_.present)
+        d_.warnings.push_back(path + ": the scene has no sensor: tpb's default camera is used");
     if (d_.lights.empty()) d_.warnings.push_back(path + ": the scene has no emitters: the image will be black");
     for (const auto& [e, m] : exteriorChecks_)
         if (m != d_.globalMedium)

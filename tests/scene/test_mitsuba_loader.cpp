@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
 
 using namespace tpb;
 using ::testing::HasSubstr;
@@ -552,4 +553,203 @@ TEST(MitsubaLoader, UnknownParametersAreWarnedAbout) {
     ASSERT_FALSE(d.warnings.empty());
     EXPECT_THAT(d.warnings[0],
                 HasSubstr("t.xml:3: <float name=\"radious\">: unknown or unsupported parameter \"radious\""));
+}
+
+// ---- mitransient's NLOS setup (nlos_capture_meter on the relay wall, a projector laser) -----------
+
+namespace {
+
+// A mitransient-style NLOS scene, as tal writes it: a 2 m relay wall at z = 0 (the rectangle's
+// default) holding the capture meter, the sensor and the laser at (-0.5, 0, 0.25), a 0.5 m target
+// at z = 1. Every element on its own line (the refusals name them): {K} fields are replaced.
+std::string nlosScene(const std::map<std::string, std::string>& k = {}) {
+    std::string t = R"(<scene version="3.0.0">
+<integrator type="transient_nlos_path">
+<string name="capture_type" value="{CAPTURE}"/>
+<boolean name="account_first_and_last_bounces" value="{ACCOUNT}"/>
+<integer name="tpb_photons_per_pass" value="3000"/><float name="tpb_surface_radius" value="0.08"/><float name="tpb_radius" value="0.01"/><integer name="max_depth" value="4"/>{INTEGRATOR}
+</integrator>
+{EMITTER}
+<shape type="rectangle" id="target"><transform name="to_world"><scale value="0.25"/><translate z="1"/></transform></shape>
+<shape type="{WALL}" id="relay_wall"><bsdf type="diffuse"><rgb name="reflectance" value="0.8"/></bsdf>
+<sensor type="{SENSOR}">
+<point name="sensor_origin" x="-0.5" y="0" z="0.25"/>{SENSOR_EXTRA}
+<film type="transient_hdr_film"><integer name="width" value="{W}"/><integer name="height" value="{H}"/>{FILM}
+<integer name="temporal_bins" value="150"/><float name="bin_width_opl" value="0.04"/><float name="start_opl" value="0"/><rfilter type="box"/></film>
+</sensor></shape>
+{TAIL}
+</scene>
+)";
+    std::map<std::string, std::string> v = {
+        {"CAPTURE", "confocal"},
+        {"ACCOUNT", "false"},
+        {"INTEGRATOR", ""},
+        {"EMITTER",
+         R"(<emitter type="projector" id="laser"><transform name="to_world"><translate x="-0.5" y="0" z="0.25"/></transform><rgb name="irradiance" value="1, 2, 3"/><float name="fov" value="0.2"/></emitter>)"},
+        {"WALL", "rectangle"},
+        {"SENSOR", "nlos_capture_meter"},
+        {"SENSOR_EXTRA", ""},
+        {"W", "8"},
+        {"H", "6"},
+        {"FILM", ""},
+        {"TAIL", ""}};
+    for (const auto& [key, val] : k) v[key] = val;
+    for (const auto& [key, val] : v) {
+        const std::string f = "{" + key + "}";
+        for (size_t at; (at = t.find(f)) != std::string::npos;) t.replace(at, f.size(), val);
+    }
+    return t;
+}
+
+bool hasWarning(const SceneDesc& d, const std::string& fragment) {
+    for (const std::string& w : d.warnings)
+        if (w.find(fragment) != std::string::npos) return true;
+    return false;
+}
+
+// One pass of the Driver over the imported scene: no error, light on the film.
+void renderOnePass(const SceneDesc& d) {
+    test::TestScene ts = test::prepareTestScene(d);
+    RenderSettings s = ts.settings;
+    s.threads = 2;
+    Driver drv(*ts, s, ts.time);
+    EXPECT_TRUE(drv.runPass(1));
+    std::vector<float> img;
+    drv.film().steadyImage(img);
+    double total = 0.0;
+    for (float x : img) total += x;
+    EXPECT_GT(total, 0.0);
+}
+
+}  // namespace
+
+TEST(MitsubaLoader, NlosConfocalCaptureImportsAsARelayWallScan) {
+    const SceneDesc d = load(nlosScene());
+    const CameraDesc& c = d.camera;
+    EXPECT_EQ(c.type, CameraType::RelayWall);
+    ASSERT_EQ(c.wallShape, 1);
+    const ShapeDesc& w = d.shapes[1];
+    EXPECT_EQ(w.name, "relay_wall");
+    EXPECT_EQ(w.type, ShapeType::Quad);
+    expectNear(w.corner, Vec3(-1, -1, 0));
+    expectNear(w.edgeU, Vec3(2, 0, 0));
+    expectNear(w.edgeV, Vec3(0, 2, 0));
+    EXPECT_EQ(c.width, 8);
+    EXPECT_EQ(c.height, 6);
+    expectNear(c.position, Vec3(-0.5, 0, 0.25));
+    EXPECT_EQ(c.timeOrigin, WallTimeOrigin::Wall);  // account_first_and_last_bounces false
+    EXPECT_EQ(c.scan, ScanMode::Confocal);
+    ASSERT_EQ(c.scanLaser, 0);
+    const LightDesc& l = d.lights[0];
+    EXPECT_EQ(l.type, LightType::Laser);
+    EXPECT_EQ(l.name, "laser");
+    expectNear(l.position, Vec3(-0.5, 0, 0.25));
+    EXPECT_EQ(l.laserRadius, 0.0);
+    // flux = pi * irradiance * (2 tan(fov / 2))^2: the projector's image at z = 1.
+    const double a = std::pow(2.0 * std::tan(0.1 * kPi / 180.0), 2.0);
+    expectNear(l.power, Color(1, 2, 3) * (kPi * a), 1e-18);
+    EXPECT_FALSE(d.film.autoRange);
+    EXPECT_EQ(d.film.bins, 150);
+    EXPECT_EQ(d.film.binWidthOpl, 0.04);
+    EXPECT_EQ(d.film.startOpl, 0.0);
+    EXPECT_EQ(d.render.maxDepth, 3);
+    EXPECT_FALSE(hasWarning(d, "the scene has no sensor"));
+    EXPECT_EQ(d.where("camera.scan.laser"), "t.xml:7: ");
+    renderOnePass(d);
+    // account_first_and_last_bounces true counts both legs: tpb's "sensor" origin.
+    EXPECT_EQ(load(nlosScene({{"ACCOUNT", "true"}})).camera.timeOrigin, WallTimeOrigin::Sensor);
+}
+
+TEST(MitsubaLoader, NlosSingleCaptureAims) {
+    // laser_lookat_pixel in film pixels (mitransient's focus_emitter_at_relay_wall_pixel: uv = pixel / size).
+    SceneDesc d = load(nlosScene(
+        {{"CAPTURE", "single"}, {"SENSOR_EXTRA", R"(<point name="laser_lookat_pixel" x="2" y="3" z="0"/>)"}}));
+    EXPECT_EQ(d.camera.scan, ScanMode::Single);
+    EXPECT_DOUBLE_EQ(d.camera.scanPointU, 0.25);
+    EXPECT_DOUBLE_EQ(d.camera.scanPointV, 0.5);
+    expectNear(d.lights[0].direction, Vec3(0, 0, -1), 1e-15);
+    renderOnePass(d);
+    // laser_lookat_3d: a wall point.
+    d = load(
+        nlosScene({{"CAPTURE", "1"}, {"SENSOR_EXTRA", R"(<point name="laser_lookat_3d" x="0.5" y="-0.5" z="0"/>)"}}));
+    EXPECT_DOUBLE_EQ(d.camera.scanPointU, 0.75);
+    EXPECT_DOUBLE_EQ(d.camera.scanPointV, 0.25);
+    // A lookat in the projector's to_world.
+    d = load(nlosScene(
+        {{"CAPTURE", "single"},
+         {"EMITTER",
+          R"(<emitter type="projector" id="laser"><transform name="to_world"><lookat origin="-0.5, 0, 0.25" target="0.5, 0.5, 0"/></transform><float name="fov" value="0.2"/></emitter>)"}}));
+    EXPECT_NEAR(d.camera.scanPointU, 0.75, 1e-12);
+    EXPECT_NEAR(d.camera.scanPointV, 0.75, 1e-12);
+    // tal's projector (a translation, aimed from Python): the wall's centre, with a warning.
+    d = load(nlosScene({{"CAPTURE", "single"}}));
+    EXPECT_EQ(d.camera.scanPointU, 0.5);
+    EXPECT_EQ(d.camera.scanPointV, 0.5);
+    EXPECT_TRUE(hasWarning(d, "t.xml:7: <transform name=\"to_world\">: the laser is not aimed in the file"));
+    // mitsuba2-transient-nlos's laser_origin places an untransformed projector.
+    d = load(nlosScene({{"CAPTURE", "single"},
+                        {"EMITTER", R"(<emitter type="projector"><float name="fov" value="0.2"/></emitter>)"},
+                        {"SENSOR_EXTRA", R"(<point name="laser_origin" x="-0.4" y="0.1" z="0.3"/>)"}}));
+    expectNear(d.lights[0].position, Vec3(-0.4, 0.1, 0.3));
+    EXPECT_EQ(d.lights[0].name, "laser");  // the only projector
+}
+
+TEST(MitsubaLoader, NlosExhaustiveAndSequentialConfocalCaptures) {
+    SceneDesc d = load(nlosScene(
+        {{"CAPTURE", "exhaustive"},
+         {"FILM",
+          R"(<boolean name="exhaustive_scan" value="true"/><integer name="laser_scan_width" value="8"/><integer name="laser_scan_height" value="6"/>)"}}));
+    EXPECT_EQ(d.camera.scan, ScanMode::Exhaustive);
+    EXPECT_EQ(d.camera.laserGridX, 8);
+    EXPECT_EQ(d.camera.laserGridY, 6);
+    // tal without simultaneous_scan: one laser point per render, its grid in laser_scan_*.
+    d = load(nlosScene(
+        {{"CAPTURE", "3"},
+         {"FILM", R"(<integer name="laser_scan_width" value="2"/><integer name="laser_scan_height" value="3"/>)"}}));
+    EXPECT_EQ(d.camera.laserGridX, 2);
+    EXPECT_EQ(d.camera.laserGridY, 3);
+    EXPECT_TRUE(hasWarning(d, "exhaustive_scan is false"));
+    renderOnePass(d);
+    // tal's sequential confocal scan: a 1 x 1 film, the scan in original_film_width/height.
+    d = load(nlosScene(
+        {{"W", "1"},
+         {"H", "1"},
+         {"SENSOR_EXTRA",
+          R"(<integer name="original_film_width" value="4"/><integer name="original_film_height" value="5"/>)"}}));
+    EXPECT_EQ(d.camera.scan, ScanMode::Confocal);
+    EXPECT_EQ(d.camera.width, 4);
+    EXPECT_EQ(d.camera.height, 5);
+    EXPECT_TRUE(hasWarning(d, "t.xml:11: <integer name=\"original_film_width\">: one confocal point per render"));
+}
+
+TEST(MitsubaLoader, NlosRefusals) {
+    expectError(nlosScene({{"WALL", "sphere"}}), 9, "relay wall must be a rectangle");
+    expectError(nlosScene({{"TAIL", R"(<shape type="rectangle"><sensor type="nlos_capture_meter"/></shape>)"}}), 15,
+                "a second nlos_capture_meter (the first is at line 10)");
+    expectError(nlosScene({{"EMITTER", R"(<emitter type="spot" id="laser"/>)"}}), 7,
+                "the NLOS laser (id \"laser\") is a spot light");
+    expectError(
+        nlosScene({{"EMITTER", R"(<emitter type="projector" id="laser"><float name="fov" value="30"/></emitter>)"}}), 7,
+        "spreads over 30 degrees");
+    expectError(nlosScene({{"CAPTURE", "exhaustive"},
+                           {"INTEGRATOR", R"(<boolean name="force_equal_illumination_scanning" value="false"/>)"}}),
+                5, "force_equal_illumination_scanning false");
+    expectError(
+        nlosScene({{"CAPTURE", "exhaustive"},
+                   {"FILM",
+                    R"(<boolean name="exhaustive_scan" value="true"/><integer name="laser_scan_width" value="4"/>)"}}),
+        12, "must equal the film's width x height");
+    expectError(nlosScene({{"CAPTURE", "single"},
+                           {"SENSOR_EXTRA", R"(<point name="laser_lookat_pixel" x="20" y="1" z="0"/>)"}}),
+                11, "outside the relay wall");
+    expectError(
+        nlosScene(
+            {{"CAPTURE", "single"},
+             {"EMITTER",
+              R"(<emitter type="projector"><transform name="to_world"><rotate y="1" angle="90"/><translate x="-0.5" z="0.25"/></transform><float name="fov" value="0.2"/></emitter>)"}}),
+        7, "aims at no point of the relay wall");
+    expectError(nlosScene({{"CAPTURE", "zigzag"}}), 3, "unknown capture_type \"zigzag\"");
+    expectError(nlosScene({{"SENSOR", "irradiancemeter"}}), 10, "tpb imports mitransient's \"nlos_capture_meter\"");
+    expectError(nlosScene({{"SENSOR", "nloscapturemeter"}}), 10, "mitsuba2-transient-nlos");
+    expectError(nlosScene({{"CAPTURE", "confocal"}, {"EMITTER", ""}}), 3, "a confocal capture needs its laser");
 }
