@@ -188,6 +188,21 @@ void RenderOverrides::add(CLI::App* cmd) {
         ->transform(integer(1, INT_MAX, "time bins of the film"));
     cmd->add_option("--max-depth", maxDepth, "Maximum number of scattering events per path (1 = single scattering)")
         ->transform(integer(1, INT_MAX, "1 = single scattering"));
+    cmd->add_option("--bounces", bounces,
+                    "Bounce filter: only light with N scattering events (surface or medium; a laser's spot "
+                    "counts one), or MIN:MAX, or MIN: (no upper limit); e.g. 3 = an NLOS relay wall's third "
+                    "bounce, 2: = without the wall's direct response")
+        ->check(CLI::Validator(
+            [](std::string& v) -> std::string {
+                int a = 0, b = 0;
+                char colon = 0, extra = 0;
+                if (std::sscanf(v.c_str(), "%d%c%d%c", &a, &colon, &b, &extra) == 3 && colon == ':' && a >= 0 && a <= b)
+                    return "";
+                if (std::sscanf(v.c_str(), "%d%c%c", &a, &colon, &extra) == 2 && colon == ':' && a >= 0) return "";
+                if (std::sscanf(v.c_str(), "%d%c", &a, &extra) == 1 && a >= 0) return "";
+                return "expected N, MIN:MAX or MIN: with 0 <= MIN <= MAX (scattering events), got \"" + v + "\"";
+            },
+            "N|MIN:MAX|MIN:", "bounces"));
     cmd->add_option("--profile", profile, "Time profile of a ray-beam estimate: exact | uniform (paper)")
         ->check(CLI::IsMember({"exact", "uniform"}));
     cmd->add_option("--beam-length", beamLength, "Photon beams end at the next event (short) or the surface (long)")
@@ -228,6 +243,12 @@ SettingsOverrides RenderOverrides::settings() const {
     o.alpha = alpha;
     o.threads = threads;
     o.maxDepth = maxDepth;
+    if (bounces) {
+        int a = 0, b = INT_MAX;
+        char colon = 0;
+        const int n = std::sscanf(bounces->c_str(), "%d%c%d", &a, &colon, &b);
+        o.bounces = {a, n == 1 ? a : b};  // "N" = N:N; "MIN:" keeps b = INT_MAX
+    }
     o.seed = seed;
     o.width = width;
     o.height = height;

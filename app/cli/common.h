@@ -33,7 +33,8 @@ struct RenderOverrides {
     std::optional<int> threads, width, height, bins, maxDepth;
     std::optional<uint64_t> seed;
     std::string profile, beamLength;
-    std::optional<std::string> accel;  // "bvh" | "embree" | "brute"; unset = the default
+    std::optional<std::string> accel;    // "bvh" | "embree" | "brute"; unset = the default
+    std::optional<std::string> bounces;  // "N", "MIN:MAX" or "MIN:" (the bounce filter)
     std::optional<std::string> estimator, surfaceEstimator, timeKernel;  // names checked by validate()
     bool ptFreeFlight = false;  // path tracer: no equiangular sampling (for comparisons)
 

@@ -55,7 +55,7 @@ void renderPixel(const Scene& scene, const CameraPassEstimators& est, const Came
         const SurfaceInteraction si = interact(scene, ray, *hit);
         const Vec3& ng = si.ng;
         if (si.kind == SurfaceKind::Emitter) {  // visible emitter, seen at its arrival time
-            if (si.front) {
+            if (si.front && s.emittersSeen) {
                 const Light& l = scene.lights[si.shape->areaLight];
                 splatInstant(time, scratch.acc, stats, path.beta * l.areaRadiance(), path.oplCam + l.emitOpl,
                              l.emitOpl);

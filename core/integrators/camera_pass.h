@@ -17,7 +17,8 @@ struct CameraPassParams {
     uint64_t seed = 1;
     uint64_t pass = 1;
     int maxDepth = 16;
-    int bundleBlock = 1;  // primary segments share queries over blocks this wide (planBundles; 1: off)
+    int bundleBlock = 1;       // primary segments share queries over blocks this wide (planBundles; 1: off)
+    bool emittersSeen = true;  // false: the bounce filter leaves out emitters seen directly (0 events)
 };
 
 // The estimators a camera path asks (either may be null: that stage is off for the scene).

@@ -15,6 +15,7 @@
 #include "transport/free_flight.h"
 #include "transport/interaction.h"
 
+#include <climits>
 #include <vector>
 
 namespace tpb {
@@ -34,6 +35,11 @@ struct PathContext {
     // aimEmitOpl (scanEmitOpl). Null: every laser keeps its own direction.
     const Vec3* aim = nullptr;
     double aimEmitOpl = 0.0;
+    // The bounce filter (RenderSettings::bounceMin/bounceMax) and the scattering vertices of the
+    // camera path up to the one connecting now (a laser's spot adds one event).
+    int bounceMin = 0, bounceMax = INT_MAX;
+    int vertices = 0;
+    bool keeps(int events) const { return events >= bounceMin && events <= bounceMax; }
 };
 
 // The spot of laser `li`: where its beam (from disc point (u1, u2)) first meets a surface. A diffuse
@@ -164,7 +170,7 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
             break;
         }
     }
-    if (isBlack(Li)) return;
+    if (isBlack(Li) || !ctx.keeps(ctx.vertices + (light.type == LightType::Laser ? 1 : 0))) return;
     const Vec3 w = glm::normalize(y - x);
     const Color f = scatter(w);
     if (isBlack(f)) return;
@@ -277,8 +283,10 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                 // A scattering vertex on this segment would be at depth + 1 <= maxDepth.
                 const double sigmaBar = m.samplingSigma();
                 const SegmentMis mis{ray, s.equiangular ? std::min(dSurf, equiangularReach(m)) : 0.0, sigmaBar};
-                if (s.equiangular)
+                if (s.equiangular) {
+                    ctx.vertices = depth + 1;  // the equiangular point is this segment's scattering vertex
                     equiangularSegment(ctx, rng, mis, region, regions, beta, oplCam, oplUnw, nonSpecular);
+                }
                 const FreeFlight ff = sampleFreeFlight(region, ray, dSurf, rng);
                 if (ff.scattered) {
                     // Medium scattering vertex.
@@ -294,6 +302,7 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
                     const Vec3 x = ray.at(d);
                     ++depth;
                     const Vec3 wi = ray.d;
+                    ctx.vertices = depth;
                     nextEvent(ctx, rng, x, Vec3(0.0), regions, beta, oplCam, oplUnw, s.equiangular ? &mis : nullptr, d,
                               [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(wi, w))); });
                     if (depth >= s.maxDepth) {
@@ -327,7 +336,7 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
         if (si.kind == SurfaceKind::Emitter) {  // emitter: visible from its front side, absorbs
             if (si.front && emitterVisible) {
                 const Light& l = scene.lights[si.shape->areaLight];
-                splat(ctx, beta * l.areaRadiance(), l.emitOpl + oplCam, l.emitOpl + oplUnw);
+                if (ctx.keeps(depth)) splat(ctx, beta * l.areaRadiance(), l.emitOpl + oplCam, l.emitOpl + oplUnw);
             }
             return;
         }
@@ -350,6 +359,7 @@ void tracePath(PathContext& ctx, const RenderSettings& s, Ray ray, Rng& rng) {
             nonSpecular = true;
             const Color fr = mat.albedo * kInvPi;
             const Vec3 origin = scene.bounceOrigin(ray, *hit, ng);
+            ctx.vertices = depth;
             nextEvent(ctx, rng, hit->p, origin - hit->p, regions, beta, oplCam, oplUnw, nullptr, 0.0,
                       [&](const Vec3& w) {
                           if (glm::dot(w, ng) <= 0.0) return Color(0.0);  // light behind the surface
@@ -413,6 +423,8 @@ void pathTracePixel(const Scene& scene, const RenderSettings& s, uint64_t pass, 
     const uint64_t pixelIndex = static_cast<uint64_t>(y) * static_cast<uint64_t>(scene.camera.width) + x;
     Rng rng(s.seed, Stream::PathTracer, pass, pixelIndex);
     PathContext ctx{scene, time, acc, stats, 1.0 / spp};
+    ctx.bounceMin = s.bounceMin;
+    ctx.bounceMax = s.bounceMax;
     Vec3 aim;
     if (scene.camera.scan != ScanMode::None) {
         aim = scene.camera.laserTarget(scene.camera.laserPointOf(x, y));

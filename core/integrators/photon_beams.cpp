@@ -38,6 +38,8 @@ PhotonPassParams photonPassFor(const Scene& scene, const RenderSettings& s, cons
     pt.filmEndOpl = filmEndOpl;
     pt.threads = threads;
     pt.maxMapBytes = s.maxPhotonMapBytes > 0 ? s.maxPhotonMapBytes : maxFilmBytes();
+    pt.minEvents = s.bounceMin;
+    pt.maxEvents = s.bounceMax;
     return pt;
 }
 
@@ -77,6 +79,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     camera_.seed = settings_.seed;
     camera_.pass = ctx.pass;
     camera_.maxDepth = settings_.maxDepth;
+    camera_.emittersSeen = settings_.bounceMin == 0;
     scratch_.resize(static_cast<size_t>(ctx.threads));
     for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
     tileStats_.assign(static_cast<size_t>(ctx.tiles), CameraPassStats{});

@@ -1,5 +1,8 @@
 #include "integrators/render_settings.h"
 
+#include <climits>
+#include <tuple>
+
 #include "base/error.h"
 #include "estimators/estimator_names.h"
 #include "base/memory.h"
@@ -52,6 +55,8 @@ RenderSettings RenderSettings::fromDesc(const RenderDesc& r, double sceneDiagona
     s.passes = r.passes;
     s.timeBudgetSec = r.timeBudgetSec;
     s.maxDepth = r.maxDepth;
+    s.bounceMin = r.bounceMin;
+    s.bounceMax = r.bounceMax;
     s.seed = r.seed;
     s.threads = r.threads;
     s.profile = r.timeProfile;
@@ -78,6 +83,7 @@ void RenderSettings::apply(const SettingsOverrides& o) {
     if (o.alpha) alpha = *o.alpha;
     if (o.threads) threads = *o.threads;
     if (o.maxDepth) maxDepth = *o.maxDepth;
+    if (o.bounces) std::tie(bounceMin, bounceMax) = *o.bounces;
     if (o.seed) seed = *o.seed;
     if (o.samplesPerPixel) samplesPerPixel = *o.samplesPerPixel;
     if (o.profile) profile = *o.profile;
@@ -217,6 +223,19 @@ std::vector<std::string> RenderSettings::validate(const SettingsSource& src) {
             "must be a finite number of seconds >= 0 (0 = no time budget)", shortNumber(timeBudgetSec));
     c.check(maxDepth >= 1, c.field("max_depth", "--max-depth", ov.maxDepth.has_value()),
             "must be >= 1 (1 = single scattering)", std::to_string(maxDepth));
+    const Field bounces = c.field("bounces", "--bounces", ov.bounces.has_value());
+    c.check(bounceMin >= 0 && bounceMin <= bounceMax, bounces, "must be MIN:MAX with 0 <= MIN <= MAX",
+            std::to_string(bounceMin) + ":" + std::to_string(bounceMax));
+    // Photon beams filter where photons are stored, counting the camera path's gathering event
+    // only: exact unless a camera path bounces off a mirror or glass before it gathers.
+    if (bounceFilter() && method == Method::Beams && src.desc)
+        for (const MaterialDesc& m : src.desc->materials)
+            if (m.type == MaterialType::Mirror || m.type == MaterialType::Dielectric)
+                c.fail(bounces, c.name(bounces) +
+                                    ": the photon beams' bounce filter does not count a camera path's mirror and "
+                                    "glass bounces yet, and the scene has a " +
+                                    materialTypeName(m.type) + " material (\"" + m.name +
+                                    "\"); use the path tracer (--method pt) or drop the filter");
     c.check(warmupPasses >= 0 && warmupPasses <= kMaxWarmupPasses, c.field("warmup", "--warmup", ov.warmup.has_value()),
             "must be an integer from 0 (no warm-up) to " + std::to_string(kMaxWarmupPasses) +
                 " (warm-up passes with fewer photons)",
@@ -294,6 +313,9 @@ Record settingsRecord(const RenderSettings& s) {
     put("passes", static_cast<int64_t>(s.passes));
     put("time_budget_s", s.timeBudgetSec);
     put("max_depth", static_cast<int64_t>(s.maxDepth));
+    if (s.bounceFilter())
+        put("bounces", std::to_string(s.bounceMin) + ":" +
+                           (s.bounceMax == INT_MAX ? std::string("") : std::to_string(s.bounceMax)));
     put("seed", s.seed);
     put("threads", static_cast<int64_t>(s.threads));
     if (s.method == Method::Beams) {

@@ -42,6 +42,7 @@ struct SettingsOverrides {
     bool autoRadius = false;  // --auto-radius: the radius from a pilot pass (auto_radius.h)
     std::optional<double> alpha;
     std::optional<int> threads, maxDepth, samplesPerPixel;
+    std::optional<std::pair<int, int>> bounces;  // --bounces
     std::optional<uint64_t> seed;
     std::optional<TimeProfile> profile;
     std::optional<BeamLength> beamLength;
@@ -77,8 +78,14 @@ struct RenderSettings {
     int64_t passes = 16;         // 0 = until the time budget (or an interrupt)
     double timeBudgetSec = 0.0;  // 0 = no budget
     int maxDepth = 16;           // scattering vertices of a path (null crossings do not count)
-    uint64_t seed = 1;           // pass i depends only on (seed, i)
-    int threads = 0;             // 0 = all cores
+    // Bounce filter: only light whose path from the light to the sensor has bounceMin..bounceMax
+    // scattering events (surface or medium; a laser's spot counts as one) reaches the film. E.g.
+    // NLOS: 3..3 is the relay wall's third bounce alone, 2..INT_MAX leaves out the wall's direct
+    // response. Default: everything.
+    int bounceMin = 0, bounceMax = INT_MAX;  // (0: an emitter seen directly)
+    bool bounceFilter() const { return bounceMin > 0 || bounceMax < INT_MAX; }
+    uint64_t seed = 1;  // pass i depends only on (seed, i)
+    int threads = 0;    // 0 = all cores
 
     // ---- photon beams (paper Sec. 4) ----
     int64_t photonsPerPass = 20000;

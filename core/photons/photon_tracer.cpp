@@ -120,11 +120,11 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
                     len = openBeamLength(scene, m, region.ior, opl, s.filmEndOpl);
                     out.cutFlux += power * m.transmittance(len);  // what flows on past the beam's end
                 }
-                if (len > 0.0 && std::isfinite(len))
+                if (len > 0.0 && std::isfinite(len) && s.keeps(static_cast<uint32_t>(depth)))
                     out.beams.push_back(
                         {ray.o, ray.d, len, power, opl, regions.top(), static_cast<uint32_t>(depth), from, fromOpl});
             }
-            if (s.storePoints && ff.scattered) {
+            if (s.storePoints && ff.scattered && s.keeps(static_cast<uint32_t>(depth))) {
                 // The point at the end of this segment (header): Phi T(d) / (sigma_bar Tbar(d)) per
                 // channel, as one exponent so that neither transmittance underflows on its own.
                 const double sigmaBar = m.samplingSigma(), d = ff.distance;
@@ -158,7 +158,7 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
             case SurfaceKind::Emitter:
             case SurfaceKind::Absorber: return true;  // emitters and unassigned shapes absorb
             case SurfaceKind::Diffuse: {
-                if (s.storeSurfacePhotons)
+                if (s.storeSurfacePhotons && s.keeps(static_cast<uint32_t>(depth)))
                     out.photons.push_back({hit->p, ray.d, si.ng, power, opl, hit->t, region.ior});
                 const Vec3 newDir =
                     glm::normalize(toWorld(sampleCosineHemisphere(rng.uniform(), rng.uniform()), si.ns));

@@ -33,6 +33,7 @@
 #include "transport/interaction.h"
 
 #include <atomic>
+#include <climits>
 #include <cstdint>
 #include <vector>
 
@@ -123,6 +124,15 @@ struct PhotonPassParams {
     // A scan's laser point (scene/camera.h laserTarget): light `aimLight` (a laser) is aimed at
     // `aimTarget` instead of its own direction, and the photons' random numbers are keyed by
     // `laserPoint` too, so every laser point of a pass has its own photons. -1: no aim.
+    // The bounce filter (RenderSettings::bounceMin/bounceMax): only photons whose light path has
+    // minEvents..maxEvents events where a camera path gathers them are stored (a beam or point of
+    // depth d: d + 1, the camera's scattering point included; a surface photon landing after d
+    // events: d + 1, its landing included). The photons themselves go on: same paths either way.
+    int minEvents = 0, maxEvents = INT_MAX;
+    bool keeps(uint32_t depth) const {
+        const int64_t n = static_cast<int64_t>(depth) + 1;
+        return n >= minEvents && n <= maxEvents;
+    }
     int aimLight = -1;
     Vec3 aimTarget{0.0};
     double aimEmitOpl =

@@ -75,6 +75,14 @@ Fingerprint sceneFingerprint(const SceneDesc& d) {
         w.text("camera.type", "relay_wall");
         w("camera.wall", d.camera.wallShape);
         w.text("camera.time_origin", d.camera.timeOrigin == WallTimeOrigin::Wall ? "wall" : "sensor");
+        if (d.camera.scan != ScanMode::None) {  // (absent without a scan: relay-wall checkpoints still resume)
+            w.text("camera.scan.mode", scanModeName(d.camera.scan));
+            w("camera.scan.laser", d.camera.scanLaser);
+            w("camera.scan.point_u", d.camera.scanPointU);
+            w("camera.scan.point_v", d.camera.scanPointV);
+            w("camera.scan.grid_x", d.camera.laserGridX);
+            w("camera.scan.grid_y", d.camera.laserGridY);
+        }
     }
     w("film.auto_range", d.film.autoRange);
     w("film.bins", d.film.bins);
@@ -174,7 +182,7 @@ Fingerprint settingsFingerprint(const RenderSettings& s) {
                                             "time_profile",     "beam_length",
                                             "volume_estimator", "surface_estimator",
                                             "time_kernel",      "samples_per_pixel",
-                                            "equiangular"};
+                                            "equiangular",      "bounces"};
     const Record record = settingsRecord(s);
     Fingerprint fp;
     for (const char* key : kPassKeys)

@@ -158,6 +158,7 @@ struct RenderDesc {
     int passes = 16;              // 0 = until the time budget
     double timeBudgetSec = 0.0;   // 0 = no budget
     int maxDepth = 16;
+    int bounceMin = 0, bounceMax = INT_MAX;  // "bounces": the bounce filter (RenderSettings::bounceMin)
     uint64_t seed = 1;
     int threads = 0;  // 0 = all cores
     EmissionMode emission = EmissionMode::Delta;

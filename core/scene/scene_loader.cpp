@@ -82,6 +82,7 @@
 //     "passes": 16,                      // integer >= 0, 0 = until the time budget
 //     "time_budget_s": 0,                // >= 0, 0 = none
 //     "max_depth": 16,                   // integer >= 1
+//     "bounces": [2, 3],                 // bounce filter: only light with 2..3 scattering events (or n: exactly n) [all]
 //     "seed": 1,                         // integer in [0, 2^64)
 //     "threads": 0,                      // integer >= 0, 0 = all cores; above 4 x the cores: capped
 //     "emission": "delta",               // "delta" | "continuous"
@@ -830,6 +831,17 @@ void readRender(Context& ctx, const JsonValue& obj, RenderDesc& r) {
     r.passes = static_cast<int>(b.integer("passes", INT_MIN, INT_MAX).value_or(r.passes));
     r.timeBudgetSec = b.number("time_budget_s", r.timeBudgetSec);
     r.maxDepth = static_cast<int>(b.integer("max_depth", INT_MIN, INT_MAX).value_or(r.maxDepth));
+    if (const JsonValue* v = b.get("bounces")) {
+        // n (exactly n events) or [min, max].
+        if (v->isNumber()) {
+            r.bounceMin = r.bounceMax = b.toInt(*v, "bounces", "bounces", 0);
+        } else {
+            if (!v->isArray() || v->items.size() != 2) b.wrongType("bounces", "an integer n or a [min, max] array");
+            r.bounceMin = b.toInt(v->items[0], "bounces", "bounces", 0);
+            r.bounceMax = b.toInt(v->items[1], "bounces", "bounces", 0);
+            b.check(r.bounceMin <= r.bounceMax, "bounces", "must be [min, max] with min <= max");
+        }
+    }
     if (const JsonValue* s = b.get("seed")) {
         if (!s->isNumber()) b.wrongType("seed", "an integer");
         uint64_t seed = 0;

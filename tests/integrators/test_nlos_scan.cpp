@@ -5,6 +5,7 @@
 // origins, and that a scan's film does not depend on the number of threads.
 #include "film/film_view.h"
 #include "render/driver.h"
+#include "render/fingerprint.h"
 #include "scene/scene_loader.h"
 #include "support/test_scene.h"
 #include "base/error.h"
@@ -13,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -133,6 +135,23 @@ TEST(NlosScan, BadScansAreRefusedNamingTheKey) {
     EXPECT_THAT(errorOf(scanScene(R"({"mode": "confocal", "laser": "laser"})", "",
                                   R"("name": "laser", "type": "laser", "position": [0, 0, 1.5])")),
                 HasSubstr("shape \"target\" is in the way"));
+}
+
+// A checkpoint of one scan does not resume another: the scan enters the scene's fingerprint.
+TEST(NlosScan, TheScanIsPartOfTheFingerprint) {
+    const auto fp = [](const std::string& scan) {
+        return sceneFingerprint(loadSceneFromString(scanScene(scan), "scan.json"));
+    };
+    const Fingerprint confocal = fp(R"({"mode": "confocal", "laser": "laser"})");
+    EXPECT_THAT(fingerprintChanges(confocal, fp(R"({"mode": "single", "laser": "laser"})")),
+                ::testing::Contains(HasSubstr("camera.scan.mode")));
+    EXPECT_THAT(fingerprintChanges(fp(R"({"mode": "exhaustive", "laser": "laser", "grid": [2, 2]})"),
+                                   fp(R"({"mode": "exhaustive", "laser": "laser", "grid": [2, 3]})")),
+                ::testing::Contains(HasSubstr("camera.scan.grid_y")));
+    EXPECT_THAT(fingerprintChanges(fp(R"({"mode": "single", "laser": "laser", "point": [0.5, 0.5]})"),
+                                   fp(R"({"mode": "single", "laser": "laser", "point": [0.25, 0.5]})")),
+                ::testing::Contains(HasSubstr("camera.scan.point_u")));
+    EXPECT_TRUE(fingerprintChanges(confocal, fp(R"({"mode": "confocal", "laser": "laser"})")).empty());
 }
 
 // The target's response at every wall point starts at the geometric first arrival (laser ->
@@ -271,6 +290,72 @@ TEST_P(NlosScanMethods, PhotonBeamsMatchThePathTracer) {
 
 INSTANTIATE_TEST_SUITE_P(Media, NlosScanMethods, ::testing::Values(false, true),
                          [](const auto& info) { return std::string(info.param ? "fog" : "vacuum"); });
+
+// The bounce filter partitions the light: the films of bounces 0..1, 2..3 and 4.. add up to the
+// unfiltered film (the photons and paths are the same whatever the filter; only what is stored or
+// connected changes), for both methods; the laser spot's own response is 1 bounce and the target's
+// first response 3, so 2..3 holds the target and nothing before it.
+class NlosBounceFilter : public ::testing::TestWithParam<Method> {};
+
+TEST_P(NlosBounceFilter, FiltersPartitionTheFilm) {
+    const Method method = GetParam();
+    const auto render = [&](int lo, int hi) {
+        SettingsOverrides o;
+        o.method = method;
+        o.maxDepth = 8;
+        o.photons = 5000;
+        o.samplesPerPixel = 16;
+        if (lo > 0 || hi < INT_MAX) o.bounces = std::pair<int, int>{lo, hi};
+        const test::TestScene p =
+            prepare(scanScene(R"({"mode": "confocal", "laser": "laser"})", R"(, "time_origin": "wall")"), o);
+        Driver drv(*p.scene, p.settings, p.time);
+        EXPECT_TRUE(drv.runPass(1));
+        const auto snap = drv.snapshot();
+        std::vector<double> v;
+        const std::vector<float> steady = steadyImage(*snap);
+        v.assign(steady.begin(), steady.end());
+        for (int k = 0; k < p.time.bins; ++k) {
+            const std::vector<float> img = frameImage(*snap, k, TimeAxis::Real, EmissionMode::Delta);
+            v.insert(v.end(), img.begin(), img.end());
+        }
+        return v;
+    };
+    const std::vector<double> all = render(0, INT_MAX), direct = render(0, 1), third = render(2, 3),
+                              later = render(4, INT_MAX);
+    ASSERT_EQ(all.size(), third.size());
+    double total = 0.0, worst = 0.0, sumThird = 0.0, sumLater = 0.0, sumDirect = 0.0;
+    for (size_t i = 0; i < all.size(); ++i) {
+        total += all[i];
+        worst = std::max(worst, std::abs(direct[i] + third[i] + later[i] - all[i]));
+        sumDirect += direct[i], sumThird += third[i], sumLater += later[i];
+    }
+    EXPECT_LE(worst, 1e-5 * total / 1000.0 + 1e-12) << "the filtered films do not add up to the film";
+    EXPECT_GT(sumThird, 0.0);
+    if (method == Method::Beams) {
+        EXPECT_GT(sumDirect, 100.0 * sumThird);  // the laser spot, seen through the surface kernel
+    } else {
+        EXPECT_EQ(sumDirect, 0.0);  // a delta on the wall: the path tracer never sees it
+        EXPECT_GT(sumLater, 0.0);   // (5 bounces: too rare for one pass of the beams)
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, NlosBounceFilter, ::testing::Values(Method::Beams, Method::PathTracer),
+                         [](const auto& info) { return std::string(info.param == Method::Beams ? "beams" : "pt"); });
+
+// Bounce filters are refused with the key when they cannot be honoured.
+TEST(NlosScan, BadBounceFiltersAreRefused) {
+    std::string json = scanScene(R"({"mode": "confocal", "laser": "laser"})");
+    const std::string withFilter = [&] {
+        std::string j = json;
+        j.replace(j.find(R"("max_depth": 4)"), 14, R"("max_depth": 4, "bounces": [3, 2])");
+        return j;
+    }();
+    EXPECT_THAT(errorOf(withFilter), HasSubstr("render.bounces"));
+    std::string mirror = json;
+    mirror.replace(mirror.find(R"("max_depth": 4)"), 14, R"("max_depth": 4, "bounces": 3)");
+    mirror.replace(mirror.find(R"("materials": {)"), 14, R"("materials": {"m": {"type": "mirror"}, )");
+    EXPECT_THAT(errorOf(mirror), HasSubstr("does not count a camera path's mirror and glass bounces"));
+}
 
 // Laser points are rendered one after the other and their pixels gathered on any thread: the
 // film is the same for 1 and 2 threads.
