@@ -42,38 +42,56 @@ struct PathContext {
     bool keeps(int events) const { return events >= bounceMin && events <= bounceMax; }
 };
 
-// The spot of laser `li`: where its beam (from disc point (u1, u2)) first meets a surface. A diffuse
-// surface re-emits the flux the leg transmits as a Lambertian point, of radiant intensity
-// Phi T_leg (rho / pi) cos(n, w) towards w (W / sr), so a vertex can connect to it: the laser's
-// delta direction is carried by the leg, and the spot is an ordinary point light with a cosine
-// lobe. No spot (returns false) when the beam meets glass, a mirror, a null boundary or nothing,
-// or a scattering medium fills the leg (its in-scattered light is not connected: the photon beams
-// render it).
-struct LaserSpot {
-    Vec3 anchor;              // rayEps in front of the spot, on the laser's side: where shadow rays end
-    Vec3 normal;              // the surface's normal, facing the laser
-    Color intensityCos{0.0};  // Phi T_leg rho / pi (W / sr per unit cosine)
-    double opl = 0.0;         // pulse instant + the leg's OPL
+// Where equiangular sampling stops on a segment: transmittance e^-30 in the clearest channel.
+// Beyond it, free-flight vertices alone connect to delta lights, so an unbounded segment (an open
+// medium) neither wastes samples at negligible transmittance nor puts them at absurd times.
+double equiangularReach(const Medium& m) {
+    const double sigmaMin = std::min(m.sigma_t.x, std::min(m.sigma_t.y, m.sigma_t.z));
+    return sigmaMin > 0.0 ? 30.0 / sigmaMin : kInf;
+}
+
+// A laser's leg: its beam (from disc point (u1, u2), aimed at the pixel's laser point for a scan)
+// up to the first surface, inside the region the laser sits in. Two ways to connect a vertex x to it:
+//  - the spot, where the beam meets a diffuse surface: it re-emits the flux the leg transmits as a
+//    Lambertian point, of radiant intensity Phi T_leg (rho / pi) cos(n, w) towards w (W / sr);
+//  - the beam itself when the region scatters: a line light whose point y(s) sends
+//    Phi T(s) sigma_s p(cos(d, w)) ds towards w; s is sampled equiangularly about x
+//    (base/sampling.h), which keeps the 1 / |x - y|^2 bounded next to the beam.
+// The laser's delta direction is carried by the leg in both. Not connected: a beam that meets glass,
+// a mirror or a null boundary first (no spot), and light scattered beyond the laser's own region.
+struct LaserLeg {
+    Ray ray;
+    double length = kInf;  // to the first surface
+    const Region* region = nullptr;
+    double emitOpl = 0.0;                   // pulse instant (a scan's: scanEmitOpl)
+    bool spot = false;                      // the leg ends on a diffuse surface
+    Vec3 spotAnchor{0.0}, spotNormal{0.0};  // rayEps in front of the spot; its normal, facing the laser
+    Color spotIntensityCos{0.0};            // Phi T_leg rho / pi (W / sr per unit cosine)
+    double spotOpl = 0.0;                   // pulse instant + the leg's OPL
+    bool scattering() const { return region->hasMedium && region->medium.scattering; }
 };
 
-bool laserSpot(const PathContext& ctx, int li, double u1, double u2, LaserSpot& spot) {
+LaserLeg laserLeg(const PathContext& ctx, int li, double u1, double u2) {
     const Scene& scene = ctx.scene;
     const Light& light = scene.lights[li];
     const bool aimed = ctx.aim && li == scene.camera.scanLaser;
+    LaserLeg leg;
     const Vec3 dir = aimed ? glm::normalize(*ctx.aim - light.position) : light.direction;
-    const Ray ray{light.laserOrigin(u1, u2, dir), dir};
-    const std::optional<SurfaceHit> hit = scene.geometry.intersect(ray);
-    if (!hit) return false;
-    const Region& leg = scene.regions[static_cast<size_t>(scene.lightPlacement[static_cast<size_t>(li)].regions.top())];
-    if (leg.hasMedium && leg.medium.scattering) return false;
-    const SurfaceInteraction si = interact(scene, ray, *hit);
-    if (si.kind != SurfaceKind::Diffuse) return false;
-    const SegmentTransport seg = crossSegment(leg, ray, hit->t);
-    spot.anchor = scene.bounceOrigin(ray, *hit, si.ng);
-    spot.normal = si.ng;
-    spot.intensityCos = light.power * seg.transmittance * si.material->albedo * kInvPi;
-    spot.opl = (aimed ? ctx.aimEmitOpl : light.emitOpl) + seg.opl;
-    return true;
+    leg.ray = {light.laserOrigin(u1, u2, dir), dir};
+    leg.region = &scene.regions[static_cast<size_t>(scene.lightPlacement[static_cast<size_t>(li)].regions.top())];
+    leg.emitOpl = aimed ? ctx.aimEmitOpl : light.emitOpl;
+    const std::optional<SurfaceHit> hit = scene.geometry.intersect(leg.ray);
+    if (!hit) return leg;
+    leg.length = hit->t;
+    const SurfaceInteraction si = interact(scene, leg.ray, *hit);
+    if (si.kind != SurfaceKind::Diffuse) return leg;
+    const SegmentTransport seg = crossSegment(*leg.region, leg.ray, hit->t);
+    leg.spot = true;
+    leg.spotAnchor = scene.bounceOrigin(leg.ray, *hit, si.ng);
+    leg.spotNormal = si.ng;
+    leg.spotIntensityCos = light.power * seg.transmittance * si.material->albedo * kInvPi;
+    leg.spotOpl = leg.emitOpl + seg.opl;
+    return leg;
 }
 
 // One contribution at real time tReal and unwarped time tUnw.
@@ -118,8 +136,9 @@ bool isDeltaPositionLight(const Light& l) { return l.type == LightType::Point ||
 // on an area light): light term, shadow ray from x + offset, splat at the connection's times.
 // `scatter(w)` is the vertex's phase function or BSDF-times-cosine for the direction w to the light.
 template <class Scatter>
-void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, const Vec3& x, const Vec3& offset,
-                  const RegionStack& regions, const Color& beta, double oplCam, double oplUnw, Scatter&& scatter) {
+void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, double u3, double u4, const Vec3& x,
+                  const Vec3& offset, const RegionStack& regions, const Color& beta, double oplCam, double oplUnw,
+                  Scatter&& scatter) {
     const Scene& scene = ctx.scene;
     const Light& light = scene.lights[li];
     Vec3 y;
@@ -154,19 +173,41 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
             break;
         }
         case LightType::Laser: {
-            LaserSpot spot;
-            if (!laserSpot(ctx, li, u1, u2, spot)) {
+            const LaserLeg leg = laserLeg(ctx, li, u1, u2);
+            const bool beam = leg.scattering() && leg.length > 0.0;
+            if (!leg.spot && !beam) {
                 ++ctx.stats.laserSamples;
                 return;
             }
-            y = spot.anchor;
-            const Vec3 v = y - x;
-            const double d2 = glm::dot(v, v);
-            if (!(d2 > 0.0)) return;
-            const double cosOut = -glm::dot(spot.normal, v) / std::sqrt(d2);
-            if (cosOut <= 0.0) return;  // behind the spot's surface (or along it: the wall itself)
-            Li = spot.intensityCos * (cosOut / d2);
-            emitOpl = spot.opl;
+            // The spot or the beam, with probability 1/2 each when both can be connected.
+            const bool both = leg.spot && beam;
+            const bool useSpot = leg.spot && (!both || u3 < 0.5);
+            const double choice = both ? 0.5 : 1.0;
+            if (useSpot) {
+                y = leg.spotAnchor;
+                const Vec3 v = y - x;
+                const double d2 = glm::dot(v, v);
+                if (!(d2 > 0.0)) return;
+                const double cosOut = -glm::dot(leg.spotNormal, v) / std::sqrt(d2);
+                if (cosOut <= 0.0) return;  // behind the spot's surface (or along it: the wall itself)
+                Li = leg.spotIntensityCos * (cosOut / (d2 * choice));
+                emitOpl = leg.spotOpl;
+            } else {
+                const Medium& m = leg.region->medium;
+                const double reach = std::min(leg.length, equiangularReach(m));
+                const EquiangularFrame f(leg.ray.o, leg.ray.d, reach, x);
+                if (!f.valid) return;
+                const EquiangularSample eq = f.sample(u4);
+                if (!(eq.t >= 0.0 && eq.t < reach) || !(eq.pdf > 0.0) || !std::isfinite(eq.pdf)) return;
+                y = leg.ray.at(eq.t);
+                const Vec3 v = x - y;
+                const double d2 = glm::dot(v, v);
+                if (!(d2 > 0.0)) return;
+                const double phase = m.phase.eval(glm::dot(leg.ray.d, v / std::sqrt(d2)));
+                Li = light.power * m.transmittance(eq.t) * m.sigma_s * (phase / (d2 * eq.pdf * choice));
+                emitOpl = leg.emitOpl + leg.region->ior * eq.t;
+                ++ctx.stats.equiangularSamples;
+            }
             break;
         }
     }
@@ -180,14 +221,6 @@ void connectLight(PathContext& ctx, int li, double pick, double u1, double u2, c
     if (!traceShadow(scene, x + offset, y, regions, tr, oplShadow, ctx.stats)) return;
     const Color L = beta * f * Li * tr / pick;
     splat(ctx, L, emitOpl + oplShadow + oplCam, emitOpl + oplShadow + oplUnw);
-}
-
-// Where equiangular sampling stops on a segment: transmittance e^-30 in the clearest channel.
-// Beyond it, free-flight vertices alone connect to delta lights, so an unbounded segment (an open
-// medium) neither wastes samples at negligible transmittance nor puts them at absurd times.
-double equiangularReach(const Medium& m) {
-    const double sigmaMin = std::min(m.sigma_t.x, std::min(m.sigma_t.y, m.sigma_t.z));
-    return sigmaMin > 0.0 ? 30.0 / sigmaMin : kInf;
 }
 
 // The two techniques that place a scattering point on a medium segment and connect it to a point
@@ -222,7 +255,11 @@ void nextEvent(PathContext& ctx, Rng& rng, const Vec3& x, const Vec3& offset, co
             beta *= pff / (pff + peq);
         }
     }
-    connectLight(ctx, li, pick, u1, u2, x, offset, regions, beta, oplCam, oplUnw, scatter);
+    // A laser takes two more numbers (spot or beam, the point on the beam): drawn only for lasers,
+    // so the paths of scenes without one are what they were.
+    double u3 = 0.0, u4 = 0.0;
+    if (light.type == LightType::Laser) u3 = rng.uniform(), u4 = rng.uniform();
+    connectLight(ctx, li, pick, u1, u2, u3, u4, x, offset, regions, beta, oplCam, oplUnw, scatter);
 }
 
 // The equiangular technique on one medium segment (see SegmentMis): a light picked with
@@ -248,7 +285,7 @@ void equiangularSegment(PathContext& ctx, Rng& rng, const SegmentMis& mis, const
     const Color weight = beta * m.sigma_s * m.transmittance(t) / (peq + pff);
     const double dOpl = region.ior * t;
     ++ctx.stats.equiangularSamples;
-    connectLight(ctx, li, pick, 0.0, 0.0, mis.ray.at(t), Vec3(0.0), regions, weight, oplCam + dOpl,
+    connectLight(ctx, li, pick, 0.0, 0.0, 0.0, 0.0, mis.ray.at(t), Vec3(0.0), regions, weight, oplCam + dOpl,
                  nonSpecular ? oplUnw + dOpl : 0.0,
                  [&](const Vec3& w) { return Color(m.phase.eval(glm::dot(mis.ray.d, w))); });
 }

@@ -28,11 +28,12 @@
 // direct-light paths through dielectrics are still found: by BSDF sampling an area light through
 // the specular chain. Consequences (inherent to unidirectional path tracing, not bugs):
 //  - lasers are delta in direction AND position-on-a-line: a camera path can neither connect to
-//    them nor hit them. NEE connects to the laser's spot instead: where its beam first meets a
-//    diffuse surface, a Lambertian point of intensity Phi T_leg rho / pi cos (a scan's laser aimed
-//    at the pixel's laser point). A laser whose beam meets glass, a mirror or a null boundary first,
-//    or whose leg crosses a scattering medium, contributes nothing (PathTracerStats::laserSamples);
-//    so does the spot seen directly (a delta on the wall);
+//    them nor hit them. NEE connects to the laser's leg instead (a scan's laser aimed at the
+//    pixel's laser point): to its spot, where the beam first meets a diffuse surface (a Lambertian
+//    point of intensity Phi T_leg rho / pi cos), and, when the laser's region scatters, to a point of
+//    the beam itself sampled equiangularly (a line light), each with probability 1/2. Not connected:
+//    a beam meeting glass, a mirror or a null boundary first, light it scatters beyond its own
+//    region (PathTracerStats::laserSamples), and the spot seen directly (a delta on the wall);
 //  - point and spot lights seen through a specular chain (caustics from delta lights, e.g. a
 //    point light behind glass or reflected by a mirror) are missed: the beam core's photon map and
 //    beams do capture them, so compare with such scenes only with area lights;
