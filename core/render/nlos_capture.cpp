@@ -1,6 +1,7 @@
 #include "render/nlos_capture.h"
 
 #include "base/error.h"
+#include "base/text.h"
 #include "film/film_view.h"
 
 #include <cmath>
@@ -11,10 +12,13 @@ namespace tpb {
 
 namespace {
 
+// A number YAML 1.1 readers (PyYAML) take as a float: the shortest exact decimal (base/text.h),
+// with a ".0" before an exponent that has no point ("1e-17" would be read as a string).
 std::string yamlNumber(double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.6g", v);
-    return b;
+    std::string s = shortest(v);
+    const size_t e = s.find('e');
+    if (e != std::string::npos && s.find('.') == std::string::npos) s.insert(e, ".0");
+    return s;
 }
 
 // A double-quoted YAML scalar (the JSON escapes, which YAML reads the same).

@@ -103,6 +103,11 @@ class NlosCapture(unittest.TestCase):
                 self.assertAlmostEqual(depth[3][3], TARGET_Z, places=6)
                 self.assertAlmostEqual(depth[4][4], TARGET_Z, places=6)
                 self.assertIsNone(depth[0][0])
+                # Every number is a number to a YAML reader (not a string such as "1e-17").
+                for row_d, row_n in zip(depth, info['ground_truth']['normals']):
+                    for d, n in zip(row_d, row_n):
+                        self.assertTrue(d is None or isinstance(d, (int, float)), d)
+                        self.assertTrue(n is None or all(isinstance(c, (int, float)) for c in n), n)
                 self.assertEqual(info['tpb']['scan'], 'confocal')
                 cap = bp.read_capture(h5)
                 grid = bp.make_grid(cap, 0.3, 2.0, 86)
