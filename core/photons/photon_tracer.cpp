@@ -1,5 +1,7 @@
 #include "photons/photon_tracer.h"
 
+#include <optional>
+
 #include "base/error.h"
 #include "base/memory.h"
 #include "base/parallel.h"
@@ -52,15 +54,13 @@ bool tracePhoton(const Scene& scene, const PhotonPassParams& s, int64_t index, P
     double lightPdf;
     const int li = scene.pickLight(rng.uniform(), lightPdf);
     if (li < 0 || lightPdf <= 0.0) return true;
-    const Light* emitter = &scene.lights[li];
-    Light aimed;
-    if (li == s.aimLight) {  // a scan's laser, aimed at this laser point
-        aimed = *emitter;
-        aimed.direction = glm::normalize(s.aimTarget - aimed.position);
-        aimed.emitOpl = s.aimEmitOpl;
-        emitter = &aimed;
+    std::optional<Light> aimed;  // a scan's laser, aimed at this laser point (built only then)
+    if (li == s.aimLight) {
+        aimed = scene.lights[li];
+        aimed->direction = glm::normalize(s.aimTarget - aimed->position);
+        aimed->emitOpl = s.aimEmitOpl;
     }
-    const Light& light = *emitter;
+    const Light& light = aimed ? *aimed : scene.lights[li];
     EmissionSample em = light.sampleEmission(rng, scene.rayEps);
     Color power = em.power / (lightPdf * static_cast<double>(s.powerPhotons > 0 ? s.powerPhotons : s.photons));
     const double power0 = maxComponent(power);

@@ -50,17 +50,10 @@ std::string scanScene(const std::string& scan, const std::string& cameraExtra = 
 }
 
 test::TestScene prepare(const std::string& json, const SettingsOverrides& o = {}) {
-    return test::prepareTestScene(loadSceneFromString(json, "scan.json"), o);
+    return test::testSceneFrom(json, "scan.json", o);
 }
 
-std::string errorOf(const std::string& json) {
-    try {
-        prepare(json);
-    } catch (const UserError& e) {
-        return e.what();
-    }
-    return "";
-}
+std::string errorOf(const std::string& json) { return test::prepareError(json, "scan.json"); }
 
 // The earliest time light from laser point `l` reaches the target and comes back to wall point
 // `w`: min over the target of |l - p| + |p - w| (a fine grid of the target), plus the legs laser ->

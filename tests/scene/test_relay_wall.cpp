@@ -45,17 +45,10 @@ std::string wallScene(const std::string& cameraExtra,
 
 // As the CLI prepares it, without the pilot (tests/support/test_scene.h).
 test::TestScene prepare(const std::string& json, const SettingsOverrides& o = {}) {
-    return test::prepareTestScene(loadSceneFromString(json, "wall.json"), o);
+    return test::testSceneFrom(json, "wall.json", o);
 }
 
-std::string errorOf(const std::string& json) {
-    try {
-        prepare(json);
-    } catch (const UserError& e) {
-        return e.what();
-    }
-    return "";
-}
+std::string errorOf(const std::string& json) { return test::prepareError(json, "wall.json"); }
 
 // The arrival times over pixel (i, j)'s patch of the wall: |light - x| (+ |x - sensor| when the
 // time starts at the sensor), their minimum and maximum over a fine grid of the patch.

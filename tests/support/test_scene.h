@@ -1,6 +1,7 @@
 // A scene prepared for a test as the CLI prepares it (prepareRender, render/prepare.h) but without
 // the pilot: "range": "auto" keeps the heuristic window. `sc->camera` and `*sc` reach the Scene.
 #pragma once
+#include "base/error.h"
 #include "render/prepare.h"
 #include "scene/scene_loader.h"
 
@@ -26,8 +27,20 @@ inline TestScene prepareTestScene(SceneDesc desc, const SettingsOverrides& overr
     return {std::move(p.scene), p.settings, p.time, std::move(p.source)};
 }
 
-inline TestScene testSceneFrom(const std::string& json, const std::string& path = "test.json") {
-    return prepareTestScene(loadSceneFromString(json, path));
+inline TestScene testSceneFrom(const std::string& json, const std::string& path = "test.json",
+                               const SettingsOverrides& overrides = {}) {
+    return prepareTestScene(loadSceneFromString(json, path), overrides);
+}
+
+// The UserError message of loading and preparing `json` so, "" when it prepares.
+inline std::string prepareError(const std::string& json, const std::string& path = "test.json",
+                                const SettingsOverrides& overrides = {}) {
+    try {
+        testSceneFrom(json, path, overrides);
+    } catch (const UserError& e) {
+        return e.what();
+    }
+    return "";
 }
 
 }  // namespace tpb::test
