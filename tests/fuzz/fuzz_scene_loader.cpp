@@ -4,6 +4,7 @@
 // any other exception is a bug. A scene that loads must also respect the documented ranges
 // (docs/user/scenes.md "Scene format"), so a validation gap is reported as a crash too (__builtin_trap).
 #include "base/error.h"
+#include "integrators/render_settings.h"
 #include "scene/scene_loader.h"
 
 #include <cmath>
@@ -42,11 +43,18 @@ void checkInvariants(const tpb::SceneDesc& d) {
         require(std::isfinite(l.emitOpl));
         require(l.laserRadius >= 0.0);
     }
-    const tpb::RenderDesc& r = d.render;
-    require(r.photonsPerPass >= 1 && r.maxDepth >= 1 && r.passes >= 0 && r.threads >= 0);
-    require(r.alpha > 0.0 && r.alpha <= 1.0);
-    require(r.radius > 0.0 && r.surfaceRadius > 0.0);
-    require(r.timeBudgetSec >= 0.0);
+}
+
+// The render block is range-checked once, by RenderSettings::validate (the loader only parses it;
+// prepareRender calls validate again with the built scene's diagonal): what passes must be usable.
+void checkSettings(const tpb::SceneDesc& d) {
+    tpb::RenderSettings s = tpb::RenderSettings::fromDesc(d.render, 1.0);
+    s.validate({&d, nullptr, 0.0});
+    require(s.photonsPerPass >= 1 && s.maxDepth >= 1 && s.passes >= 0 && s.threads >= 0);
+    require(s.alpha > 0.0 && s.alpha <= 1.0);
+    require(s.beamRadius0 > 0.0 && s.surfaceRadius0 > 0.0);
+    require(s.timeBudgetSec >= 0.0 && std::isfinite(s.timeBudgetSec));
+    require(s.bounceMin >= 0 && s.bounceMin <= s.bounceMax);
 }
 
 }  // namespace
@@ -57,6 +65,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         // A folder that does not exist: relative mesh paths never name a real file.
         const tpb::SceneDesc desc = tpb::loadSceneFromString(text, "/nonexistent/tpb-fuzz/scene.json");
         checkInvariants(desc);
+        checkSettings(desc);
     } catch (const tpb::UserError&) {
         // The expected outcome for bad input.
     }
