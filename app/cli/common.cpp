@@ -228,6 +228,9 @@ void RenderOverrides::add(CLI::App* cmd) {
                        "(e.g. box:0.05)";
             },
             "none|box|box:WIDTH"));
+    cmd->add_option("--phasor", phasor,
+                    "Exact phasor film beside the bins (docs/user/phasor.md): F1,F2,... (cycles per m of optical "
+                    "path) | wl:WL1,WL2,... (wavelengths, m) | band:MEAN:SIGMA (mitransient's phasor film band, m)");
     cmd->add_option("--accel", accel, "Beam query backend: bvh | embree | brute")
         ->check(CLI::IsMember({"bvh", "embree", "brute"}));
 }
@@ -262,6 +265,7 @@ SettingsOverrides RenderOverrides::settings() const {
     o.volumeEstimator = estimator;
     o.surfaceEstimator = surfaceEstimator;
     if (timeKernel) o.timeKernel = parseTimeKernel(*timeKernel);
+    o.phasor = phasor;
     return o;
 }
 
@@ -608,6 +612,8 @@ OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     f.files = {kPreviewExrName, kPreviewPngName, kSteadyExrName, kSteadyPngName, kSummaryName};
     if (r.strip > 0) f.files.push_back(kStripName);
     if (r.captureScene) f.files.push_back(kCaptureH5Name);
+    if (r.phasor)
+        for (const std::string& n : phasorFileNames()) f.files.push_back(n);
     if (r.npy)
         for (const std::string& n : volumeFileNames()) f.files.push_back(n);
     if (r.contactSheet > 0) f.files.push_back(contactSheetName());
@@ -779,6 +785,8 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         writeNlosHdf5(r.out + "/" + kCaptureH5Name, nlosCapture(*snap, *r.captureScene, r.provenance.scene));
         rep.kept.push_back(kCaptureH5Name);
     }
+    if (r.phasor)
+        for (const std::string& n : exportPhasorNpy(*snap, r.out, r.opt, r.provenance)) rep.kept.push_back(n);
     rep.kept.push_back(kSummaryName);
     writeSummary(false);
 

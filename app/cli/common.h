@@ -36,7 +36,8 @@ struct RenderOverrides {
     std::optional<std::string> accel;    // "bvh" | "embree" | "brute"; unset = the default
     std::optional<std::string> bounces;  // "N", "MIN:MAX" or "MIN:" (the bounce filter)
     std::optional<std::string> estimator, surfaceEstimator, timeKernel;  // names checked by validate()
-    bool ptFreeFlight = false;  // path tracer: no equiangular sampling (for comparisons)
+    std::optional<std::string> phasor;  // --phasor, read by prepareRender (film/phasor.h)
+    bool ptFreeFlight = false;          // path tracer: no equiangular sampling (for comparisons)
 
     void add(CLI::App* cmd);
     // The overrides the flags give (prepareRender applies and validates them).
@@ -123,6 +124,7 @@ struct RenderOutputs {
     // A relay-wall scan: capture.h5 in the NLOS toolkit's layout (render/nlos_capture.h), written
     // with the steady image.
     const Scene* captureScene = nullptr;
+    bool phasor = false;  // the film has a phasor film: phasor.npy & co (volume_export.h)
 };
 // The files RenderOutputs writes for a film of `bins` bins (preview.exr/png included).
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins);

@@ -251,6 +251,7 @@ void run(RenderCmd& c) {
     outputs.fps = c.fps;
     outputs.contactSheet = c.contactSheet;
     if (prepared.scene->camera.scan != ScanMode::None) outputs.captureScene = prepared.scene.get();
+    outputs.phasor = prepared.settings.phasor.active();
     outputs.tone.exposureEv = static_cast<float>(c.videoEv);
     outputs.tone.falseColor = c.falseColour;
     outputs.tone.srgb = !c.noSrgb;

@@ -127,6 +127,11 @@ void ExportJob::run(std::shared_ptr<const Driver> driver, ExportRequest req) {
             const std::vector<std::string> names = exportVolumeNpy(
                 film, dir, opt, provenanceOf(*driver, req.scenePath), [&](int d, int) { done_ = base + d; }, &cancel_);
             if (!cancel_) wrote(dir + "/ (transient.npy, transient.json, steady/before/after.npy)");
+            // A film with phasor frequencies (--phasor): its exact phasors beside the volume.
+            if (!cancel_ && film.phasor().active()) {
+                exportPhasorNpy(film, dir, opt, provenanceOf(*driver, req.scenePath));
+                wrote(dir + "/ (phasor.npy, phasor_rgb.npy, phasor.json)");
+            }
         }
         if (req.contactSheet && !cancel_) {
             step("contact sheet");

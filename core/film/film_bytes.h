@@ -9,6 +9,8 @@
 
 namespace tpb {
 
-uint64_t filmBytes(int width, int height, int bins);
+// With a phasor film of `phasorFrequencies` frequencies: 2 axes x (Re, Im) x RGB doubles more per
+// frequency (film/phasor.h).
+uint64_t filmBytes(int width, int height, int bins, int phasorFrequencies = 0);
 
 }  // namespace tpb

@@ -6,7 +6,9 @@
 
 namespace tpb {
 
-void TileSums::zero(size_t pixels, int bins_) {
+void TileSums::zero(size_t pixels, int bins_, int phasorCount_) {
+    phasorCount = phasorCount_;
+    for (int a = 0; a < 2; ++a) phasor[a].assign(pixels * phasorStride(), 0.0);
     passes = 0;
     weight = 0.0;
     binCount = bins_;
@@ -50,8 +52,8 @@ void TileBlock::invalidateCumulative() {
     }
 }
 
-FilmLayout::FilmLayout(int w, int h, const TimeBins& t)
-    : width(w), height(h), tilesX((w + kTile - 1) / kTile), time(t) {
+FilmLayout::FilmLayout(int w, int h, const TimeBins& t, const PhasorSpec& p)
+    : width(w), height(h), tilesX((w + kTile - 1) / kTile), time(t), phasor(p) {
     TPB_CHECK(w > 0 && h > 0 && t.bins > 0);
     const int tilesY = (h + kTile - 1) / kTile;
     for (int ty = 0; ty < tilesY; ++ty)

@@ -24,6 +24,7 @@
 // unchanged (an in-place add drops them; a block that the next pass replaces takes them with it).
 #pragma once
 #include "base/large_buffer.h"
+#include "film/phasor.h"
 #include "film/time_splat.h"
 
 #include <atomic>
@@ -62,11 +63,16 @@ struct TileSums {
     int binCount = 0;
     std::vector<double> steady;               // [pixel][rgb]
     std::vector<double> before[2], after[2];  // per axis, [pixel][rgb]: light before the first bin / after the last
+    // The phasor film (film/phasor.h), per axis: [pixel][frequency][Re rgb, Im rgb]; empty without.
+    // Not in the overflow check: |a phasor sum| <= the steady sum of its pixel, which is checked.
+    std::vector<double> phasor[2];
+    int phasorCount = 0;
     // An upper bound of |every sum| in the tile (grows by each pass's largest value; merges add the
     // bounds): while bound + the largest value of a pixel's pass stays far from FLT_MAX, that pass
     // cannot push a sum out of float's range and the writer skips the per-value check.
     double absBound = 0.0;
-    void zero(size_t pixels, int binCount);
+    void zero(size_t pixels, int binCount, int phasorCount = 0);
+    size_t phasorStride() const { return static_cast<size_t>(phasorCount) * 6; }  // per pixel and axis
     // Index in bins[axis] of the red value of `bin` of the tile's pixel `pixel`.
     size_t binIndex(size_t pixel, int bin) const {
         return (pixel * static_cast<size_t>(binCount) + static_cast<size_t>(bin)) * 3;
@@ -102,9 +108,10 @@ private:
 // The film's geometry, shared by the film and its snapshots.
 struct FilmLayout {
     static constexpr int kTile = 16;
-    FilmLayout(int width, int height, const TimeBins& time);
+    FilmLayout(int width, int height, const TimeBins& time, const PhasorSpec& phasor = {});
     int width, height, tilesX;
     TimeBins time;
+    PhasorSpec phasor;
     std::vector<TileRect> tiles;
     int tileOf(int x, int y) const { return (y / kTile) * tilesX + (x / kTile); }
     size_t pixels(int tile) const { return static_cast<size_t>(tiles[tile].w) * tiles[tile].h; }
@@ -117,6 +124,7 @@ public:
     int height() const { return layout_->height; }
     const TimeBins& time() const { return layout_->time; }
     int bins() const { return layout_->time.bins; }
+    const PhasorSpec& phasor() const { return layout_->phasor; }
     int tileCount() const { return static_cast<int>(blocks_.size()); }
     const TileRect& tileRect(int tile) const { return layout_->tiles[tile]; }
     int tileOf(int x, int y) const { return layout_->tileOf(x, y); }

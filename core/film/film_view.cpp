@@ -223,4 +223,32 @@ std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis, int stride) 
     return energy;
 }
 
+std::vector<double> phasorVolume(const FilmSnapshot& s, TimeAxis axis, const TimeResponse& response) {
+    const PhasorSpec& spec = s.phasor();
+    if (!spec.active()) return {};
+    const size_t nf = static_cast<size_t>(spec.count()), stride = nf * 6;
+    std::vector<Complex> h(nf, Complex(1.0, 0.0));
+    if (!response.identity())
+        for (size_t i = 0; i < nf; ++i) h[i] = responseTransform(response, spec.frequencies[i]);
+    std::vector<double> out(static_cast<size_t>(s.width()) * s.height() * stride, 0.0);
+    const int a = static_cast<int>(axis);
+    for (int t = 0; t < s.tileCount(); ++t) {
+        const TileSums& sums = s.block(t).sums;
+        const TileRect& r = s.tileRect(t);
+        const double inv = inversePasses(sums);
+        for (int py = 0; py < r.h; ++py)
+            for (int px = 0; px < r.w; ++px) {
+                const double* src = sums.phasor[a].data() + (static_cast<size_t>(py) * r.w + px) * stride;
+                double* dst = out.data() + (static_cast<size_t>(r.y0 + py) * s.width() + (r.x0 + px)) * stride;
+                for (size_t i = 0; i < nf; ++i)
+                    for (int c = 0; c < 3; ++c) {
+                        const Complex v = Complex(src[i * 6 + c], src[i * 6 + 3 + c]) * inv * h[i];
+                        dst[i * 6 + c] = v.real();
+                        dst[i * 6 + 3 + c] = v.imag();
+                    }
+            }
+    }
+    return out;
+}
+
 }  // namespace tpb

@@ -39,5 +39,9 @@ std::vector<double> volume(const FilmSnapshot& s, TimeAxis axis, EmissionMode mo
 // film's memory read: the viewer's choice of the brightest bin, which runs while the film renders
 // and holds a snapshot as long as it reads).
 std::vector<double> binEnergy(const FilmSnapshot& s, TimeAxis axis, int stride = 1);
+// The phasor film's average (film/phasor.h), W*H*F*2*3: [y][x][frequency][Re, Im][rgb], in double;
+// empty when the film has none. The pulse and sensor response multiply it by their transforms
+// (TimeResponse::transform); the default leaves it as it is.
+std::vector<double> phasorVolume(const FilmSnapshot& s, TimeAxis axis, const TimeResponse& response = {});
 
 }  // namespace tpb

@@ -10,6 +10,7 @@
 #include <cfloat>
 #include <climits>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -40,9 +41,11 @@ FilmTally& FilmTally::operator+=(const FilmTally& o) {
 namespace {
 
 // One estimate onto both time axes and the steady state; `splat` is splatTime or the smoothed one.
+// With a phasor film, also the estimate's phasors: `profile` is its profile (without the time
+// kernel, film/phasor.h) and `floor` its causal floor.
 template <class Splat>
 void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, double aReal, double bReal, double aUnw,
-                   double bUnw, Splat&& splat) {
+                   double bUnw, const SegmentProfile* profile, const ArrivalFloor& floor, Splat&& splat) {
     if (!isFinite(L) || !std::isfinite(aReal) || !std::isfinite(aUnw) || !std::isfinite(bReal) ||
         !std::isfinite(bUnw)) {
         ++tally.rejected;
@@ -88,6 +91,10 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
         }
         tally.inside[a] += luminance(binned[a]);
     }
+    if (const PhasorSpec* ph = acc.phasorSpec(); ph && profile) {
+        addEstimatePhasor(*ph, L, *profile, aReal, bReal, floor.real, acc.phasor(TimeAxis::Real));
+        addEstimatePhasor(*ph, L, *profile, aUnw, bUnw, floor.unwarped, acc.phasor(TimeAxis::Unwarped));
+    }
 }
 
 }  // namespace
@@ -95,9 +102,9 @@ void splatBothAxes(PixelAccumulator& acc, FilmTally& tally, const Color& L, doub
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
                  double s0, double s1, double aReal, double bReal, double aUnw, double bUnw) {
     const SegmentProfile profile(kappa, s0, s1);  // the same on both axes
-    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) TPB_HOT_LAMBDA {
-        return splatTime(time, L, profile, a, b, sink);
-    });
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, &profile, {},
+                  [&](double a, double b, auto&& sink)
+                      TPB_HOT_LAMBDA { return splatTime(time, L, profile, a, b, sink); });
 }
 
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L,
@@ -109,14 +116,16 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
         return;
     }
     if (floor.active()) {
-        splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink, TimeAxis axis) {
-            return splatTimeFloored(time, L, profile, a, b, axis == TimeAxis::Real ? floor.real : floor.unwarped, sink);
-        });
+        splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, &profile, floor,
+                      [&](double a, double b, auto&& sink, TimeAxis axis) {
+                          return splatTimeFloored(time, L, profile, a, b,
+                                                  axis == TimeAxis::Real ? floor.real : floor.unwarped, sink);
+                      });
         return;
     }
-    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink) TPB_HOT_LAMBDA {
-        return splatTime(time, L, profile, a, b, sink);
-    });
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, &profile, {},
+                  [&](double a, double b, auto&& sink)
+                      TPB_HOT_LAMBDA { return splatTime(time, L, profile, a, b, sink); });
 }
 
 void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, const Color& L, const Color& kappa,
@@ -130,13 +139,20 @@ void splatSpread(const TimeBins& time, PixelAccumulator& acc, FilmTally& tally, 
         splatSpread(time, acc, tally, L, SegmentProfile(kappa, s0, s1), aReal, bReal, aUnw, bUnw, kernel, floor);
         return;
     }
-    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, [&](double a, double b, auto&& sink, TimeAxis axis) {
-        return splatTimeSmoothed(time, L, kappa, s0, s1, a, b, kernel, sink,
-                                 axis == TimeAxis::Real ? floor.real : floor.unwarped);
-    });
+    // The phasor film takes the profile without the kernel (film/phasor.h).
+    std::optional<SegmentProfile> unsmoothed;
+    if (acc.phasorSpec()) unsmoothed.emplace(kappa, s0, s1);
+    splatBothAxes(acc, tally, L, aReal, bReal, aUnw, bUnw, unsmoothed ? &*unsmoothed : nullptr, floor,
+                  [&](double a, double b, auto&& sink, TimeAxis axis) {
+                      return splatTimeSmoothed(time, L, kappa, s0, s1, a, b, kernel, sink,
+                                               axis == TimeAxis::Real ? floor.real : floor.unwarped);
+                  });
 }
 
-void PixelAccumulator::reset(int bins) {
+void PixelAccumulator::reset(int bins, const PhasorSpec* phasor) {
+    phasor_ = phasor && phasor->active() ? phasor : nullptr;
+    phasorData_.assign(phasorStride() * 2, 0.0);
+    phasorTouched_ = false;
     bins_ = bins;
     words_ = (bins + 63) / 64;
     data_.assign(static_cast<size_t>(bins) * 2 * 3, 0.0);
@@ -162,13 +178,18 @@ void PixelAccumulator::clearTouched() {
         before_[a] = after_[a] = Color(0.0);
     }
     steady_ = Color(0.0);
+    if (phasorTouched_) {
+        std::fill(phasorData_.begin(), phasorData_.end(), 0.0);
+        phasorTouched_ = false;
+    }
 }
 
-TransientFilm::TransientFilm(int width, int height, const TimeBins& time)
-    : layout_(std::make_shared<const FilmLayout>(width, height, time)), tiles_(new Tile[layout_->tiles.size()]) {
+TransientFilm::TransientFilm(int width, int height, const TimeBins& time, const PhasorSpec& phasor)
+    : layout_(std::make_shared<const FilmLayout>(width, height, time, phasor)),
+      tiles_(new Tile[layout_->tiles.size()]) {
     for (int t = 0; t < tileCount(); ++t) {
         TileSums zero;
-        zero.zero(layout_->pixels(t), time.bins);
+        zero.zero(layout_->pixels(t), time.bins, phasor.count());
         tiles_[t].block = std::make_shared<TileBlock>(std::move(zero));
     }
 }
@@ -206,8 +227,8 @@ uint64_t TransientFilm::bytes() const {
         const TileSums& sums = s->block(t).sums;
         n += sums.steady.size() * sizeof(double);
         for (int a = 0; a < 2; ++a)
-            n +=
-                sums.bins[a].size() * sizeof(FilmSum) + (sums.before[a].size() + sums.after[a].size()) * sizeof(double);
+            n += sums.bins[a].size() * sizeof(FilmSum) +
+                 (sums.before[a].size() + sums.after[a].size() + sums.phasor[a].size()) * sizeof(double);
     }
     return n;
 }
@@ -222,7 +243,7 @@ void TransientFilm::clear() {
     for (int t = 0; t < tileCount(); ++t) {
         std::lock_guard<std::mutex> g(tiles_[t].writer);
         TileSums zero;
-        zero.zero(layout_->pixels(t), bins());
+        zero.zero(layout_->pixels(t), bins(), phasor().count());
         publish(t, std::make_shared<TileBlock>(std::move(zero)));
     }
     stats.rejectedSamples = 0;
@@ -240,10 +261,10 @@ void TransientFilm::restoreTile(int tile, TileSums sums) {
     if (tile < 0 || tile >= tileCount())
         throw std::invalid_argument("TransientFilm::restoreTile: no tile " + std::to_string(tile));
     const size_t px = layout_->pixels(tile);
-    bool ok = sums.binCount == bins() && sums.steady.size() == px * 3;
+    bool ok = sums.binCount == bins() && sums.steady.size() == px * 3 && sums.phasorCount == phasor().count();
     for (int a = 0; a < 2; ++a)
         ok = ok && sums.bins[a].size() == px * static_cast<size_t>(bins()) * 3 && sums.before[a].size() == px * 3 &&
-             sums.after[a].size() == px * 3;
+             sums.after[a].size() == px * 3 && sums.phasor[a].size() == px * sums.phasorStride();
     if (!ok)
         throw std::invalid_argument("TransientFilm::restoreTile: tile " + std::to_string(tile) + " has the wrong size");
     std::lock_guard<std::mutex> g(tiles_[tile].writer);
@@ -254,7 +275,7 @@ void TransientFilm::merge(const TransientFilm& other) {
     if (&other == this) throw std::invalid_argument("TransientFilm::merge: a film cannot be merged into itself");
     const TimeBins &ta = time(), &tb = other.time();
     if (other.width() != width() || other.height() != height() || ta.bins != tb.bins || ta.startOpl != tb.startOpl ||
-        ta.binWidth != tb.binWidth)
+        ta.binWidth != tb.binWidth || !(phasor() == other.phasor()))
         throw std::invalid_argument("TransientFilm::merge: the films differ in size or time axis (" +
                                     std::to_string(width()) + "x" + std::to_string(height()) + "x" +
                                     std::to_string(bins()) + " vs " + std::to_string(other.width()) + "x" +
@@ -275,6 +296,7 @@ void TransientFilm::merge(const TransientFilm& other) {
             addAll(sum.bins[a], add.bins[a]);
             addAll(sum.before[a], add.before[a]);
             addAll(sum.after[a], add.after[a]);
+            addAll(sum.phasor[a], add.phasor[a]);
         }
         publish(t, std::make_shared<TileBlock>(std::move(sum)));
     }
@@ -333,6 +355,14 @@ TileStaging::Pixel pixelRecord(const PixelAccumulator& acc, uint32_t pixel, Tile
     px.steady = acc.steady();
     grow3(px.steady);
     px.largest = largest;
+    if (acc.phasorSpec() && acc.phasorTouched()) {
+        px.hasPhasor = true;
+        px.phasorOffset = staging.phasor.size();
+        for (int a = 0; a < 2; ++a) {
+            const double* v = acc.phasor(static_cast<TimeAxis>(a));
+            staging.phasor.insert(staging.phasor.end(), v, v + acc.phasorStride());
+        }
+    }
     return px;
 }
 
@@ -414,11 +444,14 @@ void TransientFilm::TileWriter::addStaged(const TileStaging& staged) {
     const size_t valueBase = staging_->values.size();
     staging_->runs.insert(staging_->runs.end(), staged.runs.begin(), staged.runs.end());
     staging_->values.insert(staging_->values.end(), staged.values.begin(), staged.values.end());
+    const size_t phasorBase = staging_->phasor.size();
+    staging_->phasor.insert(staging_->phasor.end(), staged.phasor.begin(), staged.phasor.end());
     for (TileStaging::Pixel px : staged.pixels) {
         for (int a = 0; a < 2; ++a) {
             px.firstRun[a] += runBase;
             px.offset[a] += valueBase;
         }
+        px.phasorOffset += phasorBase;
         staging_->pixels.push_back(px);
     }
 }
@@ -481,6 +514,14 @@ double TransientFilm::TileWriter::addTo(TileSums& t, const TileStaging& staged, 
     for (int a = 0; a < 2; ++a) {
         add3(t.before[a], px.before[a]);
         add3(t.after[a], px.after[a]);
+    }
+    if (px.hasPhasor) {
+        const size_t n = t.phasorStride();
+        const double* v = staged.phasor.data() + px.phasorOffset;
+        for (int a = 0; a < 2; ++a, v += n) {
+            double* dst = t.phasor[a].data() + pixel * n;
+            for (size_t j = 0; j < n; ++j) dst[j] += v[j];
+        }
     }
     return largest;
 }

@@ -25,6 +25,7 @@
 #include "film/time_kernel.h"
 #include "film/time_splat.h"
 #include "film/film_snapshot.h"
+#include "film/phasor.h"
 
 #include <atomic>
 #include <memory>
@@ -40,8 +41,9 @@ namespace tpb {
 // (forEachRun), not the whole range (issue 15).
 class PixelAccumulator {
 public:
-    explicit PixelAccumulator(int bins = 1) { reset(bins); }
-    void reset(int bins);
+    // With an active phasor spec (film/phasor.h) it also sums each estimate's phasors.
+    explicit PixelAccumulator(int bins = 1, const PhasorSpec* phasor = nullptr) { reset(bins, phasor); }
+    void reset(int bins, const PhasorSpec* phasor = nullptr);
     // Adds c to one bin and marks it touched.
     TPB_HOT_INLINE void add(TimeAxis axis, int bin, const Color& c) {
         addUnmarked(axis, bin, c);
@@ -107,6 +109,15 @@ public:
     int lo(TimeAxis a) const { return lo_[static_cast<int>(a)]; }
     int hi(TimeAxis a) const { return hi_[static_cast<int>(a)]; }
     const double* bin(TimeAxis a, int k) const { return &data_[(static_cast<size_t>(a) * bins_ + k) * 3]; }
+    // The phasor sums (nullptr: no phasor film): per axis [frequency][Re rgb, Im rgb].
+    const PhasorSpec* phasorSpec() const { return phasor_; }
+    double* phasor(TimeAxis a) {
+        phasorTouched_ = true;
+        return &phasorData_[static_cast<size_t>(a) * phasorStride()];
+    }
+    const double* phasor(TimeAxis a) const { return &phasorData_[static_cast<size_t>(a) * phasorStride()]; }
+    bool phasorTouched() const { return phasorTouched_; }
+    size_t phasorStride() const { return phasor_ ? static_cast<size_t>(phasor_->count()) * 6 : 0; }
     void clearTouched();  // zero the touched runs, ready for the next pixel
 
 private:
@@ -116,6 +127,9 @@ private:
     int lo_[2], hi_[2];
     Color steady_{0.0};
     Color before_[2] = {Color(0.0), Color(0.0)}, after_[2] = {Color(0.0), Color(0.0)};
+    const PhasorSpec* phasor_ = nullptr;
+    std::vector<double> phasorData_;  // [axis][frequency][Re rgb, Im rgb]
+    bool phasorTouched_ = false;
 };
 
 struct FilmStats {
@@ -185,15 +199,19 @@ struct TileStaging {
         uint32_t firstRun[2] = {0, 0}, runCount[2] = {0, 0};  // its runs in `runs`, per axis
         size_t offset[2] = {0, 0};  // of its first run's rgb in `values`, per axis (the runs follow)
         Color steady{0.0}, before[2] = {Color(0.0), Color(0.0)}, after[2] = {Color(0.0), Color(0.0)};
-        double largest = 0.0;  // largest |value| of the pixel's pass (TileSums::absBound)
+        double largest = 0.0;    // largest |value| of the pixel's pass (TileSums::absBound)
+        bool hasPhasor = false;  // its phasor sums are in `phasor` from phasorOffset (both axes)
+        size_t phasorOffset = 0;
     };
     std::vector<Pixel> pixels;   // in the order they came
     std::vector<Run> runs;       // the touched runs, [pixel][axis][run]
     std::vector<double> values;  // the touched runs' rgb, [pixel][axis][run][bin][rgb]
+    std::vector<double> phasor;  // [pixel with phasors][axis][frequency][Re rgb, Im rgb]
     void clear() {
         pixels.clear();
         runs.clear();
         values.clear();
+        phasor.clear();
     }
 };
 
@@ -205,7 +223,9 @@ class TransientFilm {
 public:
     static constexpr int kTile = FilmLayout::kTile;
 
-    TransientFilm(int width, int height, const TimeBins& time);
+    // With an active phasor spec the film also sums each estimate's phasors (film/phasor.h).
+    TransientFilm(int width, int height, const TimeBins& time, const PhasorSpec& phasor = {});
+    const PhasorSpec& phasor() const { return layout_->phasor; }
     int width() const { return layout_->width; }
     int height() const { return layout_->height; }
     const TimeBins& time() const { return layout_->time; }

@@ -116,4 +116,50 @@ std::vector<std::string> exportVolumeNpy(const FilmSnapshot& film, const std::st
     return written;
 }
 
+std::vector<std::string> phasorFileNames() { return {"phasor.npy", "phasor_rgb.npy", "phasor.json"}; }
+
+std::vector<std::string> exportPhasorNpy(const FilmSnapshot& film, const std::string& dir, const ExportOptions& opt,
+                                         const VolumeProvenance& render) {
+    const PhasorSpec& spec = film.phasor();
+    if (!spec.active()) return {};
+    ensureWritableDir(dir);
+    const int W = film.width(), H = film.height(), F = spec.count();
+    const std::vector<double> v = phasorVolume(film, opt.axis, opt.response);  // [y][x][f][re, im][rgb]
+    std::vector<float> lum(static_cast<size_t>(W) * H * F * 2), rgb(v.size());
+    for (size_t i = 0; i < v.size(); ++i) rgb[i] = static_cast<float>(v[i]);
+    for (size_t i = 0; i < lum.size(); ++i)
+        lum[i] = static_cast<float>(luminance(Color(v[i * 3], v[i * 3 + 1], v[i * 3 + 2])));
+    writeNpy(dir + "/phasor.npy", {H, W, F, 2}, lum);
+    writeNpy(dir + "/phasor_rgb.npy", {H, W, F, 2, 3}, rgb);
+    using nlohmann::json;
+    json j;
+    j["format"] = "tpb phasor film";
+    j["version"] = 1;
+    j["files"] = {{"luminance", "phasor.npy"}, {"rgb", "phasor_rgb.npy"}};
+    j["shape"] = {{"phasor.npy", {H, W, F, 2}}, {"phasor_rgb.npy", {H, W, F, 2, 3}}};
+    j["index"] = "phasor[y, x, f, 0 = real | 1 = imaginary] (phasor_rgb: then colour r, g, b)";
+    j["definition"] =
+        "P(f) = Int L(t) exp(-i 2 pi f (t - reference_opl_m)) dt over every estimate's exact time profile (no bins); "
+        "P(0) is the steady image";
+    json freqs = json::array(), ghz = json::array(), wl = json::array();
+    for (double f : spec.frequencies) {
+        freqs.push_back(f);
+        ghz.push_back(f * kC_m_per_ns);  // cycles per m x m per ns = cycles per ns
+        wl.push_back(f > 0.0 ? 1.0 / f : 0.0);
+    }
+    j["frequencies_per_m"] = freqs;
+    j["frequencies_ghz"] = ghz;
+    j["wavelengths_m"] = wl;
+    j["reference_opl_m"] = spec.refOpl;
+    j["time"] = {{"axis", axisName(opt.axis)},
+                 {"pulse", pulseName(opt.response)},
+                 {"sensor", sensorName(opt.response)},
+                 {"time_response", describe(opt.response)},
+                 {"film_bin_width_opl_m", film.time().binWidth},
+                 {"film_nyquist_per_m", 0.5 / film.time().binWidth}};
+    j["render"] = {{"scene", render.scene}, {"passes", film.minPasses()}, {"settings", recordJson(render.settings)}};
+    writeTextFile(dir + "/phasor.json", j.dump(2) + "\n");
+    return phasorFileNames();
+}
+
 }  // namespace tpb

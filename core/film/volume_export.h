@@ -41,6 +41,18 @@ std::vector<std::string> exportVolumeNpy(const FilmSnapshot& film, const std::st
                                          const std::function<void(int, int)>& progress = {},
                                          const std::atomic<bool>* cancel = nullptr);
 
+// The phasor film (film/phasor.h), when the film has one, on ExportOptions' time axis and with its
+// pulse and sensor response (their transforms):
+//   phasor.npy      float32 (H, W, F, 2): the luminance's phasor, [..., 0] real, [..., 1] imaginary
+//                   (mitransient's phasor_hdr_film shape and sign, exp(-i 2 pi f (opl - start)))
+//   phasor_rgb.npy  float32 (H, W, F, 2, 3): per colour channel
+//   phasor.json     the frequencies (cycles per m of OPL, GHz, wavelengths), the reference OPL,
+//                   the axis and response, the render (docs/user/phasor.md)
+// Returns the names written (none without a phasor film).
+std::vector<std::string> exportPhasorNpy(const FilmSnapshot& film, const std::string& dir, const ExportOptions& opt,
+                                         const VolumeProvenance& render);
+std::vector<std::string> phasorFileNames();
+
 // The side file's JSON text (exposed for the tests): `beforeRgb`/`afterRgb`/`steadyRgb` are the
 // images' sums over the pixels.
 std::string volumeSideJson(const FilmSnapshot& film, const ExportOptions& opt, const VolumeProvenance& render,

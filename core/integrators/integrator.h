@@ -36,6 +36,7 @@ namespace tpb {
 struct PassContext {
     uint64_t pass = 1;                         // 1-based; keys every random number of the pass
     const TimeBins* time = nullptr;            // the film's time axis
+    const PhasorSpec* phasor = nullptr;        // the film's phasor frequencies (film/phasor.h), or none
     int threads = 1;                           // worker threads of the Driver (thread ids 0..threads-1)
     int tiles = 0;                             // tiles of the film (tile ids 0..tiles-1)
     const std::atomic<bool>* abort = nullptr;  // set: stop as soon as possible (the pass is dropped)

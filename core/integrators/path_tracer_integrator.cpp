@@ -8,7 +8,7 @@ PathTracerIntegrator::PathTracerIntegrator(const Scene& scene, const RenderSetti
     : scene_(scene), settings_(settings) {}
 
 bool PathTracerIntegrator::beginPass(const PassContext& ctx, PassStats&) {
-    accs_.assign(static_cast<size_t>(ctx.threads), PixelAccumulator(ctx.time->bins));
+    accs_.assign(static_cast<size_t>(ctx.threads), PixelAccumulator(ctx.time->bins, ctx.phasor));
     tileStats_.assign(static_cast<size_t>(ctx.tiles), PathTracerStats{});
     return true;
 }

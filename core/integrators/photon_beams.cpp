@@ -81,7 +81,7 @@ bool PhotonBeamsIntegrator::beginPass(const PassContext& ctx, PassStats& ps) {
     camera_.maxDepth = settings_.maxDepth;
     camera_.emittersSeen = settings_.bounceMin == 0;
     scratch_.resize(static_cast<size_t>(ctx.threads));
-    for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
+    for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins, ctx.phasor);
     tileStats_.assign(static_cast<size_t>(ctx.tiles), CameraPassStats{});
 
     const PhotonPassParams pt =
@@ -262,7 +262,7 @@ bool PhotonBeamsIntegrator::beginProbe(const PassContext& ctx, const ProbeReques
     camera_.pass = 0;
     camera_.maxDepth = settings_.maxDepth;
     scratch_.resize(static_cast<size_t>(ctx.threads));
-    for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins);
+    for (auto& sc : scratch_) sc.acc.reset(ctx.time->bins, ctx.phasor);
     return !(ctx.abort && ctx.abort->load());
 }
 

@@ -7,6 +7,7 @@
 // built scene's bounding diagonal), times in seconds of wall clock, depths in scattering vertices.
 #pragma once
 #include "accel/accel_backend.h"
+#include "film/phasor.h"
 #include "io/record.h"
 #include "scene/scene_desc.h"
 
@@ -50,6 +51,7 @@ struct SettingsOverrides {
     std::optional<bool> equiangular;
     std::optional<std::string> volumeEstimator, surfaceEstimator;  // --estimator, --surface-estimator
     std::optional<TimeKernelSettings> timeKernel;                  // --time-kernel
+    std::optional<std::string> phasor;                             // --phasor (film/phasor.h)
     // ---- the film's shape ----
     std::optional<int> width, height, bins;
 };
@@ -124,6 +126,10 @@ struct RenderSettings {
     // (path_tracer.cpp) instead of next-event estimation at free-flight vertices (infinite
     // variance next to the light). Both are unbiased.
     bool equiangular = true;
+
+    // ---- the film's phasor frequencies (film/phasor.h; resolved by render/prepare.cpp once the
+    // time axis is known; none by default) ----
+    PhasorSpec phasor;
 
     // ---- how the film is first shown (viewer, exported frames) ----
     EmissionMode emission = EmissionMode::Delta;

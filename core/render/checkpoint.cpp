@@ -156,6 +156,7 @@ json overridesJson(const SettingsOverrides& o) {
     put("estimator", o.volumeEstimator);
     put("surface_estimator", o.surfaceEstimator);
     if (o.timeKernel) j["time_kernel"] = timeKernelName(*o.timeKernel);
+    put("phasor", o.phasor);
     put("width", o.width);
     put("height", o.height);
     put("bins", o.bins);
@@ -186,6 +187,7 @@ SettingsOverrides overridesFrom(const json& j) {
     get("estimator", o.volumeEstimator);
     get("surface_estimator", o.surfaceEstimator);
     if (j.contains("time_kernel")) o.timeKernel = parseTimeKernel(j.at("time_kernel").get<std::string>());
+    get("phasor", o.phasor);
     get("width", o.width);
     get("height", o.height);
     get("bins", o.bins);
@@ -205,7 +207,8 @@ uint64_t payloadBytes(const FilmLayout& layout) {
     uint64_t n = 0;
     for (size_t t = 0; t < layout.tiles.size(); ++t) {
         const uint64_t px = layout.pixels(static_cast<int>(t));
-        n += 16 + 8 * (px * 3 * 5 + 2 * px * static_cast<uint64_t>(layout.time.bins) * 3);
+        n += 16 + 8 * (px * 3 * 5 + 2 * px * static_cast<uint64_t>(layout.time.bins) * 3 +
+                       2 * px * static_cast<uint64_t>(layout.phasor.count()) * 6);
     }
     return n;
 }
@@ -255,6 +258,10 @@ CheckpointInfo infoFrom(const std::string& path, const json& h) {
         i.time.bins = h.at("time").at("bins").get<int>();
         i.time.startOpl = h.at("time").at("start_opl_m").get<double>();
         i.time.binWidth = h.at("time").at("bin_width_opl_m").get<double>();
+        if (h.contains("phasor")) {
+            i.phasor.frequencies = h.at("phasor").at("frequencies_per_m").get<std::vector<double>>();
+            i.phasor.refOpl = h.at("phasor").at("reference_opl_m").get<double>();
+        }
         for (const json& kv : h.at("fingerprint"))
             i.fingerprint.emplace_back(kv.at(0).get<std::string>(), kv.at(1).get<std::string>());
         i.overrides = overridesFrom(h.at("overrides"));
@@ -263,7 +270,9 @@ CheckpointInfo infoFrom(const std::string& path, const json& h) {
     }
     if (i.width < 1 || i.height < 1 || i.time.bins < 1 || !(i.time.binWidth > 0.0))
         bad(path, "film size or time axis out of range");
-    const FilmLayout layout(i.width, i.height, i.time);
+    for (double f : i.phasor.frequencies)
+        if (!(f >= 0.0 && f <= 1e6)) bad(path, "phasor frequency out of range");
+    const FilmLayout layout(i.width, i.height, i.time, i.phasor);
     if (h.value("payload_bytes", uint64_t(0)) != payloadBytes(layout))
         bad(path, "payload size does not match its " + std::to_string(i.width) + "x" + std::to_string(i.height) + "x" +
                       std::to_string(i.time.bins) + " film");
@@ -280,7 +289,7 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
         throw UserError(path + ": no checkpoint written: the film's tiles hold " + std::to_string(snap->minPasses()) +
                         " to " + std::to_string(snap->maxPasses()) + " passes, not " + std::to_string(info.passes) +
                         " each (a pass was cut short); the last checkpoint, if any, is kept");
-    const FilmLayout layout(film.width(), film.height(), film.time());
+    const FilmLayout layout(film.width(), film.height(), film.time(), film.phasor());
     json h;
     h["format"] = kFormat;
     h["version"] = kVersion;
@@ -297,6 +306,9 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
     h["time"] = {
         {"bins", film.time().bins}, {"start_opl_m", film.time().startOpl}, {"bin_width_opl_m", film.time().binWidth}};
     h["tiles"] = film.tileCount();
+    // The phasor film's sums follow each tile's after[1] (film/phasor.h); absent: none.
+    if (film.phasor().active())
+        h["phasor"] = {{"frequencies_per_m", film.phasor().frequencies}, {"reference_opl_m", film.phasor().refOpl}};
     h["payload_bytes"] = payloadBytes(layout);
     json fp = json::array();
     for (const auto& [k, v] : info.fingerprint) fp.push_back({k, v});
@@ -325,6 +337,8 @@ void writeCheckpoint(const std::string& path, const CheckpointInfo& info, const 
         f.write(s.before[1].data(), s.before[1].size() * 8);
         f.write(s.after[0].data(), s.after[0].size() * 8);
         f.write(s.after[1].data(), s.after[1].size() * 8);
+        f.write(s.phasor[0].data(), s.phasor[0].size() * 8);
+        f.write(s.phasor[1].data(), s.phasor[1].size() * 8);
     }
     f.commit(/*seal=*/true);
 }
@@ -348,7 +362,12 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
     } catch (const std::exception& e) {
         bad(path, std::string("history of the passes unreadable (") + e.what() + ")");
     }
-    if (!into) c.film = std::make_unique<TransientFilm>(c.info.width, c.info.height, c.info.time);
+    const PhasorSpec& phasor = c.info.phasor;
+    if (into && !(into->phasor() == phasor))
+        throw UserError(path + ": the checkpoint's phasor film (" + std::to_string(phasor.count()) +
+                        " frequencies) differs from this render's (" + std::to_string(into->phasor().count()) +
+                        "): resume with the same --phasor, or render anew without --resume");
+    if (!into) c.film = std::make_unique<TransientFilm>(c.info.width, c.info.height, c.info.time, phasor);
     TransientFilm& film = into ? *into : *c.film;
     auto get = [&](void* data, size_t bytes) { o.in->read(data, bytes, "film"); };
     // Each pass weighs at most 1 (render_settings.h passWeight), a pass at least 1 photon's share.
@@ -364,7 +383,7 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
                       " passes");
     for (int t = 0; t < film.tileCount(); ++t) {
         TileSums s;
-        s.zero(static_cast<size_t>(film.tileRect(t).w) * film.tileRect(t).h, film.bins());
+        s.zero(static_cast<size_t>(film.tileRect(t).w) * film.tileRect(t).h, film.bins(), film.phasor().count());
         get(&s.passes, 8);
         get(&s.absBound, 8);
         get(s.steady.data(), s.steady.size() * 8);
@@ -374,6 +393,8 @@ Checkpoint readCheckpoint(const std::string& path, TransientFilm* into) {
         get(s.before[1].data(), s.before[1].size() * 8);
         get(s.after[0].data(), s.after[0].size() * 8);
         get(s.after[1].data(), s.after[1].size() * 8);
+        get(s.phasor[0].data(), s.phasor[0].size() * 8);
+        get(s.phasor[1].data(), s.phasor[1].size() * 8);
         if (s.passes != static_cast<int64_t>(c.info.passes))
             bad(path, "tile " + std::to_string(t) + " holds " + std::to_string(s.passes) + " passes, the header " +
                           std::to_string(c.info.passes));
@@ -419,6 +440,8 @@ SettingsOverrides checkpointOverrides(const RenderSettings& s, const SettingsOve
         o.samplesPerPixel = s.samplesPerPixel;
         o.equiangular = s.equiangular;
     }
+    // The resolved list (a band's frequencies depend on the bins): the resume's film gets the same.
+    if (s.phasor.active()) o.phasor = phasorListText(s.phasor);
     return o;
 }
 
@@ -435,6 +458,8 @@ CheckpointInfo checkpointInfoFor(const PreparedRender& p, const RenderSettings& 
     i.fingerprint = p.sceneFingerprint;
     for (auto& kv : settingsFingerprint(running)) i.fingerprint.push_back(std::move(kv));
     for (auto& kv : timeFingerprint(p.time)) i.fingerprint.push_back(std::move(kv));
+    for (auto& kv : phasorFingerprint(running.phasor)) i.fingerprint.push_back(std::move(kv));
+    i.phasor = running.phasor;
     i.overrides = checkpointOverrides(running, flags);
     return i;
 }
@@ -480,6 +505,7 @@ SettingsOverrides resumeOverrides(const SettingsOverrides& cp, const SettingsOve
     same("--profile", given.profile, cp.profile, [](TimeProfile p) { return std::string(profileName(p)); });
     same("--beam-length", given.beamLength, cp.beamLength, [](BeamLength b) { return std::string(lengthName(b)); });
     same("--accel", given.accel, cp.accel, [](AccelBackend a) { return std::string(accelName(a)); });
+    same("--phasor", given.phasor, cp.phasor, str);
     same("--time-kernel", given.timeKernel, cp.timeKernel,
          [](const TimeKernelSettings& k) { return timeKernelName(k); });
     same("--pt-free-flight", given.equiangular, cp.equiangular, [](bool e) { return std::string(e ? "off" : "on"); });

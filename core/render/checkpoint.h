@@ -43,6 +43,7 @@ struct CheckpointInfo {
     uint64_t passes = 0;
     int width = 0, height = 0;
     TimeBins time;
+    PhasorSpec phasor;  // the phasor film's frequencies (film/phasor.h); none when inactive
     Fingerprint fingerprint;
     SettingsOverrides overrides;  // the flags the render ran with (a resume adopts them)
 };

@@ -19,7 +19,7 @@ Driver::Driver(const Scene& scene, const RenderSettings& settings, const TimeBin
                std::unique_ptr<Integrator> integrator)
     : scene_(scene),
       settings_(settings),
-      film_(std::make_unique<TransientFilm>(scene.camera.width, scene.camera.height, time)),
+      film_(std::make_unique<TransientFilm>(scene.camera.width, scene.camera.height, time, settings.phasor)),
       integrator_(integrator ? std::move(integrator) : makeIntegrator(scene, settings)) {
     settings_.threads = resolveThreads(settings_.threads);
     startTime_ = nowSec();
@@ -33,6 +33,7 @@ bool Driver::runPass(uint64_t pass) {
     PassContext ctx;
     ctx.pass = pass;
     ctx.time = &film_->time();
+    ctx.phasor = &film_->phasor();
     ctx.threads = settings_.threads;
     ctx.tiles = film_->tileCount();
     ctx.abort = &abort_;

@@ -199,6 +199,21 @@ Fingerprint timeFingerprint(const TimeBins& t) {
     return w.fp;
 }
 
+std::string phasorListText(const PhasorSpec& p) {
+    std::string list;
+    for (double x : p.frequencies) {
+        if (!list.empty()) list += ',';
+        list += shortest(x);
+    }
+    return list;
+}
+
+Fingerprint phasorFingerprint(const PhasorSpec& p) {
+    Fingerprint f;
+    if (p.active()) f.emplace_back("film.phasor.frequencies", phasorListText(p));
+    return f;
+}
+
 std::string currentFingerprintKey(const std::string& key) {
     static const std::map<std::string, std::string> kRenamed = {{"render.photons", "render.photons_per_pass"},
                                                                 {"render.radius_m", "render.radius"},

@@ -33,6 +33,11 @@ Fingerprint sceneFingerprint(const SceneDesc& desc);
 Fingerprint settingsFingerprint(const RenderSettings& s);
 // The film's time axis (bins, start, width: bit-exact, as %.17g).
 Fingerprint timeFingerprint(const TimeBins& t);
+// The phasor film's frequencies (film/phasor.h), as the list phasorListText writes; nothing without
+// one. A checkpoint holds the phasor sums, so a resume must have the same.
+Fingerprint phasorFingerprint(const PhasorSpec& p);
+// "f1,f2,..." (cycles per m, shortest decimals): what --phasor reads back as the same list.
+std::string phasorListText(const PhasorSpec& p);
 
 // The current name of a fingerprint key: checkpoints written before the settings had one
 // serialisation name some keys differently (render.photons, render.radius_m,

@@ -3,6 +3,7 @@
 
 #include "base/error.h"
 #include "base/memory.h"
+#include "base/text.h"
 #include "film/film_bytes.h"
 
 #include <algorithm>
@@ -190,6 +191,21 @@ PreparedRender prepareRender(SceneDesc desc, const SettingsOverrides& overrides,
     p.time = axis.time;
     p.fit = axis.fit;
     p.settings.validateAgainstFilm(p.time.binWidth * p.time.bins, {&desc, &overrides, diag});
+    // The phasor film's frequencies (film/phasor.h): --phasor, else the film block's "phasor".
+    const std::string phasorText = overrides.phasor ? *overrides.phasor : desc.film.phasor;
+    if (!phasorText.empty()) {
+        const std::string what = overrides.phasor ? "--phasor" : desc.where("film.phasor") + "film.phasor";
+        p.settings.phasor.frequencies = parsePhasorFrequencies(phasorText, p.time.bins, p.time.binWidth, what);
+        p.settings.phasor.refOpl = p.time.startOpl;
+        if (p.settings.method == Method::Preview)
+            throw UserError(what + ": the preview has no time; render with --method beams or pt");
+        const Camera& cam = p.scene->camera;
+        const uint64_t need = filmBytes(cam.width, cam.height, p.time.bins, p.settings.phasor.count());
+        if (need > maxFilmBytes())
+            throw UserError(what + ": the film with " + std::to_string(p.settings.phasor.count()) +
+                            " phasor frequencies would need " + humanBytes(need) + " but at most " +
+                            humanBytes(maxFilmBytes()) + " is allowed; ask for fewer frequencies or a smaller film");
+    }
     p.source.path = desc.path;
     p.source.version = desc.version;
     p.source.locs = std::move(desc.locs);
@@ -200,6 +216,7 @@ Fingerprint renderFingerprint(const PreparedRender& p) {
     Fingerprint f = p.sceneFingerprint;
     for (auto& kv : settingsFingerprint(p.settings)) f.push_back(std::move(kv));
     for (auto& kv : timeFingerprint(p.time)) f.push_back(std::move(kv));
+    for (auto& kv : phasorFingerprint(p.settings.phasor)) f.push_back(std::move(kv));
     return f;
 }
 

@@ -83,6 +83,9 @@ struct FilmDesc {
     double startOpl = 0.0;      // m of OPL
     double binWidthOpl = 0.01;  // m of OPL (ignored when autoRange; derived from bins)
     int bins = 256;
+    // The phasor film's frequencies as written ("" = none): film/phasor.h parsePhasorFrequencies,
+    // read once the time axis is known (render/prepare.cpp).
+    std::string phasor;
 };
 
 struct MediumDesc {

@@ -30,6 +30,9 @@
 //   //            "grid": [4, 4]}},      // exhaustive: Lx x Ly laser points at the cell centres
 //   "film": {
 //     "bins": 256,                       // time bins, integer >= 1
+//     "phasor": [0.5, 2],                // optional exact phasor film: frequencies in cycles per m of
+//                                        // OPL, or a string "F1,F2" | "wl:WL1,WL2" | "band:MEAN:SIGMA"
+//                                        // (docs/user/phasor.md; read once the time axis is known)
 //     "range": "auto",                   // fit the time range to the scene [default] ...
 //     "start_m": 0, "bin_width_m": 0.01  // ... or an explicit range (start_ns / bin_width_ns too);
 //   },                                   //     giving either one turns "auto" off (and both: error)
@@ -488,6 +491,21 @@ void readFilm(Context& ctx, const JsonValue& obj, FilmDesc& film) {
         const std::string key = start ? (b.has("start_m") ? "start_m" : "start_ns")
                                       : (b.has("bin_width_m") ? "bin_width_m" : "bin_width_ns");
         b.fail(key, key + " cannot be combined with \"range\": \"auto\" (remove one of them)");
+    }
+    if (const JsonValue* v = b.get("phasor")) {
+        if (v->isString()) {
+            film.phasor = v->text;
+        } else if (v->isArray() && !v->items.empty()) {
+            for (const JsonValue& x : v->items) {
+                if (!x.isNumber())
+                    b.wrongType("phasor", "frequencies [f1, f2, ...] in cycles per m of OPL, or a string");
+                if (!film.phasor.empty()) film.phasor += ',';
+                film.phasor += shortest(x.number);
+            }
+        } else {
+            b.wrongType("phasor",
+                        "frequencies [f1, f2, ...] in cycles per m of OPL, or a string such as \"band:0.5:0.5\"");
+        }
     }
     if (start || width) film.autoRange = false;
     if (start) film.startOpl = *start;
