@@ -7,6 +7,7 @@
 #include "film/film_export.h"
 #include "film/tone_map.h"
 #include "film/volume_export.h"
+#include "render/nlos_backprojection.h"
 #include "render/prepare.h"
 #include "scene/scene.h"
 #include "scene/scene_loader.h"
@@ -123,6 +124,8 @@ struct RenderOutputs {
     // A relay-wall scan: capture.h5 in the NLOS toolkit's layout (render/nlos_capture.h), written
     // with the steady image.
     const Scene* captureScene = nullptr;
+    // --backproject: backprojection.npy and .json from the capture (render/nlos_backprojection.h).
+    std::optional<BackprojectionSettings> backproject;
 };
 // The files RenderOutputs writes for a film of `bins` bins (preview.exr/png included).
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins);
