@@ -112,10 +112,15 @@ NlosCapture nlosCaptureGeometry(const Scene& scene, const TimeBins& tb) {
 }
 
 NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath) {
+    NlosCapture cap = nlosCaptureData(film, scene);
+    cap.sceneInfoYaml = sceneInfo(scene, scenePath);
+    return cap;
+}
+
+NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene) {
     const Camera& c = scene.camera;
     const TimeBins& tb = film.time();
     NlosCapture cap = nlosCaptureGeometry(scene, tb);
-    cap.sceneInfoYaml = sceneInfo(scene, scenePath);
 
     // H[k][lx][ly][sx][sy] = luminance of film pixel (sx, l Sy + sy), l = ly Lx + lx, bin k.
     const size_t perBin = static_cast<size_t>(cap.laserX) * cap.laserY * cap.sensorX * cap.sensorY;
