@@ -114,7 +114,15 @@ INSTANTIATE_TEST_SUITE_P(Scans, SyntheticPoint,
                                            SyntheticCase{Scan::Single, false, BackprojectionFilter::None},
                                            SyntheticCase{Scan::Single, true, BackprojectionFilter::None},
                                            SyntheticCase{Scan::Exhaustive, false, BackprojectionFilter::Laplacian},
-                                           SyntheticCase{Scan::Exhaustive, true, BackprojectionFilter::None}));
+                                           SyntheticCase{Scan::Exhaustive, true, BackprojectionFilter::None}),
+                         [](const ::testing::TestParamInfo<SyntheticCase>& info) {
+                             const SyntheticCase& c = info.param;
+                             const char* scan = c.scan == Scan::Confocal ? "Confocal"
+                                                : c.scan == Scan::Single ? "Single"
+                                                                         : "Exhaustive";
+                             return std::string(scan) + (c.fromDevices ? "FromDevices" : "FromWall") +
+                                    (c.filter == BackprojectionFilter::Laplacian ? "Laplacian" : "");
+                         });
 
 TEST(Backprojection, DefaultGridAndRefusals) {
     const NlosCapture c = syntheticCapture(Scan::Confocal, false);
