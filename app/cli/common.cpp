@@ -11,6 +11,7 @@
 #include "film/film_view.h"
 #include "film/picture_export.h"
 #include "io/folder_lock.h"
+#include "io/npy.h"
 #include "render/nlos_capture.h"
 #include "render/checkpoint.h"
 #include "render/time_range.h"
@@ -607,6 +608,46 @@ OutputFolder::OutputFolder(const std::string& dir, const std::string& command, c
 
 OutputFolder::~OutputFolder() = default;  // releases the lock (lock_)
 
+namespace {
+
+// backprojection.npy (nx, ny, nz float32) and backprojection.json (its grid, its peak, its cost).
+void writeBackprojection(const std::string& out, const NlosCapture& cap, const BackprojectionSettings& s, bool quiet) {
+    const double t0 = nowSec();
+    const BackprojectionVolume vol = backproject(cap, s);
+    const double sec = nowSec() - t0;
+    const BackprojectionGrid& g = vol.grid;
+    writeNpy(out + "/" + kBackprojectionNpyName, {g.nx(), g.ny(), g.nz()}, vol.values);
+    using nlohmann::json;
+    auto vec = [](const Vec3& v) { return json::array({v.x, v.y, v.z}); };
+    json j;
+    j["about"] =
+        "backprojection.npy: (nx, ny, nz) float32, the sum over (laser, sensor) pairs of the capture's H "
+        "(luminance) at t(x) = |l - x| + |x - s| (+ the first and last legs when the capture's time counts "
+        "them), then the filter; voxel (i, j, k) = origin + a[i] u + b[j] v + depths_m[k] normal";
+    j["filter"] = backprojectionFilterName(vol.filter);
+    j["origin"] = vec(g.origin);
+    j["u"] = vec(g.u);
+    j["v"] = vec(g.v);
+    j["normal"] = vec(g.normal);
+    j["a_m"] = g.a;
+    j["b_m"] = g.b;
+    j["depths_m"] = g.depthsM;
+    j["peak"] = {{"voxel", {vol.peakI, vol.peakJ, vol.peakK}},
+                 {"position_m", vec(g.voxel(vol.peakI, vol.peakJ, vol.peakK))},
+                 {"depth_m", g.depthsM[static_cast<size_t>(vol.peakK)]},
+                 {"value", vol.peakValue}};
+    j["voxels"] = g.voxels();
+    j["pairs"] = backprojectionPairs(cap);
+    j["seconds"] = sec;
+    writeTextFile(out + "/" + kBackprojectionJsonName, j.dump(2) + "\n");
+    if (!quiet)
+        std::printf("back-projected %lld voxels x %lld pairs in %.3f s: peak at depth %.3f m\n",
+                    static_cast<long long>(g.voxels()), static_cast<long long>(backprojectionPairs(cap)), sec,
+                    g.depthsM[static_cast<size_t>(vol.peakK)]);
+}
+
+}  // namespace
+
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     OutputFiles f;
     f.files = {kPreviewExrName, kPreviewPngName, kSteadyExrName, kSteadyPngName, kSummaryName};
@@ -614,6 +655,10 @@ OutputFiles renderOutputFiles(const RenderOutputs& r, int bins) {
     if (r.captureScene) f.files.push_back(kCaptureH5Name);
     if (r.phasor)
         for (const std::string& n : phasorFileNames()) f.files.push_back(n);
+    if (r.captureScene && r.backproject) {
+        f.files.push_back(kBackprojectionNpyName);
+        f.files.push_back(kBackprojectionJsonName);
+    }
     if (r.npy)
         for (const std::string& n : volumeFileNames()) f.files.push_back(n);
     if (r.contactSheet > 0) f.files.push_back(contactSheetName());
@@ -782,8 +827,14 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         rep.exposureEv.emplace_back(kSteadyPngName, ev);
     }
     if (r.captureScene) {
-        writeNlosHdf5(r.out + "/" + kCaptureH5Name, nlosCapture(*snap, *r.captureScene, r.provenance.scene));
+        const NlosCapture cap = nlosCapture(*snap, *r.captureScene, r.provenance.scene);
+        writeNlosHdf5(r.out + "/" + kCaptureH5Name, cap);
         rep.kept.push_back(kCaptureH5Name);
+        if (r.backproject) {
+            writeBackprojection(r.out, cap, *r.backproject, r.quiet);
+            rep.kept.push_back(kBackprojectionNpyName);
+            rep.kept.push_back(kBackprojectionJsonName);
+        }
     }
     if (r.phasor)
         for (const std::string& n : exportPhasorNpy(*snap, r.out, r.opt, r.provenance)) rep.kept.push_back(n);

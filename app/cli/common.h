@@ -7,6 +7,7 @@
 #include "film/film_export.h"
 #include "film/tone_map.h"
 #include "film/volume_export.h"
+#include "render/nlos_backprojection.h"
 #include "render/prepare.h"
 #include "scene/scene.h"
 #include "scene/scene_loader.h"
@@ -125,6 +126,8 @@ struct RenderOutputs {
     // with the steady image.
     const Scene* captureScene = nullptr;
     bool phasor = false;  // the film has a phasor film: phasor.npy & co (volume_export.h)
+    // --backproject: backprojection.npy and .json from the capture (render/nlos_backprojection.h).
+    std::optional<BackprojectionSettings> backproject;
 };
 // The files RenderOutputs writes for a film of `bins` bins (preview.exr/png included).
 OutputFiles renderOutputFiles(const RenderOutputs& r, int bins);

@@ -6,6 +6,7 @@
 #include "cli/commands.h"
 #include "cli/resume.h"
 #include "base/error.h"
+#include "base/text.h"
 #include "film/film_export.h"
 #include "io/record_json.h"
 #include "film/picture_export.h"
@@ -13,6 +14,7 @@
 #include "estimators/estimator.h"
 #include "integrators/preview.h"
 #include "io/video_encoder.h"
+#include "render/nlos_capture.h"
 #include "render/provenance.h"
 
 #include <nlohmann/json.hpp>
@@ -47,6 +49,12 @@ struct RenderCmd {
     bool noCheckpoint = false;                      // --no-checkpoint: none when Ctrl-C or SIGTERM stops the render
     bool overwriteCheckpoint = false;  // --overwrite-checkpoint: an earlier render's checkpoint in -o may go
     bool npy = false, mp4 = false, falseColour = false, noSrgb = false;
+    // --backproject and its grid (render/nlos_backprojection.h); 0 = the default.
+    bool backproject = false;
+    double bpDepthMin = 0.0, bpDepthMax = 0.0;
+    int bpDepths = 64;
+    std::string bpFilter = "none";
+    std::string bpFlagGiven;  // a --bp-* flag given (refused without --backproject)
     double fps = 24.0, videoEv = 0.0;
     int contactSheet = 0;
     bool fpsGiven = false, videoEvGiven = false;  // on the command line (a flag without its output is refused)
@@ -198,6 +206,14 @@ void checkFlagConflicts(const RenderCmd& c) {
         throw UserError("--spp sets the path tracer's camera paths per pixel per pass; --method " + c.method +
                         " traces one camera ray per pixel per pass (its progress comes from more passes or "
                         "--photons): add --method pt, or drop --spp");
+    if (!c.bpFlagGiven.empty() && !c.backproject)
+        throw UserError(c.bpFlagGiven +
+                        " shapes backprojection.npy, which only --backproject writes: add "
+                        "--backproject, or drop " +
+                        c.bpFlagGiven);
+    if (c.bpDepthMin > 0.0 && c.bpDepthMax > 0.0 && c.bpDepthMax <= c.bpDepthMin)
+        throw UserError("--bp-depth-max (" + shortest(c.bpDepthMax) + " m) must be beyond --bp-depth-min (" +
+                        shortest(c.bpDepthMin) + " m)");
     if (c.continuous && c.delta)
         throw UserError(
             "--continuous and --delta contradict each other: give one of them (frames are for a delta "
@@ -252,6 +268,20 @@ void run(RenderCmd& c) {
     outputs.contactSheet = c.contactSheet;
     if (prepared.scene->camera.scan != ScanMode::None) outputs.captureScene = prepared.scene.get();
     outputs.phasor = prepared.settings.phasor.active();
+    if (c.backproject) {
+        if (!outputs.captureScene)
+            throw UserError(
+                "--backproject back-projects an NLOS capture: it needs a relay-wall camera with a "
+                "\"scan\" (docs/user/nlos.md); drop --backproject for this scene");
+        BackprojectionSettings bp;
+        bp.depthMinM = c.bpDepthMin;
+        bp.depthMaxM = c.bpDepthMax;
+        bp.depths = c.bpDepths;
+        bp.filter = parseBackprojectionFilter(c.bpFilter, "--bp-filter");
+        bp.flag = "--backproject";
+        backprojectionGrid(nlosCaptureGeometry(*prepared.scene, prepared.time), bp);  // refused before the render
+        outputs.backproject = bp;
+    }
     outputs.tone.exposureEv = static_cast<float>(c.videoEv);
     outputs.tone.falseColor = c.falseColour;
     outputs.tone.srgb = !c.noSrgb;
@@ -475,6 +505,19 @@ void registerRender(CLI::App& app) {
     cmd->add_flag("--false-colour", c->falseColour,
                   "transient.mp4 and contact_sheet.png in false colour (log luminance)");
     cmd->add_flag("--no-srgb", c->noSrgb, "transient.mp4 and contact_sheet.png without sRGB encoding");
+    cmd->add_flag("--backproject", c->backproject,
+                  "Relay-wall scans: also back-project capture.h5 onto a voxel grid in front of the wall: "
+                  "backprojection.npy (nx x ny x depths float32, luminance) and backprojection.json (grid, peak)");
+    cmd->add_option("--bp-depth-min", c->bpDepthMin,
+                    "--backproject: nearest depth from the wall, m (default: one depth step)")
+        ->check(flags::number(0.0, 1e6, true, "m"));
+    cmd->add_option("--bp-depth-max", c->bpDepthMax,
+                    "--backproject: farthest depth, m (default: the deepest the film's last bin sees)")
+        ->check(flags::number(0.0, 1e6, true, "m"));
+    cmd->add_option("--bp-depths", c->bpDepths, "--backproject: voxels along the wall's normal")
+        ->transform(flags::integer(1, 4096, "depths"));
+    cmd->add_option("--bp-filter", c->bpFilter,
+                    "--backproject: none | laplacian (minus the second difference along depth)");
     cmd->add_flag("--preview", c->previewOnly, "Only write the eye-light geometry preview, trace no photon");
     cmd->add_flag("-q,--quiet", c->quiet, "No progress output");
     cmd->add_option("--resume", c->resume,
@@ -499,7 +542,10 @@ void registerRender(CLI::App& app) {
         c->sppGiven = cmd->get_option("--spp")->count() > 0;
         c->methodGiven = cmd->get_option("--method")->count() > 0;
         // (An output asked for: "--strip 0" and "--contact-sheet 0" ask for none.)
-        for (const char* f : {"--npy", "--mp4", "--contact-sheet", "--strip", "--checkpoint", "--checkpoint-every"})
+        for (const char* f : {"--bp-depth-min", "--bp-depth-max", "--bp-depths", "--bp-filter"})
+            if (cmd->get_option(f)->count() > 0 && c->bpFlagGiven.empty()) c->bpFlagGiven = f;
+        for (const char* f :
+             {"--npy", "--backproject", "--mp4", "--contact-sheet", "--strip", "--checkpoint", "--checkpoint-every"})
             if (cmd->get_option(f)->count() > 0 && !(std::string(f) == "--strip" && c->strip == 0) &&
                 !(std::string(f) == "--contact-sheet" && c->contactSheet == 0))
                 c->outputFlagsGiven.emplace_back(f);

@@ -11,6 +11,7 @@
 // flags are registered in app/cli/view_command.cpp, which prepares the render (prepareRender)
 // and calls runViewer.
 #pragma once
+#include "render/nlos_backprojection.h"
 #include "viewer/session.h"
 #include "viewer/gl.h"
 #include "viewer/image_view.h"
@@ -18,6 +19,7 @@
 
 #include <imgui.h>
 
+#include <atomic>
 #include <functional>
 #include <future>
 #include <memory>
@@ -85,6 +87,13 @@ struct ViewState {
     float speed = 8.0f;       // bins per second
     double playAccum = 0.0;
     int selX = 0, selY = 0;  // pixel of the profile; selY is the streak's row
+    // Relay-wall scans: the back-projection panel (in place of the streak and profile), its grid
+    // and filter (none by default: the Laplacian sharpens a converged capture but, after a few
+    // passes, picks noise), and the depth slice shown (voxel index).
+    bool showBackprojection = false;
+    BackprojectionSettings bp{.flag = "the back-projection's grid"};
+    int bpSlice = 0;
+    bool bpSliceAuto = true;  // the slice follows the peak until the user moves it
     std::string outDir = "out/view";
     int sheetFrames = 16;  // frames of the contact sheet export
 };
@@ -113,6 +122,21 @@ struct BinEnergyResult {
     std::vector<double> energy;  // per bin
     bool complete = false;       // every tile of the snapshot read had the same passes
 };
+
+// The back-projection of one snapshot (render/nlos_backprojection.h), made on a helper thread.
+struct BackprojectionResult {
+    uint64_t generation = ~0ull, passes = ~0ull;  // of the snapshot read
+    BackprojectionSettings settings;
+    BackprojectionVolume volume;
+    BackprojectionImages images;
+    int64_t pairs = 0;     // (laser, sensor) pairs summed per voxel
+    double seconds = 0.0;  // reading the capture and back-projecting
+    std::string error;     // a refused grid (the settings' message)
+};
+// Same grid and filter (what a new back-projection is needed for).
+bool sameBackprojection(const BackprojectionSettings& a, const BackprojectionSettings& b);
+// Seconds between two back-projections while the render runs (one also follows the last pass).
+inline constexpr double kBackprojectionEverySec = 2.0;
 
 // The bin holding the most light, or -1 if the film is black.
 int peakEnergyBin(const std::vector<double>& energy);
@@ -149,6 +173,10 @@ private:
     void updateFrame();
     void updateProfile();
     void updateBinEnergy();
+    void updateBackprojection();  // relay-wall scans, when the panel is shown
+    void drawBackprojectionSection();
+    void drawBackprojectionPanel();
+    bool backprojectionSettled() const;  // shown and up to date with the film and settings (or not shown)
     void fitPendingExposure(const FetchKey& key);
     void fitHiddenFrameExposure();
     void trackNoise(const FetchKey& key);  // after a frame fetch
@@ -225,6 +253,14 @@ private:
     std::future<BinEnergyResult> binEnergyJob_;
     FetchKey binEnergyRequested_;
     double binEnergyLaunched_ = -1e9, binEnergySec_ = 0.0;
+
+    std::future<BackprojectionResult> bpJob_;
+    std::atomic<bool> bpCancel_{false};
+    std::optional<BackprojectionResult> bp_;  // the last one finished
+    double bpLaunched_ = -1e9;
+    DisplayImage bpFront_, bpDepth_, bpSliceImage_, bpTop_;
+    ImVec4 bpFrontArea_{0, 0, 0, 0};  // where the front image was drawn (x, y, w, h; screenshot report)
+    int bpSliceUploaded_ = -1;        // the slice bpSliceImage_ shows (-1: none since bp_ changed)
 
     std::future<ProfileResult> profileJob_;
     FetchKey profileRequested_, profileKey_;

@@ -23,6 +23,7 @@ bool Viewer::settled() {
         return false;
     if (st_.autoBin && !(binEnergyRequested_ == binEnergyKey())) return false;
     if (!(frameKey_ == frameKey()) || !frameComplete_) return false;
+    if (!backprojectionSettled()) return false;
     return profileKey_ == profileKey();
 }
 
@@ -128,6 +129,19 @@ void Viewer::takeScreenshot(int fbWidth, int fbHeight) {
     labels("ticks profile_ns", profileTicksNs_);
     labels("colour_bar", colourBarTicks_);
     std::printf("profile_log %d\n", st_.profileLog ? 1 : 0);
+    if (bp_ && bp_->error.empty()) {  // the back-projection shown (backprojection_view.cpp)
+        const BackprojectionVolume& v = bp_->volume;
+        const Vec3 p = v.grid.voxel(v.peakI, v.peakJ, v.peakK);
+        std::printf(
+            "backprojection passes %llu voxels %d %d %d pairs %lld ms %.3f peak_voxel %d %d %d depth_m %.6g "
+            "position_m %.6g %.6g %.6g front_area %.1f %.1f %.1f %.1f\n",
+            static_cast<unsigned long long>(bp_->passes), v.grid.nx(), v.grid.ny(), v.grid.nz(),
+            static_cast<long long>(bp_->pairs), 1000.0 * bp_->seconds, v.peakI, v.peakJ, v.peakK,
+            v.grid.depthsM[static_cast<size_t>(v.peakK)], p.x, p.y, p.z, bpFrontArea_.x, bpFrontArea_.y, bpFrontArea_.z,
+            bpFrontArea_.w);
+    } else if (bp_) {
+        std::printf("backprojection error %s\n", bp_->error.c_str());
+    }
     std::printf("noise relative_error %.6g batches %d\n", noise_.relativeError(), noise_.batches());
     // How fast the picture came: seconds from the driver's start to the first fetched image with
     // light, and to the end of each pass (the warm-up's effect; issue 15's targets: light within 1 s,

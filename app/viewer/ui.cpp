@@ -178,8 +178,14 @@ void Viewer::drawUi() {
 
     ImGui::SetNextWindowPos(ImVec2(left, topH));
     ImGui::SetNextWindowSize(ImVec2(ds.x - left, ds.y - topH));
-    section_ = "Streak and pixel profile";
-    if (ImGui::Begin("Streak and pixel profile", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawTimePanel();
+    if (st_.showBackprojection && scene_.camera.scan != ScanMode::None) {
+        section_ = "Back-projection panel";
+        if (ImGui::Begin("Back-projection panel", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar))
+            drawBackprojectionPanel();
+    } else {
+        section_ = "Streak and pixel profile";
+        if (ImGui::Begin("Streak and pixel profile", nullptr, kPanel | ImGuiWindowFlags_NoScrollbar)) drawTimePanel();
+    }
     ImGui::End();
     drawPopups();
     if (!firstRecorded_) {  // the layout the user first aims at (screenshot mode reports it)
@@ -283,6 +289,7 @@ void Viewer::drawControls() {
                 "white = clipped, black = no energy");
         }
     }
+    drawBackprojectionSection();
     drawProgressSection();
     drawSettingsSection();
     drawExportSection();

@@ -213,6 +213,8 @@ Viewer::~Viewer() {
     // Helper threads first (they only read the film); the session then finishes a checkpoint being
     // written, cancels an export and stops the render; the GL objects (members declared after the
     // session) are deleted first, while the context still exists.
+    bpCancel_ = true;
+    if (bpJob_.valid()) bpJob_.wait();
     if (profileJob_.valid()) profileJob_.wait();
     if (binEnergyJob_.valid()) binEnergyJob_.wait();
 }
@@ -279,7 +281,7 @@ void Viewer::run() {
     while (!glfwWindowShouldClose(window_) && gCloseSignal.load() == 0) {
         const bool busyDriver = driver().running() && !driver().paused();
         const bool animate = shot || st_.playing || session_.exportJob().busy() || profileJob_.valid() ||
-                             binEnergyJob_.valid() || !frameComplete_;
+                             binEnergyJob_.valid() || bpJob_.valid() || !frameComplete_;
         if (animate || extraFrames > 0) {
             glfwPollEvents();
             if (extraFrames > 0) --extraFrames;
@@ -312,6 +314,7 @@ void Viewer::run() {
         updateFrame();
         updateProfile();
         updateBinEnergy();
+        updateBackprojection();
         drawUi();
         ImGui::Render();
 

@@ -75,12 +75,11 @@ std::string sceneInfo(const Scene& scene, const std::string& scenePath) {
 
 }  // namespace
 
-NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath) {
+NlosCapture nlosCaptureGeometry(const Scene& scene, const TimeBins& tb) {
     const Camera& c = scene.camera;
     if (!c.relayWall || c.scan == ScanMode::None)
         throw UserError("an NLOS capture needs a relay-wall camera with a \"scan\" (docs/user/scenes.md)");
     NlosCapture cap;
-    const TimeBins& tb = film.time();
     cap.bins = tb.bins;
     cap.sensorX = c.width;
     cap.sensorY = c.sensorRows;
@@ -109,7 +108,19 @@ NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std:
     cap.deltaT = tb.binWidth;
     cap.tStart = tb.startOpl;
     cap.tAccountsFirstAndLastBounces = !c.timeFromWall;
+    return cap;
+}
+
+NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath) {
+    NlosCapture cap = nlosCaptureData(film, scene);
     cap.sceneInfoYaml = sceneInfo(scene, scenePath);
+    return cap;
+}
+
+NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene) {
+    const Camera& c = scene.camera;
+    const TimeBins& tb = film.time();
+    NlosCapture cap = nlosCaptureGeometry(scene, tb);
 
     // H[k][lx][ly][sx][sy] = luminance of film pixel (sx, l Sy + sy), l = ly Lx + lx, bin k.
     const size_t perBin = static_cast<size_t>(cap.laserX) * cap.laserY * cap.sensorX * cap.sensorY;

@@ -18,6 +18,12 @@ namespace tpb {
 // `scenePath`. Throws UserError when the camera has no scan.
 NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath);
 
+// The capture without scene_info (the viewer's back-projection: no rays cast).
+NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene);
+// The capture without H and scene_info: the grids, devices and time axis `tb` (what a
+// back-projection's grid needs before the render). Throws UserError when the camera has no scan.
+NlosCapture nlosCaptureGeometry(const Scene& scene, const TimeBins& tb);
+
 // The name `tpb render` writes it under, beside the frames.
 inline constexpr const char* kCaptureH5Name = "capture.h5";
 

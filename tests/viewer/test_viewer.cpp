@@ -1201,3 +1201,84 @@ TEST_F(ViewerTest, ExportsAndSaveCheckpointRespectTheFolderLockAndOtherCheckpoin
         << r.err;
     EXPECT_TRUE(slurp(other / "checkpoint.tpbck") == before) << "the other render's checkpoint was replaced";
 }
+
+namespace {
+
+// The hidden target of scenes/nlos_confocal.json as the scene file gives it: every quad but the
+// relay wall (z = 0), all at one depth; their extent in x and y.
+struct HiddenTarget {
+    double depthM = -1.0, xLo = 1e9, xHi = -1e9, yLo = 1e9, yHi = -1e9;
+};
+
+HiddenTarget hiddenTarget(const fs::path& scene) {
+    const nlohmann::json j = nlohmann::json::parse(slurp(scene));
+    HiddenTarget t;
+    for (const auto& s : j["shapes"]) {
+        if (s["name"] == "relay") continue;
+        const auto c = s["corner"].get<std::vector<double>>(), u = s["edge_u"].get<std::vector<double>>(),
+                   v = s["edge_v"].get<std::vector<double>>();
+        EXPECT_EQ(u[2], 0.0);
+        EXPECT_EQ(v[2], 0.0);
+        t.depthM = c[2];
+        t.xLo = std::min({t.xLo, c[0], c[0] + u[0] + v[0]});
+        t.xHi = std::max({t.xHi, c[0], c[0] + u[0] + v[0]});
+        t.yLo = std::min({t.yLo, c[1], c[1] + u[1] + v[1]});
+        t.yHi = std::max({t.yHi, c[1], c[1] + u[1] + v[1]});
+    }
+    return t;
+}
+
+}  // namespace
+
+// The Back-projection view on the shipped confocal scan (2 full passes, no warm-up): the report's peak voxel is at
+// the T's depth within one bin width of round-trip time plus a depth step, in front of the T within
+// one voxel pitch, and the panel's front image is drawn (not black).
+TEST(ViewerBackprojection, PeakIsAtTheHiddenTarget) {
+    if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is missing";
+    const fs::path dir = makeTempDir("backprojection");
+    const fs::path scene = fs::path(TPB_SOURCE_DIR) / "scenes" / "nlos_confocal.json";
+    const Proc r =
+        runXvfb(std::string(TPB_BINARY) + " view " + q(scene) +
+                    " --passes 2 --warmup 0 --seed 1 --after-passes 2 --window-size 1280 800 --screenshot " +
+                    q(dir / "bp.png") + " --click Back-projection --click 'Back-projection/Show back-projection'",
+                dir / "bp");
+    if (r.err.find("Xvfb failed to start") != std::string::npos) GTEST_SKIP() << "no X server: " << r.err;
+    ASSERT_EQ(r.code, 0) << r.out << r.err;
+    const size_t at = r.out.find("backprojection passes ");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    int passes = 0, nx = 0, ny = 0, nz = 0, i = 0, j = 0, k = 0;
+    long long pairs = 0;
+    double ms = 0, depth = 0, x = 0, y = 0, z = 0, fx = 0, fy = 0, fw = 0, fh = 0;
+    ASSERT_EQ(std::sscanf(r.out.c_str() + at,
+                          "backprojection passes %d voxels %d %d %d pairs %lld ms %lf peak_voxel %d %d %d depth_m %lf "
+                          "position_m %lf %lf %lf front_area %lf %lf %lf %lf",
+                          &passes, &nx, &ny, &nz, &pairs, &ms, &i, &j, &k, &depth, &x, &y, &z, &fx, &fy, &fw, &fh),
+              17)
+        << r.out;
+    EXPECT_EQ(passes, 2);
+    EXPECT_EQ(nx, 16);
+    EXPECT_EQ(ny, 16);
+    EXPECT_EQ(pairs, 256);
+    const nlohmann::json sc = nlohmann::json::parse(slurp(scene));
+    const double binM = sc["film"]["bin_width_m"].get<double>();
+    const double stepM = (sc["film"]["start_m"].get<double>() + binM * sc["film"]["bins"].get<int>()) / 2.0 / nz;
+    const HiddenTarget t = hiddenTarget(scene);
+    ASSERT_GT(t.depthM, 0.0);
+    EXPECT_NEAR(depth, t.depthM, binM / 2.0 + stepM);
+    const double pitch = 2.0 / 16.0;  // the 2 m wall over 16 sensor points
+    EXPECT_GE(x, t.xLo - pitch);
+    EXPECT_LE(x, t.xHi + pitch);
+    EXPECT_GE(y, t.yLo - pitch);
+    EXPECT_LE(y, t.yHi + pitch);
+    // The front image is on screen and shows the peak (some pixel near white-yellow).
+    const Image8 shot = readPng(dir / "bp.png");
+    ASSERT_GT(fw, 10.0);
+    ASSERT_LE(fx + fw, shot.w);
+    ASSERT_LE(fy + fh, shot.h);
+    int bright = 0;
+    for (int py = static_cast<int>(fy); py < static_cast<int>(fy + fh); ++py)
+        for (int px = static_cast<int>(fx); px < static_cast<int>(fx + fw); ++px)
+            bright += shot.at(px, py)[0] > 240 && shot.at(px, py)[1] > 200;
+    EXPECT_GT(bright, 0) << "no bright voxel in the front image";
+    fs::remove_all(dir);
+}
