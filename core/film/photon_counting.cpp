@@ -94,16 +94,21 @@ double samplePoisson(Rng& rng, double mean) {
 
 namespace {
 
+// "--counts dark_hz=-5" (or "dark_hz=-5" when the caller names the flag itself).
+std::string named(const std::string& what, std::string_view item) {
+    return (what.empty() ? std::string() : what + " ") + std::string(item);
+}
+
 double parseNumber(std::string_view item, std::string_view value, const std::string& what) {
     double v = 0.0;
     const auto [p, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
     if (ec != std::errc() || p != value.data() + value.size() || !std::isfinite(v))
-        throw UserError(what + " " + std::string(item) + ": not a number; write e.g. photons=1e4");
+        throw UserError(named(what, item) + ": not a number; write e.g. photons=1e4");
     return v;
 }
 
 void require(bool ok, const std::string& what, std::string_view item, const char* rule) {
-    if (!ok) throw UserError(what + " " + std::string(item) + ": " + rule);
+    if (!ok) throw UserError(named(what, item) + ": " + rule);
 }
 
 }  // namespace
@@ -127,7 +132,7 @@ PhotonCounting parseCounting(std::string_view s, const std::string& what) {
             else if (key == "on" || key.empty())
                 continue;
             else
-                throw UserError(what + " " + std::string(item) +
+                throw UserError(named(what, item) +
                                 ": unknown item; use photons=, efficiency=, dark_hz=, ambient_hz=, cycles=, "
                                 "afterpulse=, afterpulse_ns=, seed=, pileup, coates (or off)");
             continue;
@@ -159,13 +164,13 @@ PhotonCounting parseCounting(std::string_view s, const std::string& what) {
             require(v >= 0.0 && v <= 9e15 && v == std::floor(v), what, item, "seed must be a whole number >= 0");
             m.seed = static_cast<uint64_t>(v);
         } else {
-            throw UserError(what + " " + std::string(item) +
+            throw UserError(named(what, item) +
                             ": unknown key; use photons=, efficiency=, dark_hz=, ambient_hz=, cycles=, afterpulse=, "
                             "afterpulse_ns=, seed=, pileup, coates (or off)");
         }
     }
     if (m.coates && !m.pileup)
-        throw UserError(what + " coates: the Coates correction undoes pile-up; add pileup (or drop coates)");
+        throw UserError(named(what, "coates") + ": the Coates correction undoes pile-up; add pileup (or drop coates)");
     return m;
 }
 

@@ -75,7 +75,8 @@ std::string sceneInfo(const Scene& scene, const std::string& scenePath) {
 
 }  // namespace
 
-NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath) {
+NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath,
+                        const TimeResponse& response) {
     const Camera& c = scene.camera;
     if (!c.relayWall || c.scan == ScanMode::None)
         throw UserError("an NLOS capture needs a relay-wall camera with a \"scan\" (docs/user/scenes.md)");
@@ -115,7 +116,7 @@ NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std:
     const size_t perBin = static_cast<size_t>(cap.laserX) * cap.laserY * cap.sensorX * cap.sensorY;
     cap.H.assign(perBin * static_cast<size_t>(tb.bins), 0.0f);
     for (int k = 0; k < tb.bins; ++k) {
-        const std::vector<float> img = frameImage(film, k, TimeAxis::Real, EmissionMode::Delta);
+        const std::vector<float> img = frameImage(film, k, TimeAxis::Real, EmissionMode::Delta, response);
         float* h = &cap.H[static_cast<size_t>(k) * perBin];
         for (int lx = 0; lx < cap.laserX; ++lx)
             for (int ly = 0; ly < cap.laserY; ++ly) {

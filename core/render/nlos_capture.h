@@ -7,6 +7,7 @@
 // it (per sensor point, the distance along the wall's normal to the first surface, and its normal).
 #pragma once
 #include "film/film_snapshot.h"
+#include "film/time_response.h"
 #include "io/nlos_hdf5.h"
 #include "scene/scene.h"
 
@@ -15,8 +16,10 @@
 namespace tpb {
 
 // The capture of `film`, rendered from `scene` (a relay-wall camera with a scan) loaded from
-// `scenePath`. Throws UserError when the camera has no scan.
-NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath);
+// `scenePath`, seen through `response` (pulse, sensor, photon counts: film/time_response.h; with
+// counts, H holds counts per bin). Throws UserError when the camera has no scan.
+NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath,
+                        const TimeResponse& response = {});
 
 // The name `tpb render` writes it under, beside the frames.
 inline constexpr const char* kCaptureH5Name = "capture.h5";
