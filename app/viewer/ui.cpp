@@ -557,11 +557,15 @@ void Viewer::drawTimeResponse() {
     }
 }
 
-// Photon counts (film/photon_counting.h), applied when the film is read like the pulse: one row,
-// [counts] then the budget, dark and ambient rates, cycles, pile-up, Coates and the seed. The
-// efficiency and afterpulses come from --counts.
+// Photon counts (film/photon_counting.h), applied when the film is read like the pulse: [counts]
+// after the pulse and sensor, then (when on) a row of the budget, dark and ambient rates, cycles,
+// pile-up, Coates and the seed. The efficiency and afterpulses come from --counts.
 void Viewer::drawCounting() {
     PhotonCounting m = st_.response.counting;
+    ImGui::SameLine();  // on the pulse/sensor row if it fits; its parameters on a row of their own
+    const float boxWidth =
+        ImGui::GetFrameHeight() + ImGui::GetStyle().ItemInnerSpacing.x + ImGui::CalcTextSize("counts").x;
+    if (ImGui::GetContentRegionAvail().x < boxWidth) ImGui::NewLine();
     ImGui::Checkbox("counts", &m.enabled);
     track("counts");
     if (ImGui::IsItemHovered())
@@ -569,8 +573,10 @@ void Viewer::drawCounting() {
             "the film read as SPAD photon counts per bin (grey): Poisson, or first-photon TCSPC with pile-up;\n"
             "no re-render; off: the noise-free film");
     if (m.enabled) {
+        bool first = true;
         const auto number = [&](const char* id, double& v, double lo, double hi, const char* tip) {
-            ImGui::SameLine(0, 2);
+            if (!first) ImGui::SameLine(0, 2);
+            first = false;
             ImGui::SetNextItemWidth(60);
             ImGui::InputDouble(id, &v, 0.0, 0.0, "%.3g");
             track(id);
