@@ -134,6 +134,19 @@ CLI::Validator sensor() {
         "ideal|gaussian:NS|exp:NS");
 }
 
+CLI::Validator counts() {
+    return CLI::Validator(
+        [](std::string& s) -> std::string {
+            try {
+                parseCounting(s, "");  // CLI11 names the flag
+                return std::string();
+            } catch (const UserError& e) {
+                return e.what();
+            }
+        },
+        "off|photons=P,dark_hz=R,...");
+}
+
 CLI::Validator threads() {
     return CLI::Validator(
         [](std::string& s) -> std::string {
@@ -338,6 +351,8 @@ nlohmann::json summaryHeader(const PreparedRender& p, const char* method, size_t
                    {"pulse", pulseName(opt.response)},
                    {"sensor", sensorName(opt.response)},
                    {"time_response", describe(opt.response)},
+                   {"counts", countingName(opt.response.counting)},  // film/photon_counting.h
+                   {"units", opt.response.counting.enabled ? "counts per bin" : "radiance"},
                    {"step", opt.step}};
     const FilmStats& fs = film.stats;
     nlohmann::json energy = {{"rejected_samples", fs.rejectedSamples.load()},
@@ -827,7 +842,7 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
         rep.exposureEv.emplace_back(kSteadyPngName, ev);
     }
     if (r.captureScene) {
-        const NlosCapture cap = nlosCapture(*snap, *r.captureScene, r.provenance.scene);
+        const NlosCapture cap = nlosCapture(*snap, *r.captureScene, r.provenance.scene, r.opt.response);
         writeNlosHdf5(r.out + "/" + kCaptureH5Name, cap);
         rep.kept.push_back(kCaptureH5Name);
         if (r.backproject) {

@@ -27,6 +27,8 @@ CLI::Validator threads();
 // (film/time_response.h).
 CLI::Validator pulse();
 CLI::Validator sensor();
+// --counts off | photons=P,efficiency=E,dark_hz=R,... (film/photon_counting.h)
+CLI::Validator counts();
 }  // namespace flags
 
 }  // namespace tpb::app

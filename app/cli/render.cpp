@@ -42,6 +42,7 @@ struct RenderCmd {
     int spp = 1;
     // Checkpoints (render/checkpoint.h, cli/resume.h).
     std::string pulse = "delta", sensor = "ideal";  // --pulse, --sensor (film/time_response.h)
+    std::string counts = "off";                     // --counts (film/photon_counting.h)
     std::string resume;                             // --resume DIR
     bool outGiven = false;                          // -o given (a resume writes into the checkpoint's folder otherwise)
     bool checkpoint = false;                        // --checkpoint: one when the render ends
@@ -254,6 +255,7 @@ void run(RenderCmd& c) {
     opt.pixel = c.half ? ExrPixel::Half : ExrPixel::Float;
     opt.response = *parseSensor(c.sensor, *parsePulse(c.pulse));  // (each checked when parsed)
     checkTimeResponseFitsFilm(c.pulse, c.sensor, prepared.time);  // against the bins: before any pass or file
+    opt.response.counting = parseCounting(c.counts);              // (checked when parsed)
     opt.step = c.frameStep;
     RenderOutputs outputs;
     outputs.out = c.out;
@@ -476,6 +478,11 @@ void registerRender(CLI::App& app) {
     cmd->add_option("--sensor", c->sensor,
                     "Sensor time response: ideal | gaussian:FWHM_NS (jitter) | exp:TAU_NS (decay)")
         ->check(flags::sensor());
+    cmd->add_option("--counts", c->counts,
+                    "Outputs as SPAD photon counts per bin (after --pulse/--sensor; no re-render): off | "
+                    "photons=P,efficiency=E,dark_hz=R,ambient_hz=R,cycles=N,afterpulse=P,afterpulse_ns=T,pileup,"
+                    "coates,seed=S (docs/user/photon-counting.md)")
+        ->check(flags::counts());
     cmd->add_flag("--half", c->half, "Write half-float EXR frames");
     cmd->add_option("--frame-step", c->frameStep, "Write every K-th frame")
         ->transform(flags::integer(1, INT_MAX, "1 = every frame"));

@@ -135,6 +135,10 @@ void registerView(CLI::App& app) {
         ->check(flags::pulse());
     cmd->add_option("--sensor", o->sensor, "Start with this sensor response: ideal | gaussian:FWHM_NS | exp:TAU_NS")
         ->check(flags::sensor());
+    cmd->add_option("--counts", o->counts,
+                    "Start with the film read as SPAD photon counts: off | photons=P,efficiency=E,dark_hz=R,"
+                    "ambient_hz=R,cycles=N,afterpulse=P,afterpulse_ns=T,pileup,coates,seed=S")
+        ->check(flags::counts());
     cmd->add_flag("--false-color", o->falseColor, "Start with the false-colour intensity map");
     cmd->add_flag("--no-srgb", o->noSrgb, "Show linear values (no sRGB encoding)");
     CLI::Option* steady =

@@ -58,6 +58,7 @@ struct ViewOptions {
     // <export folder>/checkpoint.tpbck: render/checkpoint.h) so `--resume` can reproduce it.
     SettingsOverrides flags;
     std::string pulse = "delta", sensor = "ideal";  // --pulse, --sensor (film/time_response.h; checked)
+    std::string counts = "off";                     // --counts (film/photon_counting.h; checked)
     double launchedAt = 0.0;                        // nowSec() when `tpb view` started (the timeline's origin)
 };
 
@@ -181,6 +182,7 @@ private:
     void fitHiddenFrameExposure();
     void trackNoise(const FetchKey& key);  // after a frame fetch
     void drawTimeResponse();               // View section: pulse shape and sensor response
+    void drawCounting();                   // View section: the film as SPAD photon counts
     std::string responseNote() const;
     const char* emissionLabel()
         const;  // "delta pulse", "pulse response" or "continuous emission"  // " (gaussian pulse, FWHM 1 ns; ideal sensor)" or ""

@@ -14,6 +14,7 @@
 #include <GLFW/glfw3.h>  // key codes (ImGui 1.86 indexes keys by the backend's codes)
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -263,6 +264,7 @@ void Viewer::drawControls() {
         if (ImGui::IsItemHovered())
             ImGui::SetTooltip("Light on from the pulse instant (running sum of the delta response)");
         drawTimeResponse();
+        drawCounting();
     }
 
     if (section("Display", ImGuiTreeNodeFlags_DefaultOpen)) {
@@ -559,6 +561,62 @@ void Viewer::drawTimeResponse() {
     if (!(r == st_.response)) {
         st_.response = r;
         st_.autoFrame = true;  // a blurred pulse is dimmer at its peak: fit the exposure again
+    }
+}
+
+// Photon counts (film/photon_counting.h), applied when the film is read like the pulse: [counts]
+// after the pulse and sensor, then (when on) a row of the budget, dark and ambient rates, cycles,
+// pile-up, Coates and the seed. The efficiency and afterpulses come from --counts.
+void Viewer::drawCounting() {
+    PhotonCounting m = st_.response.counting;
+    ImGui::SameLine();  // on the pulse/sensor row if it fits; its parameters on a row of their own
+    const float boxWidth =
+        ImGui::GetFrameHeight() + ImGui::GetStyle().ItemInnerSpacing.x + ImGui::CalcTextSize("counts").x;
+    if (ImGui::GetContentRegionAvail().x < boxWidth) ImGui::NewLine();
+    ImGui::Checkbox("counts", &m.enabled);
+    track("counts");
+    if (ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "the film read as SPAD photon counts per bin (grey): Poisson, or first-photon TCSPC with pile-up;\n"
+            "no re-render; off: the noise-free film");
+    if (m.enabled) {
+        bool first = true;
+        const auto number = [&](const char* id, double& v, double lo, double hi, const char* tip) {
+            if (!first) ImGui::SameLine(0, 2);
+            first = false;
+            ImGui::SetNextItemWidth(60);
+            ImGui::InputDouble(id, &v, 0.0, 0.0, "%.3g");
+            track(id);
+            if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", tip);
+            v = std::clamp(v, lo, hi);
+        };
+        number("##photons", m.photons, 1e-6, 1e15, "signal photons a mean pixel expects over the time axis");
+        number("##dark", m.darkHz, 0.0, 1e12, "dark count rate, Hz");
+        number("##ambient", m.ambientHz, 0.0, 1e12, "detected ambient photon rate, Hz");
+        number("##cycles", m.cycles, 1.0, 1e15, "laser cycles in the acquisition");
+        m.cycles = std::floor(m.cycles);
+        ImGui::SameLine();
+        ImGui::Checkbox("pile-up", &m.pileup);
+        track("pile-up");
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("first photon per cycle (TCSPC with dead time)");
+        if (m.pileup) {
+            ImGui::SameLine();
+            ImGui::Checkbox("Coates", &m.coates);
+            track("Coates");
+            if (ImGui::IsItemHovered()) ImGui::SetTooltip("the piled-up histogram corrected (Coates 1968)");
+        } else {
+            m.coates = false;
+        }
+        int seed = static_cast<int>(std::min<uint64_t>(m.seed, INT_MAX));
+        ImGui::SameLine();
+        ImGui::SetNextItemWidth(70);
+        if (ImGui::InputInt("##seed", &seed)) m.seed = static_cast<uint64_t>(std::max(seed, 0));
+        track("seed");
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("seed of the counts (the same seed, the same counts)");
+    }
+    if (!(m == st_.response.counting)) {
+        st_.response.counting = m;
+        st_.autoFrame = true;  // counts and radiance differ by orders of magnitude: fit the exposure again
     }
 }
 

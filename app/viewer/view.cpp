@@ -181,6 +181,7 @@ Viewer::Viewer(const PreparedRender& prepared, const RenderSettings& settings, c
         st_.autoFrame = st_.autoSteady = false;
     }
     st_.response = *parseSensor(opt.sensor, *parsePulse(opt.pulse));  // (checked when parsed)
+    st_.response.counting = parseCounting(opt.counts);
     if (st_.response.pulse != PulseShape::Delta) st_.pulseNs = st_.response.pulseWidth / kC_m_per_ns;
     if (st_.response.sensor != SensorShape::Ideal) st_.sensorNs = st_.response.sensorWidth / kC_m_per_ns;
     st_.display.falseColor = opt.falseColor;

@@ -12,7 +12,7 @@ inline uint64_t splitmix64(uint64_t x) {
     return x ^ (x >> 31);
 }
 
-enum class Stream : uint64_t { Photon = 1, Camera = 2, PathTracer = 3, Test = 4 };
+enum class Stream : uint64_t { Photon = 1, Camera = 2, PathTracer = 3, Test = 4, Counts = 5 };
 
 // PCG32 (O'Neill 2014): 64-bit state, 32-bit output, selectable sequence.
 class Rng {

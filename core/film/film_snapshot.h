@@ -129,6 +129,8 @@ public:
     const TileRect& tileRect(int tile) const { return layout_->tiles[tile]; }
     int tileOf(int x, int y) const { return layout_->tileOf(x, y); }
     const TileBlock& block(int tile) const { return *blocks_[tile]; }
+    // The block itself: readers that cache what they derive from a snapshot key it on its blocks.
+    const std::shared_ptr<const TileBlock>& blockPointer(int tile) const { return blocks_[tile]; }
     int64_t passes(int tile) const { return blocks_[tile]->sums.passes; }
     int64_t minPasses() const;  // passes completed by every tile
     int64_t maxPasses() const;  // passes completed by some tile

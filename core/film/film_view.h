@@ -18,7 +18,10 @@
 namespace tpb {
 
 // `response` (time_response.h): the pulse shape and sensor response the film is seen with; the
-// default (delta pulse, ideal sensor) reads the sums as they are, bit for bit as before.
+// default (delta pulse, ideal sensor) reads the sums as they are, bit for bit as before. With
+// response.counting on, every read is the counted film (photon_counting.h): r = g = b = counts per
+// bin, the scale from the steady image's mean luminance; the steady, before and after images stay
+// noise-free (they are not time-resolved counts).
 //
 // W*H*3, row-major. `bin` is clamped to the film.
 std::vector<float> frameImage(const FilmSnapshot& s, int bin, TimeAxis axis, EmissionMode mode,

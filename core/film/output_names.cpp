@@ -22,6 +22,7 @@ std::string outputTag(TimeAxis axis, EmissionMode mode, const TimeResponse& r) {
     };
     if (r.pulse != PulseShape::Delta) tag += "_pulse-" + plain(pulseName(r));
     if (r.sensor != SensorShape::Ideal) tag += "_sensor-" + plain(sensorName(r));
+    if (r.counting.enabled) tag += "_counts";
     return tag;
 }
 

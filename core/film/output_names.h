@@ -12,7 +12,7 @@
 namespace tpb {
 
 // "real_delta", "unwarped_continuous", ...; a pulse shape or sensor response other than
-// delta/ideal adds e.g. "_pulse-gaussian0.5_sensor-exp0.1" (ns).
+// delta/ideal adds e.g. "_pulse-gaussian0.5_sensor-exp0.1" (ns); photon counts add "_counts".
 std::string outputTag(TimeAxis axis, EmissionMode mode, const TimeResponse& r = {});
 
 // With an empty tag: the untagged name (in brackets below).

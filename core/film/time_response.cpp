@@ -123,7 +123,7 @@ uint64_t binKernelComputations() { return gKernelComputations.load(); }
 
 BinKernel binKernel(const TimeResponse& r, double binWidth, int filmBins) {
     BinKernel k;
-    if (r.identity()) return k;
+    if (r.kernelIdentity()) return k;
     if ((r.pulse != PulseShape::Delta && !(r.pulseWidth > 0.0)) ||
         (r.sensor != SensorShape::Ideal && !(r.sensorWidth > 0.0)))
         throw std::invalid_argument("binKernel: a pulse or sensor width must be > 0");
@@ -167,20 +167,22 @@ std::shared_ptr<const BinKernel> sharedBinKernel(const TimeResponse& r, double b
         std::shared_ptr<const BinKernel> kernel;
     };
     static const auto identity = std::make_shared<const BinKernel>();
-    if (r.identity()) return identity;  // every frame of every render: no lock
+    if (r.kernelIdentity()) return identity;  // every frame of every render: no lock
+    TimeResponse key = r;                     // the kernel does not depend on the counting
+    key.counting = {};
     static std::mutex mutex;
     static std::vector<Entry> cache;  // most recently used last
     constexpr size_t kKept = 8;       // a few: the viewer switches between responses, axes' widths are equal
     const std::lock_guard<std::mutex> lock(mutex);  // held while computing: each kernel once
     for (size_t i = 0; i < cache.size(); ++i)
-        if (cache[i].response == r && cache[i].binWidth == binWidth && cache[i].filmBins == filmBins) {
+        if (cache[i].response == key && cache[i].binWidth == binWidth && cache[i].filmBins == filmBins) {
             std::rotate(cache.begin() + static_cast<std::ptrdiff_t>(i),
                         cache.begin() + static_cast<std::ptrdiff_t>(i) + 1, cache.end());
             return cache.back().kernel;
         }
     auto kernel = std::make_shared<const BinKernel>(binKernel(r, binWidth, filmBins));
     if (cache.size() == kKept) cache.erase(cache.begin());
-    cache.push_back({r, binWidth, filmBins, kernel});
+    cache.push_back({key, binWidth, filmBins, kernel});
     return kernel;
 }
 
@@ -268,7 +270,7 @@ std::string describe(const TimeResponse& r) {
     std::string s = r.sensor == SensorShape::Ideal      ? "ideal sensor"
                     : r.sensor == SensorShape::Gaussian ? "gaussian sensor jitter, FWHM " + ns(r.sensorWidth) + " ns"
                                                         : "exponential sensor decay, " + ns(r.sensorWidth) + " ns";
-    return p + "; " + s;
+    return p + "; " + s + (r.counting.enabled ? "; " + describeCounting(r.counting) : "");
 }
 
 }  // namespace tpb

@@ -27,7 +27,11 @@
 //
 // Continuous emission (the step response) blurred: Y_k = sum_m W_m C_(k-m), C the running sum. C
 // is taken as the light that arrived before the film for k < 0, and as its last value past the end.
+//
+// The photon-counting detector (photon_counting.h) rides along: it is applied after the kernel.
 #pragma once
+#include "film/photon_counting.h"
+
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -45,7 +49,10 @@ struct TimeResponse {
     double pulseWidth = 0.0;  // m of OPL: Gaussian FWHM, square width
     SensorShape sensor = SensorShape::Ideal;
     double sensorWidth = 0.0;  // m of OPL: Gaussian FWHM, exponential decay time
-    bool identity() const { return pulse == PulseShape::Delta && sensor == SensorShape::Ideal; }
+    PhotonCounting counting;   // the film read as counts (photon_counting.h); off by default
+    // The kernel is the identity (delta pulse, ideal sensor); identity(): and no counting either.
+    bool kernelIdentity() const { return pulse == PulseShape::Delta && sensor == SensorShape::Ideal; }
+    bool identity() const { return kernelIdentity() && !counting.enabled; }
     bool operator==(const TimeResponse&) const = default;
 };
 
@@ -55,7 +62,7 @@ std::optional<TimeResponse> parsePulse(std::string_view s, TimeResponse base = {
 std::optional<TimeResponse> parseSensor(std::string_view s, TimeResponse base = {});
 std::string pulseName(const TimeResponse& r);   // the inverse: "gaussian:0.1" (ns)
 std::string sensorName(const TimeResponse& r);  // "exp:0.05" (ns)
-// For people: "gaussian pulse, FWHM 0.1 ns; ideal sensor".
+// For people: "gaussian pulse, FWHM 0.1 ns; ideal sensor" (+ "; Poisson counts, ..." when counting).
 std::string describe(const TimeResponse& r);
 
 // The weights of Y_k = sum_{i} w[i] X_(k - (lo + i)) + before * X_(before the film) + after * X_(past

@@ -53,6 +53,8 @@ std::string volumeSideJson(const FilmSnapshot& film, const ExportOptions& opt, c
                  {"pulse", pulseName(opt.response)},  // film/time_response.h: widths in ns
                  {"sensor", sensorName(opt.response)},
                  {"time_response", describe(opt.response)},
+                 {"counts", countingName(opt.response.counting)},  // film/photon_counting.h
+                 {"units", opt.response.counting.enabled ? "photon counts per bin (r = g = b)" : "radiance"},
                  {"bins", t.bins},
                  {"start_opl_m", t.startOpl},
                  {"bin_width_opl_m", t.binWidth},

@@ -111,13 +111,14 @@ NlosCapture nlosCaptureGeometry(const Scene& scene, const TimeBins& tb) {
     return cap;
 }
 
-NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath) {
-    NlosCapture cap = nlosCaptureData(film, scene);
+NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath,
+                        const TimeResponse& response) {
+    NlosCapture cap = nlosCaptureData(film, scene, response);
     cap.sceneInfoYaml = sceneInfo(scene, scenePath);
     return cap;
 }
 
-NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene) {
+NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene, const TimeResponse& response) {
     const Camera& c = scene.camera;
     const TimeBins& tb = film.time();
     NlosCapture cap = nlosCaptureGeometry(scene, tb);
@@ -126,7 +127,7 @@ NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene) {
     const size_t perBin = static_cast<size_t>(cap.laserX) * cap.laserY * cap.sensorX * cap.sensorY;
     cap.H.assign(perBin * static_cast<size_t>(tb.bins), 0.0f);
     for (int k = 0; k < tb.bins; ++k) {
-        const std::vector<float> img = frameImage(film, k, TimeAxis::Real, EmissionMode::Delta);
+        const std::vector<float> img = frameImage(film, k, TimeAxis::Real, EmissionMode::Delta, response);
         float* h = &cap.H[static_cast<size_t>(k) * perBin];
         for (int lx = 0; lx < cap.laserX; ++lx)
             for (int ly = 0; ly < cap.laserY; ++ly) {

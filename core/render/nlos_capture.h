@@ -7,6 +7,7 @@
 // it (per sensor point, the distance along the wall's normal to the first surface, and its normal).
 #pragma once
 #include "film/film_snapshot.h"
+#include "film/time_response.h"
 #include "io/nlos_hdf5.h"
 #include "scene/scene.h"
 
@@ -15,11 +16,13 @@
 namespace tpb {
 
 // The capture of `film`, rendered from `scene` (a relay-wall camera with a scan) loaded from
-// `scenePath`. Throws UserError when the camera has no scan.
-NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath);
+// `scenePath`, seen through `response` (pulse, sensor, photon counts: film/time_response.h; with
+// counts, H holds counts per bin). Throws UserError when the camera has no scan.
+NlosCapture nlosCapture(const FilmSnapshot& film, const Scene& scene, const std::string& scenePath,
+                        const TimeResponse& response = {});
 
 // The capture without scene_info (the viewer's back-projection: no rays cast).
-NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene);
+NlosCapture nlosCaptureData(const FilmSnapshot& film, const Scene& scene, const TimeResponse& response = {});
 // The capture without H and scene_info: the grids, devices and time axis `tb` (what a
 // back-projection's grid needs before the render). Throws UserError when the camera has no scan.
 NlosCapture nlosCaptureGeometry(const Scene& scene, const TimeBins& tb);

@@ -681,6 +681,23 @@ TEST_F(CliErrors, TimeResponseWiderThanTheKernelLimitIsRefusedBeforeAnyPass) {
     }
 }
 
+// --counts: negative rates or budgets, unknown items and coates without pileup are refused when the
+// command line is parsed, naming the item and the fix, before anything is written.
+TEST_F(CliErrors, BadCountsAreRefusedNamingTheItemAndTheFix) {
+    const fs::path scene = write("scene.json", insideScene());
+    for (const auto& [model, text] : std::vector<std::pair<std::string, std::string>>{
+             {"dark_hz=-5", "error: --counts: dark_hz=-5: dark_hz must be >= 0 (a rate in Hz; 0 for no dark counts)"},
+             {"photons=-1", "error: --counts: photons=-1: photons must be > 0"},
+             {"ambient_hz=-2", "error: --counts: ambient_hz=-2: ambient_hz must be >= 0"},
+             {"coates", "error: --counts: coates: the Coates correction undoes pile-up; add pileup"},
+             {"dark=3", "error: --counts: dark=3: unknown key; use photons=, efficiency=, dark_hz="}}) {
+        const Proc p = render(scene, {"--counts", model});
+        EXPECT_EQ(p.code, 2) << p.err;
+        EXPECT_EQ(fromErrorLine(p.err).rfind(text, 0), 0u) << p.err;
+        EXPECT_FALSE(fs::exists(dir_ / "out"));
+    }
+}
+
 // Item 12: --frame-step 0 and --spp 0 said "not in range 0.000000 to 1797...(309 digits)".
 TEST_F(CliErrors, FrameStepZeroSaysTheRangeInAFewWords) {
     const fs::path scene = write("scene.json", insideScene());

@@ -10,9 +10,11 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -169,6 +171,42 @@ TEST_F(CliOutputs, NpyMp4AndContactSheetAreWrittenAndListed) {
     const Proc again = runTpb("render " + q(scene_) + " -o " + q(out) + " -q --no-frames", dir_);
     ASSERT_EQ(again.code, 0) << again.err;
     for (const std::string& f : want) EXPECT_FALSE(fs::exists(out / f)) << f;
+}
+
+// --counts (film/photon_counting.h): transient.npy holds grey whole counts, the same for the same
+// seed and others for another; summary.json and transient.json record the model and the units.
+TEST_F(CliOutputs, CountsAreWrittenReproduciblyAndRecorded) {
+    const auto counts = [&](const std::string& name, const std::string& model) {
+        const fs::path out = dir_ / name;
+        const Proc p =
+            runTpb("render " + q(scene_) + " -o " + q(out) + " --npy --no-frames -q --counts " + model, dir_);
+        EXPECT_EQ(p.code, 0) << p.err;
+        const std::string bytes = slurp(out / "transient.npy");
+        std::vector<float> v((bytes.size() - 128) / 4);
+        std::memcpy(v.data(), bytes.data() + 128, v.size() * 4);
+        return v;
+    };
+    const std::string model = "photons=300,dark_hz=1e6,cycles=1e5,seed=4";
+    const std::vector<float> a = counts("a", model), b = counts("b", model),
+                             c = counts("c", "photons=300,dark_hz=1e6,cycles=1e5,seed=5");
+    ASSERT_EQ(a.size(), 14u * 21 * 12 * 3);
+    EXPECT_EQ(a, b);
+    EXPECT_NE(a, c);
+    double total = 0.0;
+    for (size_t i = 0; i < a.size(); i += 3) {
+        EXPECT_EQ(a[i], std::floor(a[i]));
+        EXPECT_EQ(a[i], a[i + 2]);
+        total += a[i];
+    }
+    EXPECT_GT(total, 0.0);
+    const json summary = json::parse(slurp(dir_ / "a" / "summary.json"));
+    EXPECT_EQ(
+        summary["frames"]["counts"],
+        "photons=300,efficiency=1,dark_hz=1000000,ambient_hz=0,cycles=100000,afterpulse=0,afterpulse_ns=10,seed=4");
+    EXPECT_EQ(summary["frames"]["units"], "counts per bin");
+    const json side = json::parse(slurp(dir_ / "a" / "transient.json"));
+    EXPECT_EQ(side["time"]["counts"], summary["frames"]["counts"]);
+    EXPECT_EQ(side["time"]["units"], "photon counts per bin (r = g = b)");
 }
 
 // Ctrl-C while ffmpeg encodes: the encoding stops, ffmpeg is killed, no transient.mp4 (nor its

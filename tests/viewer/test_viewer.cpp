@@ -1009,6 +1009,45 @@ TEST_F(ViewerTest, SavedCheckpointResumesToTheFilmOfOneUninterruptedRender) {
     EXPECT_NE(v.out.find("after 5 passes"), std::string::npos) << v.out;
 }
 
+// Photon counts in the viewer (film/photon_counting.h): started with --counts, the Volume export
+// holds grey whole counts under a "_counts" name; the View section's "counts" box turns them off
+// at once, and the export is the noise-free film again.
+TEST_F(ViewerTest, CountsRowTogglesTheCountedFilmAndItsExports) {
+    const auto npy = [](const fs::path& file) {
+        std::ifstream f(file, std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+        const size_t header =
+            bytes.size() < 10
+                ? 0
+                : 10 + (static_cast<unsigned char>(bytes[8]) | (static_cast<unsigned char>(bytes[9]) << 8));
+        std::vector<float> v(bytes.size() > header ? (bytes.size() - header) / 4 : 0);
+        if (!v.empty()) std::memcpy(v.data(), bytes.data() + header, v.size() * 4);
+        return v;
+    };
+    const std::string counts = " --counts photons=300,dark_hz=1e6,seed=2 --after-passes 1 --export-folder ";
+    const fs::path on = dir_ / "counts_on", off = dir_ / "counts_off";
+    const Proc a = viewRun("counts_on", kRenderArgs + counts + q(on) + " --click 'Export/Volume (.npy)'");
+    ASSERT_EQ(a.code, 0) << a.out << a.err;
+    const std::vector<float> c = npy(on / "volume_real_delta_counts" / "transient.npy");
+    ASSERT_EQ(c.size(), static_cast<size_t>(kFilm) * kFilm * kBins * 3) << a.out << a.err;
+    double total = 0.0;
+    for (size_t i = 0; i < c.size(); i += 3) {
+        ASSERT_EQ(c[i], std::floor(c[i]));
+        ASSERT_EQ(c[i], c[i + 1]);
+        total += c[i];
+    }
+    EXPECT_GT(total, 0.5 * 300 * kFilm * kFilm) << "about 300 counts per mean pixel, most inside the film";
+    const Proc b =
+        viewRun("counts_off", kRenderArgs + counts + q(off) + " --click View/counts --click 'Export/Volume (.npy)'");
+    ASSERT_EQ(b.code, 0) << b.out << b.err;
+    EXPECT_FALSE(fs::exists(off / "volume_real_delta_counts"));
+    const std::vector<float> f = npy(off / "volume_real_delta" / "transient.npy");
+    ASSERT_EQ(f.size(), c.size()) << b.out << b.err;
+    size_t fractional = 0;
+    for (float v : f) fractional += v != std::floor(v);
+    EXPECT_GT(fractional, f.size() / 100) << "the noise-free film is radiance, not counts";
+}
+
 // The Export section's Volume (.npy), MP4 and Contact sheet buttons (issue 16), clicked like a
 // user in camera-unwarped time: the volume holds the independent render's frames value for value
 // (transient.npy's bin k = frames/frame_k.exr), its side file names the axis and the passes, the
