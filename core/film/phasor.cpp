@@ -30,33 +30,13 @@ void addPlain(const PhasorSpec& spec, const Color& energy, const SegmentProfile&
 
 }  // namespace
 
-// The floor's split is splatTimeFloored's (time_splat.h): the part of the profile earlier than the
-// floor, mirrored about it (t -> 2 floor - t), is an exponential segment arriving at
-// (2 floor - a) - b s; the rest keeps a + b s.
+// The floor's split is the bins' (time_splat.h flooredPieces); an instant is an interval of zero
+// width (the transform needs no bin-relative threshold).
 void addEstimatePhasor(const PhasorSpec& spec, const Color& energy, const SegmentProfile& p, double a, double b,
                        double floor, double* out) {
-    const double tA0 = a + b * p.s0, tB0 = a + b * p.s1;
-    const double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
-    if (!(floor > tA + 1e-12 * (1.0 + std::abs(tA)))) return addPlain(spec, energy, p, a, b, out);
-    const double mirrored = 2.0 * floor - a;
-    const bool collapsed = !(p.s1 - p.s0 > 0.0) || !(tB > tA);
-    if (collapsed) {
-        if (0.5 * (tA + tB) >= floor) return addPlain(spec, energy, p, a, b, out);
-        return addPlain(spec, energy, p, mirrored, -b, out);
-    }
-    if (!(floor < tB)) return addPlain(spec, energy, p, mirrored, -b, out);
-    const double sc = std::clamp((floor - a) / b, p.s0, p.s1);
-    const auto earlyShare = [&](const ExpProfile& e) {
-        const double below = e.reflect ? 1.0 - splat_detail::massTo(e, p.s1 - sc) * e.invTotal()
-                                       : splat_detail::massTo(e, sc - p.s0) * e.invTotal();
-        return std::clamp(b > 0.0 ? below : 1.0 - below, 0.0, 1.0);
-    };
-    const double fx = earlyShare(p.x);
-    const Color early = p.grey ? Color(fx) : Color(fx, earlyShare(p.y), earlyShare(p.z));
-    const SegmentProfile late(p.kappa, b > 0.0 ? sc : p.s0, b > 0.0 ? p.s1 : sc);
-    const SegmentProfile before(p.kappa, b > 0.0 ? p.s0 : sc, b > 0.0 ? sc : p.s1);
-    addPlain(spec, energy * (Color(1.0) - early), late, a, b, out);
-    addPlain(spec, energy * early, before, mirrored, -b, out);
+    flooredPieces(p, a, b, floor, 0.0, [&](const Color& share, const SegmentProfile& q, double qa, double qb) {
+        addPlain(spec, energy * share, q, qa, qb, out);
+    });
 }
 
 Complex responseTransform(const TimeResponse& r, double f) {

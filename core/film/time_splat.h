@@ -253,23 +253,24 @@ struct ArrivalFloor {
     bool active() const { return real > -kInf || unwarped > -kInf; }
 };
 
-// splatTime with the profile's part earlier than `floor` mirrored about it (t -> 2 floor - t, the
-// reflection of kernel density estimation at a boundary): energy kept, nothing before the floor,
-// no spike. When nothing is earlier than the floor it is splatTime itself (bit for bit).
-template <class Sink>
-TPB_HOT_INLINE OutsideFilm splatTimeFloored(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a,
-                                            double b, double floor, Sink&& sink) {
+// A profile with its part earlier than `floor` mirrored about it (t -> 2 floor - t, the
+// reflection of kernel density estimation at a boundary): calls piece(share, profile, a', b') for
+// each part, share the part's mass per channel. Nothing earlier than the floor: the whole profile
+// (share 1, a, b). Else the late part at a + b s and the early part, mirrored, at (2 floor - a) - b s
+// (late first). An interval of time no wider than `instantWidth` is an instant at its middle.
+// The bins (splatTimeFloored) and the phasor film (film/phasor.cpp) split alike.
+template <class Piece>
+TPB_HOT_INLINE void flooredPieces(const SegmentProfile& p, double a, double b, double floor, double instantWidth,
+                                  Piece&& piece) {
     const double tA0 = a + b * p.s0, tB0 = a + b * p.s1;
     const double tA = std::min(tA0, tB0), tB = std::max(tA0, tB0);
     // (A floor within rounding of the profile's start, as the unwarped floor of a beam at its
     // overlap's first point, changes nothing.)
-    if (!(floor > tA + 1e-12 * (1.0 + std::abs(tA)))) return splatTime(tb, energy, p, a, b, sink);
+    if (!(floor > tA + 1e-12 * (1.0 + std::abs(tA)))) return piece(Color(1.0), p, a, b);
     const double mirrored = 2.0 * floor - a;  // t = mirrored - b s after the reflection
-    const bool collapsed = !(p.s1 - p.s0 > 0.0) || (tB - tA) <= 1e-9 * tb.binWidth;  // splatTime's instant rule
-    if (collapsed)
-        return 0.5 * (tA + tB) >= floor ? splatTime(tb, energy, p, a, b, sink)
-                                        : splatTime(tb, energy, p, mirrored, -b, sink);
-    if (!(floor < tB)) return splatTime(tb, energy, p, mirrored, -b, sink);
+    const bool collapsed = !(p.s1 - p.s0 > 0.0) || (tB - tA) <= instantWidth;
+    if (collapsed) return 0.5 * (tA + tB) >= floor ? piece(Color(1.0), p, a, b) : piece(Color(1.0), p, mirrored, -b);
+    if (!(floor < tB)) return piece(Color(1.0), p, mirrored, -b);
     // t(s) = floor at s_c inside the segment (b != 0 here): the early part is [s0, s_c] when time
     // grows along s, [s_c, s1] when it falls. Its share per channel, from the profile's mass.
     const double sc = std::clamp((floor - a) / b, p.s0, p.s1);
@@ -282,9 +283,25 @@ TPB_HOT_INLINE OutsideFilm splatTimeFloored(const TimeBins& tb, const Color& ene
     const Color early = p.grey ? Color(fx) : Color(fx, earlyShare(p.y), earlyShare(p.z));
     const SegmentProfile late(p.kappa, b > 0.0 ? sc : p.s0, b > 0.0 ? p.s1 : sc);
     const SegmentProfile before(p.kappa, b > 0.0 ? p.s0 : sc, b > 0.0 ? sc : p.s1);
-    const OutsideFilm outLate = splatTime(tb, energy * (Color(1.0) - early), late, a, b, sink);
-    const OutsideFilm outEarly = splatTime(tb, energy * early, before, mirrored, -b, sink);
-    return {outEarly.before + outLate.before, outEarly.after + outLate.after};
+    piece(Color(1.0) - early, late, a, b);
+    piece(early, before, mirrored, -b);
+}
+
+// splatTime with the profile's part earlier than `floor` mirrored about it (flooredPieces): energy
+// kept, nothing before the floor, no spike. When nothing is earlier than the floor it is splatTime
+// itself (bit for bit).
+template <class Sink>
+TPB_HOT_INLINE OutsideFilm splatTimeFloored(const TimeBins& tb, const Color& energy, const SegmentProfile& p, double a,
+                                            double b, double floor, Sink&& sink) {
+    OutsideFilm out;
+    // (splatTime's instant rule: an interval narrower than 1e-9 bin.)
+    flooredPieces(p, a, b, floor, 1e-9 * tb.binWidth,
+                  [&](const Color& share, const SegmentProfile& q, double qa, double qb) TPB_HOT_LAMBDA {
+                      const OutsideFilm o = splatTime(tb, energy * share, q, qa, qb, sink);
+                      out.before += o.before;
+                      out.after += o.after;
+                  });
+    return out;
 }
 
 template <class Sink>
