@@ -851,8 +851,6 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
             rep.kept.push_back(kBackprojectionJsonName);
         }
     }
-    if (r.phasor)
-        for (const std::string& n : exportPhasorNpy(*snap, r.out, r.opt, r.provenance)) rep.kept.push_back(n);
     rep.kept.push_back(kSummaryName);
     writeSummary(false);
 
@@ -861,6 +859,9 @@ OutputReport writeRenderOutputs(const TransientFilm& film, const RenderOutputs& 
     const std::atomic<bool>* cancel = interrupted() ? nullptr : &interruptFlag();
     bool internal = false;  // the export failed on a bug (exit code 1), not on the user's input or disk
     try {
+        // The phasor film first (small): a failure is recorded in the summary like a frame's.
+        if (r.phasor)
+            for (const std::string& n : exportPhasorNpy(*snap, r.out, r.opt, r.provenance)) rep.kept.push_back(n);
         if (!r.noFrames) {
             const double t0 = nowSec();
             double lastPrint = t0;
